@@ -1,6 +1,449 @@
-// Placeholder until the experiment room registers its subcommands.
+// weedspray-lab experiment NAME [--json] [--plot OUT.png] [--raw] [--seed N] [--tune]
+// Reruns the papers' experiments on the simulated machine (control/experiments/).
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "control/experiments/experiments.hpp"
 #include "lab/commands.hpp"
+#include "lab/experiment_field.hpp"
+#include "lab/experiment_plot.hpp"
 
 namespace weedspray::lab {
-void add_experiment_commands(CLI::App& /*app*/) {}
+namespace {
+
+namespace ex = control::experiments;
+
+struct ExperimentOptions {
+  std::string name;
+  bool json = false;
+  std::string plot;
+  bool raw = false;
+  bool tune = false;
+  std::uint64_t seed = 1;
+  std::string images_dir;
+};
+
+constexpr int kBlue = 0x1f77b4, kOrange = 0xff7f0e, kGreen = 0x2ca02c, kRed = 0xd62728,
+              kGrey = 0x7f7f7f;
+
+PlotSeries pressure_series(const std::vector<ex::TraceSample>& trace, const std::string& name,
+                           int rgb, double t_offset = 0.0) {
+  PlotSeries s{name, {}, {}, rgb, false};
+  for (const auto& p : trace) {
+    s.x.push_back(p.time_s - t_offset);
+    s.y.push_back(p.pressure_mpa);
+  }
+  return s;
+}
+
+void print_metrics_json(const char* key, const ex::StepRun& run, const control::PidGains* weights,
+                        bool comma) {
+  std::printf(
+      "\"%s\": {\"rise_s\": %.4f, \"overshoot_pct\": %.3f, \"settle_s\": %.4f, \"itae\": %.6f, "
+      "\"settled\": %s, \"kp\": %.4g, \"ki\": %.4g, \"kd\": %.4g",
+      key, run.metrics.rise_s, run.metrics.overshoot_pct, run.metrics.settle_s, run.metrics.itae,
+      run.metrics.settled ? "true" : "false", run.gains.kp, run.gains.ki, run.gains.kd);
+  if (weights)
+    std::printf(", \"cp\": %.4g, \"ci\": %.4g, \"cd\": %.4g", weights->kp, weights->ki,
+                weights->kd);
+  std::printf("}%s", comma ? ", " : "");
+}
+
+int run_step_command(const ExperimentOptions& o) {
+  ex::StepOptions options;
+  options.seed = o.seed;
+  if (o.tune) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const ex::TuningResult t = ex::tune_step_controllers(options);
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::fprintf(stderr,
+                 "tuning: %d candidates in %.1f s\n  PID       Kp=%.4g Ki=%.4g Kd=%.4g  ITAE %.5f\n"
+                 "  fuzzy PID Kp'=%.4g Ki'=%.4g Kd'=%.4g Cp=%.4g Ci=%.4g Cd=%.4g  ITAE %.5f\n",
+                 t.candidates_evaluated, wall, t.pid.kp, t.pid.ki, t.pid.kd, t.pid_metrics.itae,
+                 t.fuzzy.base.gains.kp, t.fuzzy.base.gains.ki, t.fuzzy.base.gains.kd,
+                 t.fuzzy.correction_weights.kp, t.fuzzy.correction_weights.ki,
+                 t.fuzzy.correction_weights.kd, t.fuzzy_metrics.itae);
+    options.pid_gains = t.pid;
+    options.fuzzy = t.fuzzy;
+  }
+  const ex::StepResult r = ex::run_step(options);
+  if (o.json) {
+    std::printf("{");
+    print_metrics_json("pid", r.pid, nullptr, true);
+    print_metrics_json("fuzzy_pid", r.fuzzy_pid, &r.fuzzy_correction_weights, false);
+    std::printf(", \"setpoint_mpa\": %.3f}\n", r.setpoint_mpa);
+  } else {
+    std::printf("start-up 0 -> %.2f MPa, 4 nozzles open (UGV Fig. 7)\n", r.setpoint_mpa);
+    std::printf("%-10s %8s %10s %9s %10s   gains\n", "controller", "rise_s", "overshoot%",
+                "settle_s", "ITAE");
+    for (const auto* run : {&r.pid, &r.fuzzy_pid})
+      std::printf("%-10s %8.3f %10.2f %9.3f %10.5f   Kp=%.4g Ki=%.4g Kd=%.4g\n",
+                  run == &r.pid ? "PID" : "fuzzy PID", run->metrics.rise_s,
+                  run->metrics.overshoot_pct, run->metrics.settle_s, run->metrics.itae,
+                  run->gains.kp, run->gains.ki, run->gains.kd);
+    std::printf("fuzzy correction weights Cp=%.4g Ci=%.4g Cd=%.4g; settle band +-2 %%\n",
+                r.fuzzy_correction_weights.kp, r.fuzzy_correction_weights.ki,
+                r.fuzzy_correction_weights.kd);
+  }
+  if (!o.plot.empty()) {
+    PlotSpec spec{"Start-up to 0.2 MPa: conventional PID vs fuzzy PID",
+                  "time [s]",
+                  "line pressure [MPa]",
+                  {}};
+    spec.series.push_back(pressure_series(r.pid.trace, "conventional PID", kBlue));
+    spec.series.push_back(pressure_series(r.fuzzy_pid.trace, "fuzzy PID", kRed));
+    spec.series.push_back({"set-point", {0.0, 3.0}, {r.setpoint_mpa, r.setpoint_mpa}, kGrey});
+    write_plot_png(spec, o.plot);
+  }
+  return 0;
+}
+
+int run_ripple_command(const ExperimentOptions& o) {
+  ex::RippleOptions options;
+  options.seed = o.seed;
+  const ex::RippleResult r = ex::run_ripple(options);
+  const double ratio = r.staggered.pp_mpa > 0 ? r.synchronous.pp_mpa / r.staggered.pp_mpa : 0.0;
+  if (o.json) {
+    std::printf(
+        "{\"synchronous_pp_mpa\": %.5f, \"staggered_pp_mpa\": %.5f, \"ratio\": %.2f, "
+        "\"duty_pct\": %.0f, \"frequency_hz\": %.1f}\n",
+        r.synchronous.pp_mpa, r.staggered.pp_mpa, ratio, options.duty_pct, options.frequency_hz);
+  } else {
+    std::printf("4 nozzles at %.0f %% duty, %.0f Hz, fuzzy PID at 0.2 MPa (UGV Fig. 8)\n",
+                options.duty_pct, options.frequency_hz);
+    std::printf("%-12s %18s\n", "PWM", "pressure p-p [MPa]");
+    std::printf("%-12s %18.5f\n%-12s %18.5f\nsynchronous / staggered = %.1f x\n", "synchronous",
+                r.synchronous.pp_mpa, "staggered", r.staggered.pp_mpa, ratio);
+  }
+  if (!o.plot.empty()) {
+    PlotSpec spec{"Line pressure, 4 nozzles at 50 % / 3 Hz", "time [s]", "line pressure [MPa]", {}};
+    const double t0 = r.synchronous.trace.empty() ? 0.0 : r.synchronous.trace.front().time_s;
+    auto first_two_seconds = [&](const std::vector<ex::TraceSample>& trace) {
+      std::vector<ex::TraceSample> out;
+      for (const auto& s : trace)
+        if (s.time_s - t0 <= 2.0) out.push_back(s);
+      return out;
+    };
+    spec.series.push_back(
+        pressure_series(first_two_seconds(r.synchronous.trace), "synchronous", kBlue, t0));
+    spec.series.push_back(
+        pressure_series(first_two_seconds(r.staggered.trace), "staggered T/4", kRed, t0));
+    write_plot_png(spec, o.plot);
+  }
+  return 0;
+}
+
+int run_calibrate_command(const ExperimentOptions& o) {
+  ex::CalibrationOptions options;
+  options.seed = o.seed;
+  const ex::CalibrationResult r = ex::run_calibration(options);
+  if (o.json) {
+    std::printf(
+        "{\"meter_k_error_pct\": %.4f, \"meter_pulses_per_litre\": %.2f, "
+        "\"true_pulses_per_litre\": %.2f, \"meter_calibration_error_pct\": %.4f, \"nozzles\": [",
+        r.meter_k_error_pct, r.meter.pulses_per_litre, r.true_pulses_per_litre,
+        r.meter_calibration_error_pct);
+    for (std::size_t i = 0; i < r.nozzles.size(); ++i) {
+      const auto& n = r.nozzles[i];
+      std::printf(
+          "%s{\"a\": %.6f, \"b\": %.5f, \"true_a\": %.6f, \"true_b\": %.5f, \"r2\": %.6f, "
+          "\"full_open_l_per_min\": %.5f, \"true_full_open_l_per_min\": %.5f}",
+          i ? ", " : "", n.fitted.slope_l_per_min_per_pct, n.fitted.intercept_l_per_min,
+          n.truth.slope_l_per_min_per_pct, n.truth.intercept_l_per_min, n.r_squared,
+          n.full_open_l_per_min, n.true_full_open_l_per_min);
+    }
+    std::printf("]}\n");
+  } else {
+    std::printf(
+        "catch test: label 8500 pulses/L, measured %.1f, true %.1f (label error %.2f %%, "
+        "calibration error %.3f %%)\n",
+        r.meter.pulses_per_litre, r.true_pulses_per_litre, r.meter_k_error_pct,
+        r.meter_calibration_error_pct);
+    std::printf("nozzle lines q = A s + b at %.2f MPa, %.0f Hz (each nozzle alone, one meter)\n",
+                options.pressure_mpa, options.frequency_hz);
+    std::printf("%6s %10s %8s %10s %8s %9s %10s %10s\n", "nozzle", "A", "b", "true A", "true b",
+                "R2", "full-open", "true full");
+    for (std::size_t i = 0; i < r.nozzles.size(); ++i) {
+      const auto& n = r.nozzles[i];
+      std::printf("%6zu %10.6f %8.5f %10.6f %8.5f %9.6f %10.5f %10.5f\n", i + 1,
+                  n.fitted.slope_l_per_min_per_pct, n.fitted.intercept_l_per_min,
+                  n.truth.slope_l_per_min_per_pct, n.truth.intercept_l_per_min, n.r_squared,
+                  n.full_open_l_per_min, n.true_full_open_l_per_min);
+    }
+  }
+  if (!o.plot.empty()) {
+    PlotSpec spec{"Calibrated nozzle lines (markers: true flow at the calibration duties)",
+                  "duty [%]",
+                  "flow [L/min]",
+                  {}};
+    const int colours[] = {kBlue, kOrange, kGreen, kRed};
+    for (std::size_t i = 0; i < r.nozzles.size(); ++i) {
+      const auto& n = r.nozzles[i];
+      PlotSeries line{"nozzle " + std::to_string(i + 1) + " fitted", {}, {}, colours[i % 4]};
+      PlotSeries truth{"nozzle " + std::to_string(i + 1) + " true", {}, {}, colours[i % 4], true};
+      for (double d : options.duties_pct) {
+        line.x.push_back(d);
+        line.y.push_back(n.fitted.slope_l_per_min_per_pct * d + n.fitted.intercept_l_per_min);
+        truth.x.push_back(d);
+        truth.y.push_back(n.truth.slope_l_per_min_per_pct * d + n.truth.intercept_l_per_min);
+      }
+      spec.series.push_back(line);
+      spec.series.push_back(truth);
+    }
+    write_plot_png(spec, o.plot);
+  }
+  return 0;
+}
+
+void print_duty_point_json(const ex::DutyPoint& p) {
+  std::printf(
+      "{\"duty_pct\": %.1f, \"commanded_duty_pct\": %.3f, \"requested_l\": %.6f, \"delivered_l\": "
+      "%.6f, \"error_pct\": %.4f}",
+      p.duty_pct, p.commanded_duty_pct, p.requested_l, p.delivered_l, p.error_pct);
+}
+
+int run_linearity_command(const ExperimentOptions& o) {
+  ex::SprayRunOptions options;
+  options.seed = o.seed;
+  options.raw = o.raw;
+  const ex::LinearityResult r = ex::run_linearity(options);
+  if (o.json) {
+    std::printf(
+        "{\"raw\": %s, \"r2\": %.6f, \"mean_error_pct\": %.4f, \"max_error_pct\": %.4f, "
+        "\"points\": [",
+        r.raw ? "true" : "false", r.r2, r.mean_error_pct, r.max_error_pct);
+    for (std::size_t i = 0; i < r.points.size(); ++i) {
+      if (i) std::printf(", ");
+      print_duty_point_json(r.points[i]);
+    }
+    std::printf("]}\n");
+  } else {
+    std::printf("nozzle 1 swept, nozzles 2-4 at 100 %%, 0.2 MPa, 3 Hz, 30 s per point (%s)\n",
+                r.raw ? "RAW: no calibration/compensation/feedback, synchronous"
+                      : "calibrated, compensated, flow feedback, staggered");
+    std::printf("%6s %10s %12s %12s %8s\n", "duty%", "commanded%", "requested_L", "delivered_L",
+                "error%");
+    for (const auto& p : r.points)
+      std::printf("%6.0f %10.2f %12.5f %12.5f %8.2f\n", p.duty_pct, p.commanded_duty_pct,
+                  p.requested_l, p.delivered_l, p.error_pct);
+    std::printf("R2 %.5f  mean error %.2f %%  max error %.2f %%\n", r.r2, r.mean_error_pct,
+                r.max_error_pct);
+  }
+  if (!o.plot.empty()) {
+    PlotSpec spec{"Nozzle 1 volume in 30 s vs duty", "duty [%]", "volume [L]", {}};
+    PlotSeries req{"requested", {}, {}, kGrey};
+    PlotSeries got{"delivered (true)", {}, {}, kBlue, true};
+    for (const auto& p : r.points) {
+      req.x.push_back(p.duty_pct);
+      req.y.push_back(p.requested_l);
+      got.x.push_back(p.duty_pct);
+      got.y.push_back(p.delivered_l);
+    }
+    spec.series = {req, got};
+    write_plot_png(spec, o.plot);
+  }
+  return 0;
+}
+
+int run_orthogonal_command(const ExperimentOptions& o) {
+  ex::SprayRunOptions options;
+  options.seed = o.seed;
+  options.raw = o.raw;
+  const ex::OrthogonalResult r = ex::run_orthogonal(options);
+  if (o.json) {
+    std::printf(
+        "{\"raw\": %s, \"mean_error_pct\": %.4f, \"max_error_pct\": %.4f, "
+        "\"pressure_band_mpa\": %.5f, \"runs\": [",
+        r.raw ? "true" : "false", r.mean_error_pct, r.max_error_pct, r.pressure_band_mpa);
+    for (std::size_t i = 0; i < r.runs.size(); ++i) {
+      std::printf("%s{\"run\": %zu, \"pressure_band_mpa\": %.5f, \"nozzles\": [", i ? ", " : "",
+                  i + 1, r.runs[i].pressure_band_mpa);
+      for (std::size_t k = 0; k < 4; ++k) {
+        if (k) std::printf(", ");
+        print_duty_point_json(r.runs[i].nozzles[k]);
+      }
+      std::printf("]}");
+    }
+    std::printf("]}\n");
+  } else {
+    std::printf("L16 orthogonal test, 0.2 MPa, 3 Hz, 30 s per run (%s)\n",
+                r.raw ? "RAW: no calibration/compensation/feedback, synchronous"
+                      : "calibrated, compensated, flow feedback, staggered");
+    std::printf("%4s %23s   %31s %10s\n", "run", "duty A B C D [%]", "error A B C D [%]",
+                "band MPa");
+    for (std::size_t i = 0; i < r.runs.size(); ++i) {
+      const auto& n = r.runs[i].nozzles;
+      std::printf("%4zu %5.0f %5.0f %5.0f %5.0f   %7.2f %7.2f %7.2f %7.2f %10.4f\n", i + 1,
+                  n[0].duty_pct, n[1].duty_pct, n[2].duty_pct, n[3].duty_pct, n[0].error_pct,
+                  n[1].error_pct, n[2].error_pct, n[3].error_pct, r.runs[i].pressure_band_mpa);
+    }
+    std::printf("mean error %.2f %%  max error %.2f %%  pressure band %.4f MPa\n", r.mean_error_pct,
+                r.max_error_pct, r.pressure_band_mpa);
+  }
+  if (!o.plot.empty()) {
+    PlotSpec spec{
+        "L16 orthogonal test: volume error per nozzle and duty", "duty [%]", "error [%]", {}};
+    const int colours[] = {kBlue, kOrange, kGreen, kRed};
+    for (std::size_t k = 0; k < 4; ++k) {
+      PlotSeries s{std::string("nozzle ") + char('A' + k), {}, {}, colours[k], true};
+      for (const auto& run : r.runs) {
+        s.x.push_back(run.nozzles[k].duty_pct + (static_cast<double>(k) - 1.5));
+        s.y.push_back(run.nozzles[k].error_pct);
+      }
+      spec.series.push_back(s);
+    }
+    write_plot_png(spec, o.plot);
+  }
+  return 0;
+}
+
+int run_dose_command(const ExperimentOptions& o) {
+  ex::DoseOptions options;
+  options.seed = o.seed;
+  const ex::DoseResult r = ex::run_dose(options);
+  if (o.json) {
+    std::printf("{\"r2\": %.6f, \"mean_error_pct\": %.4f, \"points\": [", r.r2, r.mean_error_pct);
+    for (std::size_t i = 0; i < r.points.size(); ++i)
+      std::printf(
+          "%s{\"density\": %.3f, \"theoretical_l_per_min\": %.5f, "
+          "\"delivered_l_per_min\": %.5f, \"duty_pct\": %.3f}",
+          i ? ", " : "", r.points[i].density, r.points[i].theoretical_l_per_min,
+          r.points[i].delivered_l_per_min, r.points[i].duty_pct);
+    std::printf("]}\n");
+  } else {
+    std::printf("wheat paper dose check: 1 m/s, 0.4 MPa, 5 Hz, k = %.2f, 60 s per density\n",
+                options.max_density);
+    std::printf("%8s %16s %16s %8s\n", "density", "theory L/min", "delivered L/min", "duty%");
+    for (const auto& p : r.points)
+      std::printf("%8.2f %16.4f %16.4f %8.2f\n", p.density, p.theoretical_l_per_min,
+                  p.delivered_l_per_min, p.duty_pct);
+    std::printf("R2 %.5f (paper: 0.968)  mean error %.2f %%\n", r.r2, r.mean_error_pct);
+  }
+  if (!o.plot.empty()) {
+    PlotSpec spec{"Delivered vs theoretical nozzle flow",
+                  "theoretical flow [L/min]",
+                  "delivered flow [L/min]",
+                  {}};
+    PlotSeries ideal{"y = x", {}, {}, kGrey};
+    PlotSeries got{"nozzle 1 (true)", {}, {}, kBlue, true};
+    for (const auto& p : r.points) {
+      ideal.x.push_back(p.theoretical_l_per_min);
+      ideal.y.push_back(p.theoretical_l_per_min);
+      got.x.push_back(p.theoretical_l_per_min);
+      got.y.push_back(p.delivered_l_per_min);
+    }
+    spec.series = {ideal, got};
+    write_plot_png(spec, o.plot);
+  }
+  return 0;
+}
+
+int run_savings_command(const ExperimentOptions& o) {
+  std::string dir = o.images_dir;
+  if (dir.empty()) {
+    const char* data = std::getenv("WEEDSPRAY_DATA_DIR");
+    dir = std::string(data ? data : "/work/shared/data") + "/ews-train/images";
+  }
+  const std::vector<std::array<double, 4>> zones = field_zone_densities(dir);
+  ex::SavingsOptions options;
+  options.seed = o.seed;
+  const ex::SavingsResult r = ex::run_savings(zones, options);
+  if (o.json) {
+    std::printf(
+        "{\"savings_pct\": %.3f, \"under_dosed_zones\": %d, \"unsprayed_weedy_zones\": "
+        "%d, \"zones\": %d, \"variable_l\": %.4f, \"uniform_l\": %.4f, "
+        "\"nozzle_savings_pct\": [%.2f, %.2f, %.2f, %.2f]}\n",
+        r.savings_pct, r.under_dosed_zones, r.unsprayed_weedy_zones, r.zones, r.variable_l,
+        r.uniform_l, r.nozzle_savings_pct[0], r.nozzle_savings_pct[1], r.nozzle_savings_pct[2],
+        r.nozzle_savings_pct[3]);
+  } else {
+    std::printf("field: %zu zones of %.1f m x 4 nozzles from %s (vision pipeline, 2x4 grid)\n",
+                zones.size(), options.zone_length_m, dir.c_str());
+    std::printf("uniform %.3f L  variable %.3f L  savings %.1f %% (paper: 46.3 %%)\n", r.uniform_l,
+                r.variable_l, r.savings_pct);
+    std::printf("per nozzle savings %.1f %.1f %.1f %.1f %%\n", r.nozzle_savings_pct[0],
+                r.nozzle_savings_pct[1], r.nozzle_savings_pct[2], r.nozzle_savings_pct[3]);
+    std::printf(
+        "under-dosed nozzle-zones (< %.0f %% of the law's volume): %d of %d; weedy zones "
+        "left dry by the 20 %% minimum duty: %d\n",
+        options.under_dose_fraction * 100.0, r.under_dosed_zones, r.zones, r.unsprayed_weedy_zones);
+  }
+  if (!o.plot.empty()) {
+    PlotSpec spec{"Liquid per zone along the track", "distance [m]", "volume per zone [L]", {}};
+    PlotSeries target{"law's target", {}, {}, kGrey};
+    PlotSeries got{"delivered (true)", {}, {}, kBlue};
+    for (std::size_t i = 0; i < r.zone_target_l.size(); ++i) {
+      const double x = static_cast<double>(i) * options.zone_length_m;
+      target.x.push_back(x);
+      target.y.push_back(r.zone_target_l[i]);
+      got.x.push_back(x);
+      got.y.push_back(r.zone_delivered_l[i]);
+    }
+    spec.series = {target, got};
+    write_plot_png(spec, o.plot);
+  }
+  return 0;
+}
+
+int run_experiment(const ExperimentOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  int rc = 0;
+  if (o.name == "step")
+    rc = run_step_command(o);
+  else if (o.name == "ripple")
+    rc = run_ripple_command(o);
+  else if (o.name == "calibrate")
+    rc = run_calibrate_command(o);
+  else if (o.name == "linearity")
+    rc = run_linearity_command(o);
+  else if (o.name == "orthogonal")
+    rc = run_orthogonal_command(o);
+  else if (o.name == "dose")
+    rc = run_dose_command(o);
+  else if (o.name == "savings")
+    rc = run_savings_command(o);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!o.json) std::printf("(wall time %.2f s)\n", wall);
+  if (!o.plot.empty()) std::fprintf(stderr, "plot written to %s\n", o.plot.c_str());
+  return rc;
+}
+
+}  // namespace
+
+void add_experiment_commands(CLI::App& app) {
+  auto options = std::make_shared<ExperimentOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "experiment", "rerun a paper's experiment on the simulated sprayer (hydraulic plant model)");
+  cmd->add_option("name", options->name,
+                  "step | ripple | linearity | orthogonal | dose | calibrate | savings")
+      ->required()
+      ->check(CLI::IsMember(
+          {"step", "ripple", "linearity", "orthogonal", "dose", "calibrate", "savings"}));
+  cmd->add_flag("--json", options->json, "print one JSON object instead of a table");
+  cmd->add_option("--plot", options->plot, "write the figure to this PNG file");
+  cmd->add_flag("--raw", options->raw,
+                "linearity/orthogonal: no calibration, compensation or flow feedback; "
+                "synchronous PWM");
+  cmd->add_flag("--tune", options->tune, "step: rerun the gain search before the comparison");
+  cmd->add_option("--seed", options->seed, "plant seed (nozzle spread, valve delays, noise)");
+  cmd->add_option("--images", options->images_dir,
+                  "savings: field images directory (default $WEEDSPRAY_DATA_DIR/ews-train/images)");
+  cmd->callback([options] {
+    try {
+      const int rc = run_experiment(*options);
+      if (rc != 0) throw CLI::RuntimeError(rc);
+    } catch (const CLI::Error&) {
+      throw;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "experiment %s: %s\n", options->name.c_str(), e.what());
+      throw CLI::RuntimeError(1);
+    }
+  });
+}
+
 }  // namespace weedspray::lab

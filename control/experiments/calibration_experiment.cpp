@@ -1,0 +1,99 @@
+// The two calibrations on the simulated machine: the flow meter's pulses per litre from a catch
+// test, and each nozzle's line q = A s + b from runs of that nozzle alone measured with the
+// ONE line flow meter (the way a user does it on the real boom).
+#include <cmath>
+#include <vector>
+
+#include "control/experiments/experiments.hpp"
+
+namespace weedspray::control::experiments {
+namespace {
+
+RigConfig calibration_rig(const CalibrationOptions& options) {
+  RigConfig config;
+  config.seed = options.seed;
+  config.setpoint_mpa = options.pressure_mpa;
+  config.pwm_frequency_hz = options.frequency_hz;
+  config.fixes = {true, false, false};
+  config.record_period_s = 0.0;
+  return config;
+}
+
+}  // namespace
+
+CalibrationResult run_calibration(const CalibrationOptions& options) {
+  CalibrationResult result;
+  RigConfig config = calibration_rig(options);
+  ClosedLoopRig rig(config);
+  const int n = rig.plant().nozzle_count();
+  const double nominal = config.meter_pulses_per_l;
+
+  // Catch test: all nozzles open, liquid collected (the plant's TRUE volume) vs pulses.
+  rig.command_duties(std::vector<double>(static_cast<std::size_t>(n), 100.0));
+  rig.start();
+  rig.run_for(options.settle_s);
+  const double litres0 = rig.plant().total_delivered_l();
+  const std::uint64_t pulses0 = rig.plant().flow_meter_pulses();
+  rig.run_for(options.catch_test_s);
+  result.meter = calibrate_flow_meter(rig.plant().flow_meter_pulses() - pulses0,
+                                      rig.plant().total_delivered_l() - litres0, nominal);
+  result.true_pulses_per_litre = rig.plant().true_meter_pulses_per_l();
+  result.meter_k_error_pct =
+      (nominal - result.true_pulses_per_litre) / result.true_pulses_per_litre * 100.0;
+  result.meter_calibration_error_pct =
+      (result.meter.pulses_per_litre - result.true_pulses_per_litre) /
+      result.true_pulses_per_litre * 100.0;
+
+  // Nozzle lines: each nozzle alone at each duty, pressure held by the loop.
+  for (int nozzle = 0; nozzle < n; ++nozzle) {
+    std::vector<DutyFlowPoint> metered;
+    std::vector<DutyFlowPoint> truth;
+    double full_open = 0.0;
+    double true_full_open = 0.0;
+    for (double duty : options.duties_pct) {
+      std::vector<double> duties(static_cast<std::size_t>(n), 0.0);
+      duties[static_cast<std::size_t>(nozzle)] = duty;
+      rig.command_duties(duties);
+      rig.run_for(options.settle_s);
+      const double v0 = rig.plant().nozzle_delivered_l(nozzle);
+      const std::uint64_t p0 = rig.plant().flow_meter_pulses();
+      rig.run_for(options.measure_s);
+      const double minutes = options.measure_s / 60.0;
+      const double pulses = static_cast<double>(rig.plant().flow_meter_pulses() - p0);
+      metered.push_back({duty, pulses / result.meter.pulses_per_litre / minutes});
+      truth.push_back({duty, (rig.plant().nozzle_delivered_l(nozzle) - v0) / minutes});
+    }
+    {
+      std::vector<double> duties(static_cast<std::size_t>(n), 0.0);
+      duties[static_cast<std::size_t>(nozzle)] = 100.0;
+      rig.command_duties(duties);
+      rig.run_for(options.settle_s);
+      const double v0 = rig.plant().nozzle_delivered_l(nozzle);
+      const std::uint64_t p0 = rig.plant().flow_meter_pulses();
+      rig.run_for(options.measure_s);
+      const double minutes = options.measure_s / 60.0;
+      const double pulses = static_cast<double>(rig.plant().flow_meter_pulses() - p0);
+      full_open = pulses / result.meter.pulses_per_litre / minutes;
+      true_full_open = (rig.plant().nozzle_delivered_l(nozzle) - v0) / minutes;
+    }
+    const double lo = options.duties_pct.front();
+    const double hi = options.duties_pct.back();
+    NozzleCalibration cal;
+    const NozzleLineFit fit = fit_nozzle_line(metered, options.pressure_mpa, lo, hi);
+    cal.fitted = fit.line;
+    cal.r_squared = fit.r_squared;
+    cal.truth = fit_nozzle_line(truth, options.pressure_mpa, lo, hi).line;
+    cal.full_open_l_per_min = full_open;
+    cal.true_full_open_l_per_min = true_full_open;
+    result.nozzles.push_back(cal);
+  }
+  return result;
+}
+
+std::vector<double> calibrated_full_flows(const CalibrationResult& calibration) {
+  std::vector<double> flows;
+  for (const auto& n : calibration.nozzles) flows.push_back(n.full_open_l_per_min);
+  return flows;
+}
+
+}  // namespace weedspray::control::experiments

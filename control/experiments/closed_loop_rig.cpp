@@ -1,0 +1,202 @@
+#include "control/experiments/closed_loop_rig.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace weedspray::control::experiments {
+namespace {
+
+PwmConfig pwm_config(const RigConfig& c) {
+  PwmConfig p;
+  p.valve_count = static_cast<std::size_t>(c.plant.nozzle_count);
+  p.frequency_hz = c.pwm_frequency_hz;
+  p.phase_mode = c.fixes.staggered ? PwmPhaseMode::kStaggered : PwmPhaseMode::kSynchronous;
+  return p;
+}
+
+double seconds(std::chrono::nanoseconds t) {
+  return static_cast<double>(t.count()) * 1e-9;
+}
+
+}  // namespace
+
+FuzzyPidConfig default_fuzzy_pid_config() {
+  FuzzyPidConfig c;
+  // Found by tune_step_controllers() (seed 1, 0.2 MPa, 4 nozzles open; 820 candidates).
+  c.base.gains = {44.0, 360.4, 0.2253};
+  c.base.output_min = 0.0;
+  c.base.output_max = 1.0;
+  c.base.anti_windup = AntiWindup::kBackCalculation;
+  c.base.derivative_filter_s = 0.01;
+  c.correction_weights = {4.4, 72.09, 0.02253};
+  c.error_range = 0.2;
+  return c;
+}
+
+PidGains default_conventional_pid_gains() {
+  return {2.0, 8.0, 0.02};
+}
+
+ClosedLoopRig::ClosedLoopRig(const RigConfig& config)
+    : config_(config),
+      plant_(config.plant, config.seed),
+      controller_(config.controller_mode, config.controller),
+      pwm_(pwm_config(config)),
+      trim_(config.flow_trim) {
+  if (!(config.control_period_s > 0.0 && config.control_period_s <= 0.1))
+    throw std::invalid_argument("RigConfig.control_period_s must be in (0, 0.1]");
+  if (config.adc_bits < 8 || config.adc_bits > 24)
+    throw std::invalid_argument("RigConfig.adc_bits must be in [8, 24]");
+  if (!(config.meter_pulses_per_l > 0.0))
+    throw std::invalid_argument("RigConfig.meter_pulses_per_l must be > 0");
+  if (!(config.flow_trim_window_s > 0.0))
+    throw std::invalid_argument("RigConfig.flow_trim_window_s must be > 0");
+  if (config.duty_clamp) validate(*config.duty_clamp);
+  for (auto& line : lines_) line = NozzleLine{};
+  plant_.set_ground_speed(config.ground_speed_m_per_s);
+  plant_.set_return_valve_volts(10.0);  // fully open: the safe state, no pressure
+}
+
+void ClosedLoopRig::set_nozzle_lines(std::span<const NozzleLine> lines) {
+  const std::size_t n = std::min(lines.size(), lines_.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    validate(lines[i]);
+    lines_[i] = lines[i];
+  }
+}
+
+void ClosedLoopRig::set_full_open_flows(std::span<const double> flow_l_per_min) {
+  full_open_flows_.fill(0.0);
+  const std::size_t n = std::min(flow_l_per_min.size(), full_open_flows_.size());
+  std::copy_n(flow_l_per_min.begin(), n, full_open_flows_.begin());
+}
+
+void ClosedLoopRig::request_flows(std::span<const double> flow_l_per_min) {
+  requested_flows_.fill(0.0);
+  const std::size_t n = std::min(flow_l_per_min.size(), requested_flows_.size());
+  std::copy_n(flow_l_per_min.begin(), n, requested_flows_.begin());
+  flows_requested_ = true;
+  apply_flow_requests();
+}
+
+void ClosedLoopRig::command_duties(std::span<const double> duty_pct) {
+  flows_requested_ = false;
+  duties_.fill(0.0);
+  const std::size_t n = std::min(duty_pct.size(), static_cast<std::size_t>(plant_.nozzle_count()));
+  for (std::size_t i = 0; i < n; ++i) duties_[i] = std::clamp(duty_pct[i], 0.0, 100.0);
+  pwm_.set_duties(std::span<const double>(duties_.data(), n));
+}
+
+void ClosedLoopRig::apply_flow_requests() {
+  const int n = plant_.nozzle_count();
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const double pressure = config_.fixes.pressure_compensation ? filtered_pressure_mpa_ : 0.0;
+    double duty = raw_duty_for_flow_pct(lines_[k], requested_flows_[k], pressure);
+    if (requested_flows_[k] <= 0.0) duty = 0.0;
+    const bool full_open =
+        full_open_flows_[k] > 0.0 && requested_flows_[k] >= full_open_flows_[k] * (1.0 - 1e-9);
+    if (full_open) duty = 100.0;
+    if (config_.duty_clamp) duty = clamp_duty_pct(*config_.duty_clamp, duty);
+    if (config_.fixes.flow_feedback && duty > 0.0 && duty < 100.0) duty *= trim_.correction();
+    duties_[k] = std::clamp(duty, 0.0, 100.0);
+  }
+  pwm_.set_duties(std::span<const double>(duties_.data(), static_cast<std::size_t>(n)));
+}
+
+void ClosedLoopRig::start() {
+  if (started_) return;
+  started_ = true;
+  plant_.set_pump(true);
+  const double now = plant_.time_s();
+  measured_pressure_mpa_ = read_pressure_mpa();
+  filtered_pressure_mpa_ = measured_pressure_mpa_;
+  controller_.enable(0.0, config_.setpoint_mpa, measured_pressure_mpa_);
+  pwm_start_s_ = now;
+  pwm_.start(std::chrono::nanoseconds(0));
+  pending_edge_ = pwm_.next_edge();
+  next_control_s_ = now;
+  next_record_s_ = now;
+  next_trim_s_ = now + config_.flow_trim_window_s;
+  trim_pulses_ = plant_.flow_meter_pulses();
+}
+
+double ClosedLoopRig::read_pressure_mpa() const {
+  // ADC quantisation, then the label conversion volts -> mA -> MPa.
+  const double full = static_cast<double>((1L << config_.adc_bits) - 1);
+  const double counts = std::round(
+      std::clamp(plant_.pressure_sensor_volts() / config_.adc_reference_volts, 0.0, 1.0) * full);
+  const double volts = counts / full * config_.adc_reference_volts;
+  const double milliamps = volts / config_.sensor_shunt_ohms * 1000.0;
+  return (milliamps - 4.0) / 16.0 * config_.sensor_full_scale_mpa;
+}
+
+double ClosedLoopRig::next_edge_time_s() const {
+  return pwm_start_s_ + seconds(pending_edge_.time);
+}
+
+void ClosedLoopRig::control_tick() {
+  const double dt = config_.control_period_s;
+  measured_pressure_mpa_ = read_pressure_mpa();
+  const double alpha = 1.0 - std::exp(-dt / config_.compensation_filter_s);
+  filtered_pressure_mpa_ += alpha * (measured_pressure_mpa_ - filtered_pressure_mpa_);
+  const double u = controller_.update(config_.setpoint_mpa, measured_pressure_mpa_, dt);
+  plant_.set_return_valve_volts(10.0 * (1.0 - u));
+
+  // The meter reading only means something while the pressure is at its set-point: a window
+  // that saw the start-up (or any excursion beyond 5 %) is discarded, else the trim winds up
+  // during start-up and, diluted by the nozzles held fully open, takes minutes to unwind.
+  if (std::abs(filtered_pressure_mpa_ - config_.setpoint_mpa) > 0.05 * config_.setpoint_mpa)
+    trim_window_valid_ = false;
+  if (config_.fixes.flow_feedback && flows_requested_ && plant_.time_s() >= next_trim_s_ - 1e-9) {
+    const std::uint64_t pulses = plant_.flow_meter_pulses();
+    const double window = config_.flow_trim_window_s;
+    const double measured =
+        static_cast<double>(pulses - trim_pulses_) / config_.meter_pulses_per_l / window * 60.0;
+    double requested = 0.0;
+    double open_fraction = 0.0;
+    for (int i = 0; i < plant_.nozzle_count(); ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      // The trim compares against what the lines promise for the duties actually latched.
+      if (duties_[k] > 0.0) requested += requested_flows_[k];
+      open_fraction += duties_[k] / 100.0 / plant_.nozzle_count();
+    }
+    if (trim_window_valid_) trim_.update(requested, measured, open_fraction, window);
+    trim_window_valid_ = true;
+    trim_pulses_ = pulses;
+    next_trim_s_ += window;
+  }
+  if (flows_requested_) apply_flow_requests();
+}
+
+void ClosedLoopRig::run_for(double duration_s) {
+  if (!started_) throw std::logic_error("ClosedLoopRig::run_for before start()");
+  const double end = plant_.time_s() + duration_s;
+  while (true) {
+    const double edge_t = next_edge_time_s();
+    double next = std::min({end, edge_t, next_control_s_});
+    if (config_.record_period_s > 0.0) next = std::min(next, next_record_s_);
+    if (next > plant_.time_s()) plant_.step(next - plant_.time_s());
+    const double now = plant_.time_s();
+    constexpr double kEps = 1e-9;
+    while (next_edge_time_s() <= now + kEps) {
+      plant_.set_valves(pending_edge_.valve_mask);
+      applied_mask_ = pending_edge_.valve_mask;
+      pending_edge_ = pwm_.next_edge();
+    }
+    if (next_control_s_ <= now + kEps) {
+      control_tick();
+      next_control_s_ += config_.control_period_s;
+    }
+    if (config_.record_period_s > 0.0 && next_record_s_ <= now + kEps) {
+      trace_.push_back({now, plant_.line_pressure_mpa(), measured_pressure_mpa_,
+                        plant_.total_nozzle_flow_l_per_min(), 10.0 * (1.0 - controller_.output()),
+                        applied_mask_});
+      next_record_s_ += config_.record_period_s;
+    }
+    if (now >= end - kEps) break;
+  }
+}
+
+}  // namespace weedspray::control::experiments

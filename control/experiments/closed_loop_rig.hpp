@@ -1,0 +1,136 @@
+// The simulated machine the experiments run on: the hydraulic plant with the real control
+// algorithms around it, in simulated time.
+//
+//   pressure sensor volts -> ADC counts -> MPa -> PressureController -> DAC -> return valve
+//   requested flows -> (calibrated lines, sqrt(Pcal/P), flow trim) -> duties -> PwmSchedule
+//   -> exact valve edges -> plant
+//
+// Every "fix" of the papers is a switch here (RigFixes), so each experiment can run with and
+// without them on the same plant and seed. Pure: no clocks, no threads.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "control/calibration.hpp"
+#include "control/flow_feedback.hpp"
+#include "control/plant/hydraulic_plant.hpp"
+#include "control/pressure_controller.hpp"
+#include "control/pwm_schedule.hpp"
+#include "control/spray_rate_law.hpp"
+
+namespace weedspray::control::experiments {
+
+// Fuzzy-PID and PID settings found by the documented search of step_response.hpp
+// (`weedspray-lab experiment step --tune` reruns it). Output u in [0, 1] closes the return
+// valve: volts = 10 (1 - u).
+FuzzyPidConfig default_fuzzy_pid_config();
+PidGains default_conventional_pid_gains();
+
+// The fixes of the papers that can be switched off to show the raw machine.
+struct RigFixes {
+  bool staggered = true;              // staggered PWM phases (else synchronous)
+  bool pressure_compensation = true;  // duty from the calibrated line at sqrt(Pcal/P)
+  bool flow_feedback = true;          // FlowTrim on the (calibrated) meter
+};
+
+struct RigConfig {
+  plant::PlantParams plant{};
+  std::uint64_t seed = 1;
+  PressureControlMode controller_mode = PressureControlMode::kFuzzyPid;
+  FuzzyPidConfig controller = default_fuzzy_pid_config();
+  double setpoint_mpa = 0.2;
+  double control_period_s = 0.005;  // pressure loop at 200 Hz
+  // What the controller believes about its sensor (the label values, not the plant's truth).
+  double sensor_full_scale_mpa = 1.0;
+  double sensor_shunt_ohms = 165.0;
+  int adc_bits = 12;
+  double adc_reference_volts = 3.3;
+  double pwm_frequency_hz = 3.0;
+  RigFixes fixes{};
+  // Flow meter K-factor the controller uses (label 8500 until a catch test replaced it).
+  double meter_pulses_per_l = 8500.0;
+  FlowTrimConfig flow_trim{};
+  double flow_trim_window_s = 1.0;  // meter reading averaged over this window
+  // The spray law's duty clamp (< min -> 0, > max -> 100), applied to requested flows' duties.
+  std::optional<SprayLawConfig> duty_clamp{};
+  // Time constant of the pressure filter the compensation uses (noise would otherwise jitter
+  // the duties).
+  double compensation_filter_s = 0.1;
+  double ground_speed_m_per_s = 1.0;
+  double record_period_s = 0.005;  // 0 = no trace
+};
+
+struct TraceSample {
+  double time_s = 0.0;
+  double pressure_mpa = 0.0;           // true line pressure
+  double measured_pressure_mpa = 0.0;  // what the controller saw
+  double total_flow_l_per_min = 0.0;   // true nozzle total
+  double return_valve_volts = 0.0;
+  std::uint32_t valve_mask = 0;
+};
+
+class ClosedLoopRig {
+ public:
+  // Throws std::invalid_argument (from the parts) on a bad config.
+  explicit ClosedLoopRig(const RigConfig& config);
+
+  // Nozzle lines used when the fixes are on (calibrate first; see calibration_experiment).
+  void set_nozzle_lines(std::span<const NozzleLine> lines);
+  // Calibrated flow with the valve held open [L/min]; a request at or above it opens the valve
+  // fully (the line q = A s + b does not hold up there). Unset: no such rule.
+  void set_full_open_flows(std::span<const double> flow_l_per_min);
+  // Ask for a flow per nozzle [L/min]; converted to duties via the calibrated lines.
+  void request_flows(std::span<const double> flow_l_per_min);
+  // Command duties directly [%] (raw machine, or calibration runs); stops flow requests.
+  void command_duties(std::span<const double> duty_pct);
+  // Pump on, controller enabled from a fully open return valve, PWM started at the current
+  // time. Called once.
+  void start();
+  // Advance simulated time; handles PWM edges and control ticks exactly on their instants.
+  void run_for(double seconds);
+
+  plant::HydraulicPlant& plant() { return plant_; }
+  const plant::HydraulicPlant& plant() const { return plant_; }
+  const std::vector<TraceSample>& trace() const { return trace_; }
+  void clear_trace() { trace_.clear(); }
+  double time_s() const { return plant_.time_s(); }
+  double measured_pressure_mpa() const { return measured_pressure_mpa_; }
+  double flow_trim_correction() const { return trim_.correction(); }
+  std::array<double, plant::kMaxNozzles> commanded_duties_pct() const { return duties_; }
+  const RigConfig& config() const { return config_; }
+
+ private:
+  void control_tick();
+  void apply_flow_requests();
+  double read_pressure_mpa() const;
+  double next_edge_time_s() const;
+
+  RigConfig config_;
+  plant::HydraulicPlant plant_;
+  PressureController controller_;
+  PwmSchedule pwm_;
+  FlowTrim trim_;
+  std::array<NozzleLine, plant::kMaxNozzles> lines_{};
+  std::array<double, plant::kMaxNozzles> requested_flows_{};
+  std::array<double, plant::kMaxNozzles> full_open_flows_{};
+  std::array<double, plant::kMaxNozzles> duties_{};
+  bool flows_requested_ = false;
+  bool started_ = false;
+  PwmEdge pending_edge_{};
+  std::uint32_t applied_mask_ = 0;
+  double next_control_s_ = 0.0;
+  double next_record_s_ = 0.0;
+  double next_trim_s_ = 0.0;
+  double pwm_start_s_ = 0.0;
+  double measured_pressure_mpa_ = 0.0;
+  double filtered_pressure_mpa_ = 0.0;
+  std::uint64_t trim_pulses_ = 0;
+  bool trim_window_valid_ = false;
+  std::vector<TraceSample> trace_;
+};
+
+}  // namespace weedspray::control::experiments

@@ -1,0 +1,216 @@
+// The papers' experiments, rerun on the simulated machine (closed_loop_rig.hpp). Each returns
+// a plain result struct with its time series / points, for tables, JSON, plots and tests.
+// Volumes are judged against the plant's TRUE delivered volume, never the simulated meter.
+// Pure: no I/O, simulated time only; deterministic for a given seed.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "control/experiments/closed_loop_rig.hpp"
+#include "control/experiments/metrics.hpp"
+
+namespace weedspray::control::experiments {
+
+// ---------- step: start-up 0 -> 0.2 MPa, PID vs fuzzy PID (UGV Fig. 7) ----------
+struct StepRun {
+  StepMetrics metrics{};
+  PidGains gains{};  // conventional: the gains; fuzzy: the base gains
+  std::vector<TraceSample> trace;
+};
+struct StepResult {
+  StepRun pid;
+  StepRun fuzzy_pid;
+  PidGains fuzzy_correction_weights{};
+  double setpoint_mpa = 0.2;
+};
+struct StepOptions {
+  std::uint64_t seed = 1;
+  double setpoint_mpa = 0.2;
+  double duration_s = 3.0;
+  PidGains pid_gains = default_conventional_pid_gains();
+  FuzzyPidConfig fuzzy = default_fuzzy_pid_config();
+};
+StepResult run_step(const StepOptions& options);
+StepRun run_step_once(PressureControlMode mode, const FuzzyPidConfig& config,
+                      const StepOptions& options);
+
+// The documented tuning search: a coarse-to-fine grid over (Kp, Ki, Kd) minimising ITAE for
+// the conventional PID; then, for the fuzzy PID, the same search over its base gains and a
+// grid of correction weights (Cp, Ci, Cd). Each candidate is one 3 s simulated start-up.
+struct TuningResult {
+  PidGains pid{};
+  StepMetrics pid_metrics{};
+  FuzzyPidConfig fuzzy{};
+  StepMetrics fuzzy_metrics{};
+  int candidates_evaluated = 0;
+};
+TuningResult tune_step_controllers(const StepOptions& options);
+
+// ---------- ripple: 4 nozzles 50 %, 3 Hz, synchronous vs staggered (UGV Fig. 8) ----------
+struct RippleRun {
+  double pp_mpa = 0.0;  // peak-to-peak true line pressure after settling
+  std::vector<TraceSample> trace;
+};
+struct RippleResult {
+  RippleRun synchronous;
+  RippleRun staggered;
+};
+struct RippleOptions {
+  std::uint64_t seed = 1;
+  double duty_pct = 50.0;
+  double frequency_hz = 3.0;
+  double settle_s = 5.0;
+  double measure_s = 5.0;
+};
+RippleResult run_ripple(const RippleOptions& options);
+
+// ---------- calibration: meter catch test + per-nozzle lines (SPEC §2/§4) ----------
+struct NozzleCalibration {
+  NozzleLine fitted{};  // from the ONE line flow meter, with the calibrated K-factor
+  NozzleLine truth{};   // the same fit on the plant's TRUE delivered volumes
+  double r_squared = 0.0;
+  // Flow with the valve held open (100 %), metered and true. Not the line at 100 %: near full
+  // duty the off-time gets shorter than the valve's closing delay and the line stops holding.
+  double full_open_l_per_min = 0.0;
+  double true_full_open_l_per_min = 0.0;
+};
+struct CalibrationResult {
+  FlowMeterCalibration meter{};
+  double true_pulses_per_litre = 0.0;
+  double meter_k_error_pct = 0.0;  // (nominal label - true) / true * 100 as the catch test saw
+  double meter_calibration_error_pct = 0.0;  // (calibrated - true) / true * 100
+  std::vector<NozzleCalibration> nozzles;
+};
+struct CalibrationOptions {
+  std::uint64_t seed = 1;
+  double pressure_mpa = 0.2;
+  double frequency_hz = 3.0;
+  double catch_test_s = 60.0;
+  std::vector<double> duties_pct{20, 30, 40, 50, 60, 70, 80};
+  double settle_s = 2.0;
+  double measure_s = 20.0;
+};
+CalibrationResult run_calibration(const CalibrationOptions& options);
+
+// ---------- linearity: nozzle 1 swept 10-100 %, others 100 % (UGV Fig. 9) ----------
+struct DutyPoint {
+  double duty_pct = 0.0;
+  double commanded_duty_pct = 0.0;  // after calibration / compensation / trim
+  double requested_l = 0.0;
+  double delivered_l = 0.0;  // TRUE
+  double error_pct = 0.0;    // |delivered - requested| / requested * 100
+};
+struct LinearityResult {
+  std::vector<DutyPoint> points;
+  double r2 = 0.0;  // delivered volume vs duty
+  double mean_error_pct = 0.0;
+  double max_error_pct = 0.0;
+  bool raw = false;
+};
+struct SprayRunOptions {
+  std::uint64_t seed = 1;
+  double pressure_mpa = 0.2;
+  double frequency_hz = 3.0;
+  double settle_s = 3.0;
+  double run_s = 30.0;
+  // raw: no calibration (duty commanded as asked), no pressure compensation, no flow
+  // feedback, synchronous PWM. Otherwise the machine is calibrated first (run_calibration).
+  bool raw = false;
+};
+LinearityResult run_linearity(const SprayRunOptions& options);
+
+// ---------- orthogonal: the 16 L16 runs of SPEC §3 ----------
+inline constexpr std::array<std::array<double, 4>, 16> kOrthogonalL16 = {{
+    {25, 25, 25, 25},
+    {25, 50, 50, 50},
+    {25, 75, 75, 75},
+    {25, 100, 100, 100},
+    {50, 25, 50, 75},
+    {50, 50, 25, 100},
+    {50, 75, 100, 25},
+    {50, 100, 75, 50},
+    {75, 25, 75, 100},
+    {75, 50, 100, 75},
+    {75, 75, 25, 50},
+    {75, 100, 50, 25},
+    {100, 25, 100, 50},
+    {100, 50, 75, 25},
+    {100, 75, 50, 100},
+    {100, 100, 25, 75},
+}};
+struct OrthogonalRun {
+  std::array<DutyPoint, 4> nozzles{};
+  double pressure_band_mpa = 0.0;  // largest |P - set-point| after start-up
+};
+struct OrthogonalResult {
+  std::vector<OrthogonalRun> runs;
+  double mean_error_pct = 0.0;
+  double max_error_pct = 0.0;
+  double pressure_band_mpa = 0.0;
+  bool raw = false;
+};
+OrthogonalResult run_orthogonal(const SprayRunOptions& options);
+
+// Per-nozzle full-open flow the calibrated machine believes in (metered at 100 %), shared by
+// linearity/orthogonal to define "requested".
+std::vector<double> calibrated_full_flows(const CalibrationResult& calibration);
+
+// ---------- dose: wheat paper's check, densities 0.40-0.75 at 1 m/s, 0.4 MPa, 5 Hz ----------
+struct DosePoint {
+  double density = 0.0;
+  double theoretical_l_per_min = 0.0;  // 60 D w v u / k
+  double delivered_l_per_min = 0.0;    // TRUE, nozzle 1
+  double duty_pct = 0.0;
+};
+struct DoseResult {
+  std::vector<DosePoint> points;
+  double r2 = 0.0;  // delivered vs theoretical
+  double mean_error_pct = 0.0;
+};
+struct DoseOptions {
+  std::uint64_t seed = 1;
+  double pressure_mpa = 0.4;
+  double frequency_hz = 5.0;
+  double speed_m_per_s = 1.0;
+  // k = 0.75: the densest zone gets q_nom; with it the theoretical flows span 0.33-0.62 L/min,
+  // the range the paper measured (0.32-0.61).
+  double max_density = 0.75;
+  std::vector<double> densities{0.40, 0.45, 0.50, 0.55, 0.60, 0.65, 0.70, 0.75};
+  double settle_s = 3.0;
+  double run_s = 60.0;
+};
+DoseResult run_dose(const DoseOptions& options);
+
+// ---------- savings: variable vs uniform spraying over a field of zone densities ----------
+// zone_densities[z][n]: weed density of zone z (along travel) under nozzle n.
+struct SavingsOptions {
+  std::uint64_t seed = 1;
+  double pressure_mpa = 0.4;
+  double frequency_hz = 5.0;
+  double speed_m_per_s = 1.0;
+  double zone_length_m = 1.0;
+  double max_density = 0.75;
+  double decision_threshold = 0.0;
+  // A zone is under-dosed when it received less than this fraction of its target volume.
+  double under_dose_fraction = 0.9;
+};
+struct SavingsResult {
+  double variable_l = 0.0;  // TRUE volumes
+  double uniform_l = 0.0;
+  double savings_pct = 0.0;
+  int zones = 0;  // nozzle-zones (zones along travel x nozzles)
+  // Nozzle-zones that got less than under_dose_fraction of what the law decided for them.
+  int under_dosed_zones = 0;
+  // Nozzle-zones with weeds that the law's minimum-duty clamp left unsprayed (by design).
+  int unsprayed_weedy_zones = 0;
+  std::vector<double> zone_target_l;     // per zone (all nozzles)
+  std::vector<double> zone_delivered_l;  // per zone (all nozzles), variable run
+  std::array<double, 4> nozzle_savings_pct{};
+};
+SavingsResult run_savings(const std::vector<std::array<double, 4>>& zone_densities,
+                          const SavingsOptions& options);
+
+}  // namespace weedspray::control::experiments

@@ -1,0 +1,47 @@
+#include "control/flow_feedback.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace weedspray::control {
+
+FlowTrim::FlowTrim(const FlowTrimConfig& config) : config_(config) {
+  auto finite = [](double x) { return std::isfinite(x); };
+  if (!finite(config.min_correction) || !finite(config.max_correction) ||
+      !(config.min_correction > 0.0) || !(config.min_correction <= 1.0) ||
+      !(config.max_correction >= 1.0)) {
+    throw std::invalid_argument("FlowTrimConfig: need 0 < min_correction <= 1 <= max_correction");
+  }
+  if (!finite(config.gain_per_s) || config.gain_per_s < 0.0) {
+    throw std::invalid_argument("FlowTrimConfig.gain_per_s must be >= 0");
+  }
+  if (!finite(config.max_rate_per_s) || config.max_rate_per_s < 0.0) {
+    throw std::invalid_argument("FlowTrimConfig.max_rate_per_s must be >= 0");
+  }
+  if (!finite(config.min_requested_flow_l_per_min) || config.min_requested_flow_l_per_min <= 0.0) {
+    throw std::invalid_argument("FlowTrimConfig.min_requested_flow_l_per_min must be > 0");
+  }
+  if (!finite(config.min_open_fraction) || config.min_open_fraction < 0.0 ||
+      config.min_open_fraction > 1.0) {
+    throw std::invalid_argument("FlowTrimConfig.min_open_fraction must be in [0, 1]");
+  }
+}
+
+double FlowTrim::update(double requested_total_l_per_min, double measured_total_l_per_min,
+                        double open_fraction, double dt_s) noexcept {
+  const bool usable = std::isfinite(requested_total_l_per_min) &&
+                      std::isfinite(measured_total_l_per_min) && std::isfinite(open_fraction) &&
+                      std::isfinite(dt_s) && dt_s > 0.0;
+  frozen_ = !usable || requested_total_l_per_min < config_.min_requested_flow_l_per_min ||
+            open_fraction < config_.min_open_fraction;
+  if (frozen_) return correction_;
+  const double relative_error =
+      (requested_total_l_per_min - measured_total_l_per_min) / requested_total_l_per_min;
+  const double max_step = config_.max_rate_per_s * dt_s;
+  const double step = std::clamp(config_.gain_per_s * relative_error * dt_s, -max_step, max_step);
+  correction_ = std::clamp(correction_ + step, config_.min_correction, config_.max_correction);
+  return correction_;
+}
+
+}  // namespace weedspray::control

@@ -1,0 +1,224 @@
+// Hydraulic plant model of the sprayer: what the papers' test benches are made of, simulated.
+//
+//   tank -> filter -> 24 V diaphragm pump -+-> proportional return valve -> tank
+//                                          +-> spray line (hose + air chamber) -> pressure
+//                                              sensor, pulse flow meter -> N solenoid valves
+//                                              -> N nozzles
+//
+// Used by the closed-loop experiments (control/experiments/), the sim tests and the simulated
+// io backends (io/sim/, `weedsprayd --sim`). Pure and single-threaded: no clocks, no I/O; time
+// only advances in step(). Not thread-safe: a caller sharing it between threads wraps it.
+//
+// Units: SI unless the name says otherwise; pressures are gauge pressures in MPa, flows in
+// L/min where the name says so. Every default documents where the value comes from (the parts
+// the UGV paper names, or the datasheet class of such parts). Defaults are not tuned to make
+// our controllers look good: valve delays, nozzle spread and meter error are the datasheet
+// classes' typical values.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <random>
+
+namespace weedspray::control::plant {
+
+inline constexpr int kMaxNozzles = 8;
+
+struct PumpParams {
+  // 24 V DC diaphragm pump (UGV paper: A42-24; class of 24 V agricultural diaphragm pumps:
+  // 5-8 L/min open flow, 0.7-1.0 MPa shut-off). Linear pressure-flow curve between them.
+  double open_flow_l_per_min = 8.0;
+  double shutoff_pressure_mpa = 1.0;
+  // Motor spin-up / spin-down time constant after the relay switches (small DC motor).
+  double spin_time_constant_s = 0.15;
+};
+
+struct ReturnValveParams {
+  // Proportional return valve driven 0-10 V (UGV paper: FRSQT11F-16P). Opening is linear in
+  // volts above a dead band; 10 V = fully open. Flow through it: opening * k * sqrt(P).
+  double dead_band_volts = 0.5;
+  double full_scale_volts = 10.0;
+  // Flow coefficient when fully open [L/min per sqrt(MPa)]: able to bypass the pump's whole
+  // output at low pressure (full open with all nozzles shut settles near 0.11 MPa).
+  double k_l_per_min_sqrt_mpa = 20.0;
+  // Proportional solenoid class: first-order lag from command to opening.
+  double time_constant_s = 0.08;
+};
+
+struct LineParams {
+  // Compliance of the spray line: hose wall elasticity [L/MPa] (3 m of 10 mm braided PVC)...
+  double hose_compliance_l_per_mpa = 0.005;
+  // ...plus the diaphragm pump's outlet air chamber (pulsation damper), modelled as an
+  // isothermal gas volume precharged at precharge_mpa (gauge). 0 disables it. Dampers are
+  // precharged to 60-80 % of the working pressure: 0.14 MPa = 70 % of the UGV set-point.
+  double air_chamber_volume_l = 0.1;
+  double air_chamber_precharge_mpa = 0.14;
+  // Below this pressure orifice flow is treated as laminar (linear in P) so the model stays
+  // well-posed at P -> 0 (sqrt has infinite slope there).
+  double laminar_below_mpa = 0.005;
+};
+
+struct NozzleParams {
+  // Nozzle orifice coefficient [L/min per sqrt(MPa)]: 0.65 L/min at 0.2 MPa, 0.92 at 0.4
+  // (TeeJet XR/11002 class; wheat paper nominal 0.615 L/min).
+  double k_l_per_min_sqrt_mpa = 0.65 / 0.4472135955;
+  // Manufacturing spread between nozzles: each nozzle's k is drawn from N(1, sigma), clipped
+  // to +-2.5 sigma (ISO 5682: nozzles within +-5 % of rated flow).
+  double k_spread_sigma = 0.02;
+  // Solenoid valve response (small direct-acting 2/2 valves, e.g. Burkert 6013 class:
+  // opening 10-20 ms, closing 20-40 ms): a dead time, then a linear travel.
+  double open_delay_s = 0.015;
+  double close_delay_s = 0.025;
+  double open_travel_s = 0.004;
+  double close_travel_s = 0.006;
+  // Valve-to-valve spread of the delays, each drawn from N(1, sigma), clipped to +-2.5 sigma.
+  double delay_spread_sigma = 0.10;
+};
+
+struct PressureSensorParams {
+  // 4-20 mA pressure transmitter (UGV paper: CKHTP-01), 0..full_scale gauge.
+  double full_scale_mpa = 1.0;
+  // I/V stage: shunt resistor so 20 mA -> 3.3 V (SPEC §4: 4-20 mA -> 0-3.3 V -> ADC).
+  double shunt_ohms = 165.0;
+  // White noise on the voltage after the I/V stage (transmitter 0.25 % FS class + wiring).
+  double noise_volts_sigma = 0.002;
+  // Transmitter response time constant.
+  double time_constant_s = 0.002;
+};
+
+struct FlowMeterParams {
+  // Pulse flow meter in the spray line (UGV paper: LWGY turbine meter, 8500 pulses/L).
+  double nominal_pulses_per_l = 8500.0;
+  // The real meter differs from its label: true pulses/L = nominal * (1 + k_factor_error).
+  // +2 %: LWGY class accuracy is +-1 % of reading inside its range, worse near its low end,
+  // where a 4-nozzle boom at low duty runs. The catch-test calibration exists to remove this.
+  double k_factor_error = 0.02;
+};
+
+struct WheelParams {
+  // Hall wheel sensor (UGV paper: JK8002D) on a toothed wheel: pulses per metre travelled.
+  // Label value (e.g. 20 magnets on a 1 m circumference wheel)...
+  double nominal_pulses_per_m = 20.0;
+  // ...and the tyre's real rolling circumference differs by this fraction (load, slip).
+  double circumference_error = 0.0;
+};
+
+struct TankParams {
+  double capacity_l = 20.0;
+  double initial_level_l = 20.0;
+  // Pump flow fades linearly to zero as the level drops below this (it starts drawing air).
+  double suction_loss_below_l = 0.3;
+};
+
+struct PlantParams {
+  int nozzle_count = 4;
+  PumpParams pump;
+  ReturnValveParams return_valve;
+  LineParams line;
+  NozzleParams nozzle;
+  PressureSensorParams pressure_sensor;
+  FlowMeterParams flow_meter;
+  WheelParams wheel;
+  TankParams tank;
+  // Fixed integration step; step(dt) sub-steps at this size (10 kHz).
+  double integration_step_s = 1e-4;
+};
+
+// Per-nozzle values drawn from the seed: the "true" machine the calibrations must find.
+struct NozzleTruth {
+  double k_l_per_min_sqrt_mpa = 0.0;
+  double open_delay_s = 0.0;
+  double close_delay_s = 0.0;
+};
+
+class HydraulicPlant {
+ public:
+  // Throws std::invalid_argument naming the parameter if params are out of range.
+  HydraulicPlant(const PlantParams& params, std::uint64_t seed);
+
+  // --- actuators (take effect at the current simulated time) ---
+  void set_pump(bool on);
+  void set_return_valve_volts(double volts);  // clamped to [0, 10]
+  void set_valves(std::uint32_t mask);        // bit i = solenoid valve i energised
+  void set_ground_speed(double m_per_s);
+
+  // Advance simulated time by dt_s (>= 0), sub-stepping at params.integration_step_s.
+  void step(double dt_s);
+
+  // --- true state ---
+  double time_s() const { return time_s_; }
+  double line_pressure_mpa() const { return pressure_mpa_; }
+  double pump_flow_l_per_min() const { return pump_flow_l_per_s_ * 60.0; }
+  double return_flow_l_per_min() const { return return_flow_l_per_s_ * 60.0; }
+  double total_nozzle_flow_l_per_min() const;
+  double nozzle_flow_l_per_min(int i) const;
+  double valve_opening(int i) const;  // 0 closed .. 1 open (true spool position)
+  double return_valve_opening() const { return return_opening_; }
+  double nozzle_delivered_l(int i) const;  // TRUE volume through nozzle i since start
+  double total_delivered_l() const;
+  double distance_m() const { return distance_m_; }
+  double tank_level_l() const { return tank_level_l_; }
+  const NozzleTruth& nozzle_truth(int i) const;
+  int nozzle_count() const { return params_.nozzle_count; }
+  const PlantParams& params() const { return params_; }
+  // Flow of nozzle i fully open at pressure p (true k): the reference for "requested" volumes.
+  double nozzle_full_open_flow_l_per_min(int i, double pressure_mpa) const;
+
+  // --- sensors, as the controller's inputs see them ---
+  double sensor_current_ma() const;      // 4-20 mA loop current (0 if wire broken)
+  double pressure_sensor_volts() const;  // after the I/V stage, with seeded noise
+  std::uint64_t flow_meter_pulses() const { return flow_pulses_; }
+  std::uint64_t wheel_pulses() const { return wheel_pulses_; }
+  double true_meter_pulses_per_l() const;
+
+  // --- fault injection (for alarm tests) ---
+  void set_nozzle_blockage(int i, double fraction);  // 0 clear .. 1 fully blocked
+  void set_filter_blockage(double fraction);         // reduces pump flow by this fraction
+  void set_sensor_wire_broken(bool broken);          // loop current 0 mA
+  void set_sensor_shorted(bool shorted);             // loop current 24 mA
+  void set_tank_level_l(double litres);
+
+ private:
+  struct Valve {
+    bool commanded = false;
+    double position = 0.0;        // 0..1
+    double motion_target = 0.0;   // where the spool is heading
+    double motion_start_s = 0.0;  // when it starts moving (command time + dead time)
+    double delivered_l = 0.0;
+    double blockage = 0.0;
+    double flow_l_per_s = 0.0;
+  };
+
+  void substep(double dt_s);
+  double advance_valve(Valve& valve, double t0, double dt_s) const;
+  double orifice_flow_l_per_s(double k_l_per_min, double pressure_mpa) const;
+  double line_compliance_l_per_mpa(double pressure_mpa) const;
+
+  PlantParams params_;
+  std::array<NozzleTruth, kMaxNozzles> truth_{};
+  std::array<Valve, kMaxNozzles> valves_{};
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> unit_normal_{0.0, 1.0};
+
+  double time_s_ = 0.0;
+  double pressure_mpa_ = 0.0;
+  double sensor_pressure_mpa_ = 0.0;  // transmitter output (lagged)
+  double sensor_noise_volts_ = 0.0;   // drawn once per step()
+  bool pump_on_ = false;
+  double pump_speed_ = 0.0;  // 0..1
+  double pump_flow_l_per_s_ = 0.0;
+  double return_volts_ = 0.0;
+  double return_opening_ = 0.0;
+  double return_flow_l_per_s_ = 0.0;
+  double speed_m_per_s_ = 0.0;
+  double distance_m_ = 0.0;
+  double metered_l_ = 0.0;  // volume through the flow meter
+  std::uint64_t flow_pulses_ = 0;
+  std::uint64_t wheel_pulses_ = 0;
+  double tank_level_l_ = 0.0;
+  double filter_blockage_ = 0.0;
+  bool wire_broken_ = false;
+  bool shorted_ = false;
+};
+
+}  // namespace weedspray::control::plant

@@ -1,0 +1,159 @@
+#include "control/pwm_schedule.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace weedspray::control {
+
+using std::chrono::nanoseconds;
+
+std::vector<std::size_t> outer_first_order(std::size_t valve_count) {
+  std::vector<std::size_t> order;
+  order.reserve(valve_count);
+  std::size_t low = 0;
+  std::size_t high = valve_count;
+  while (low < high) {
+    order.push_back(low++);
+    if (low < high) order.push_back(--high);
+  }
+  return order;
+}
+
+PwmSchedule::PwmSchedule(const PwmConfig& config)
+    : valve_count_(config.valve_count),
+      period_(0),
+      min_on_(config.min_on_time),
+      min_off_(config.min_off_time) {
+  if (config.valve_count < 1 || config.valve_count > kMaxPwmValves) {
+    throw std::invalid_argument("PwmConfig.valve_count must be 1..32, got " +
+                                std::to_string(config.valve_count));
+  }
+  if (!(config.frequency_hz >= 1.0 && config.frequency_hz <= 20.0)) {
+    throw std::invalid_argument("PwmConfig.frequency_hz must be 1..20 Hz, got " +
+                                std::to_string(config.frequency_hz));
+  }
+  period_ = nanoseconds(std::llround(1e9 / config.frequency_hz));
+  if (min_on_.count() < 0 || min_off_.count() < 0) {
+    throw std::invalid_argument("PwmConfig.min_on_time/min_off_time must be >= 0");
+  }
+  if (min_on_ + min_off_ > period_) {
+    throw std::invalid_argument("PwmConfig.min_on_time + min_off_time exceed the PWM period");
+  }
+  std::vector<std::size_t> order =
+      config.order.empty() ? outer_first_order(valve_count_) : config.order;
+  if (order.size() != valve_count_) {
+    throw std::invalid_argument("PwmConfig.order must list each of the " +
+                                std::to_string(valve_count_) + " valves once");
+  }
+  std::array<bool, kMaxPwmValves> seen{};
+  for (std::size_t slot = 0; slot < order.size(); ++slot) {
+    const std::size_t valve = order[slot];
+    if (valve >= valve_count_ || seen[valve]) {
+      throw std::invalid_argument("PwmConfig.order is not a permutation of 0.." +
+                                  std::to_string(valve_count_ - 1) + " (entry " +
+                                  std::to_string(slot) + " = " + std::to_string(valve) + ")");
+    }
+    seen[valve] = true;
+    valves_[valve].offset =
+        config.phase_mode == PwmPhaseMode::kStaggered
+            ? nanoseconds(period_.count() * static_cast<nanoseconds::rep>(slot) /
+                          static_cast<nanoseconds::rep>(valve_count_))
+            : nanoseconds(0);
+  }
+  start(nanoseconds(0));
+}
+
+void PwmSchedule::start(nanoseconds t0) noexcept {
+  for (std::size_t v = 0; v < valve_count_; ++v) {
+    Valve& valve = valves_[v];
+    valve.started = false;
+    // A virtual closed period precedes the first one, so period_start is never a future time.
+    valve.period_start = t0 + valve.offset - period_;
+    valve.next_period_start = t0 + valve.offset;
+    valve.on_time = nanoseconds(0);
+    valve.latched_duty_pct = 0.0;
+  }
+  cursor_ = t0;
+  mask_ = 0;
+}
+
+void PwmSchedule::set_duty(std::size_t valve, double duty_pct) noexcept {
+  if (valve >= valve_count_) return;
+  valves_[valve].requested_duty_pct = std::isnan(duty_pct) ? 0.0 : std::clamp(duty_pct, 0.0, 100.0);
+}
+
+void PwmSchedule::set_duties(std::span<const double> duty_pct) noexcept {
+  const std::size_t n = std::min(duty_pct.size(), valve_count_);
+  for (std::size_t v = 0; v < n; ++v) set_duty(v, duty_pct[v]);
+}
+
+std::uint32_t PwmSchedule::force_closed() noexcept {
+  for (std::size_t v = 0; v < valve_count_; ++v) {
+    valves_[v].requested_duty_pct = 0.0;
+    valves_[v].latched_duty_pct = 0.0;
+    valves_[v].on_time = nanoseconds(0);
+  }
+  mask_ = 0;
+  return mask_;
+}
+
+nanoseconds PwmSchedule::on_time_for(double duty_pct) const noexcept {
+  if (!(duty_pct > 0.0)) return nanoseconds(0);
+  if (duty_pct >= 100.0) return period_;
+  auto on = nanoseconds(std::llround(duty_pct / 100.0 * static_cast<double>(period_.count())));
+  if (on > nanoseconds(0) && on < min_on_) on = (on * 2 < min_on_) ? nanoseconds(0) : min_on_;
+  const nanoseconds off = period_ - on;
+  if (off > nanoseconds(0) && off < min_off_) {
+    on = (off * 2 < min_off_) ? period_ : period_ - min_off_;
+  }
+  return on;
+}
+
+double PwmSchedule::effective_duty_pct(double duty_pct) const noexcept {
+  return 100.0 * static_cast<double>(on_time_for(duty_pct).count()) /
+         static_cast<double>(period_.count());
+}
+
+nanoseconds PwmSchedule::phase_offset(std::size_t valve) const noexcept {
+  return valve < valve_count_ ? valves_[valve].offset : nanoseconds(0);
+}
+
+PwmValveState PwmSchedule::valve_state(std::size_t valve) const noexcept {
+  if (valve >= valve_count_) return PwmValveState{};
+  const Valve& v = valves_[valve];
+  return PwmValveState{(mask_ >> valve & 1u) != 0, v.latched_duty_pct, v.period_start, v.on_time};
+}
+
+PwmEdge PwmSchedule::next_edge() noexcept {
+  // Every pending event lies strictly after the last applied one: period starts advance by
+  // T > 0 and an off event lies inside its period, so the earliest pending event is next.
+  auto close_time = [this](std::size_t v) {
+    const Valve& valve = valves_[v];
+    const bool closes_in_period = valve.started && (mask_ >> v & 1u) != 0 &&
+                                  valve.on_time > nanoseconds(0) && valve.on_time < period_;
+    return closes_in_period ? valve.period_start + valve.on_time : nanoseconds::max();
+  };
+  nanoseconds t = nanoseconds::max();
+  for (std::size_t v = 0; v < valve_count_; ++v) {
+    t = std::min({t, valves_[v].next_period_start, close_time(v)});
+  }
+  for (std::size_t v = 0; v < valve_count_; ++v) {
+    Valve& valve = valves_[v];
+    const std::uint32_t bit = 1u << v;
+    if (close_time(v) == t) mask_ &= ~bit;
+    if (valve.next_period_start == t) {
+      valve.started = true;
+      valve.period_start = t;
+      valve.next_period_start = t + period_;
+      valve.latched_duty_pct = valve.requested_duty_pct;
+      valve.on_time = on_time_for(valve.latched_duty_pct);
+      mask_ = valve.on_time > nanoseconds(0) ? (mask_ | bit) : (mask_ & ~bit);
+    }
+  }
+  cursor_ = t;
+  return PwmEdge{t, mask_};
+}
+
+}  // namespace weedspray::control

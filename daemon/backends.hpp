@@ -1,0 +1,56 @@
+// The devices the daemon drives, behind the io interfaces. backends_hw.cpp opens the board's
+// (libgpiod, IIO, V4L2, libmodbus); backends_sim.cpp builds the simulated machine. run.cpp
+// picks one; nothing else knows which it got.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "daemon/config.hpp"
+#include "daemon/options.hpp"
+#include "io/analog.hpp"
+#include "io/camera.hpp"
+#include "io/clock.hpp"
+#include "io/digital_input.hpp"
+#include "io/digital_output.hpp"
+#include "io/pulse_input.hpp"
+#include "io/signal_conversion.hpp"
+#include "io/tank_level.hpp"
+
+namespace weedspray::daemon {
+
+struct Backends {
+  io::Clock* clock = nullptr;
+  io::DigitalOutputBank* valves = nullptr;  // one line per nozzle
+  io::DigitalOutputBank* pump = nullptr;    // null: not wired
+  io::DigitalOutputBank* buzzer = nullptr;  // null: not wired
+  io::DigitalOutputBank* led = nullptr;     // null: not wired
+  io::AnalogInput* pressure_adc = nullptr;
+  io::AnalogOutput* return_valve = nullptr;
+  io::PulseInput* flow = nullptr;       // null: no flow meter
+  io::PulseInput* wheel = nullptr;      // null: fixed speed
+  io::DigitalInput* key = nullptr;      // null: no start/stop key
+  io::TankLevelSensor* tank = nullptr;  // null: no tank sensor
+  std::vector<io::Camera*> cameras;     // one per [[camera]]
+  io::CurrentLoopSensorConfig sensor{};
+  io::ValveDriveConfig drive{};
+  std::string mode;  // "hw" | "sim"
+
+  // Sim only: advances the simulated world that no device drives (the vehicle's speed).
+  std::function<void(double t_s)> drive_world;
+  // Sim only: "valves=0x0 pump=0" as the plant sees them (written at exit for the tests).
+  std::function<std::string()> describe_outputs;
+
+  std::vector<std::shared_ptr<void>> owned;  // keeps the devices alive
+
+  // Every output to its safe value: valves closed, pump off, return valve open, buzzer/LED off.
+  void force_safe() noexcept;
+};
+
+// Throws std::runtime_error naming the device that could not be opened.
+Backends make_hw_backends(const Config& config);
+Backends make_sim_backends(const Config& config, const Options& options);
+
+}  // namespace weedspray::daemon

@@ -1,0 +1,127 @@
+// The board: libgpiod lines, IIO ADC/DAC, V4L2 cameras, libmodbus tank sensor, all configured
+// from the [gpio], [adc], [dac], [modbus] and [[camera]] sections.
+#include <stdexcept>
+
+#include "daemon/backends.hpp"
+#include "io/linux/gpio_digital_input.hpp"
+#include "io/linux/gpio_output_bank.hpp"
+#include "io/linux/gpio_pulse_input.hpp"
+#include "io/linux/iio_analog.hpp"
+#include "io/linux/modbus_tank_level.hpp"
+#include "io/linux/monotonic_clock.hpp"
+#include "io/linux/v4l2_camera.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+io::hw::CameraPixelFormat pixel_format(const std::string& name) {
+  if (name == "MJPG") return io::hw::CameraPixelFormat::kMjpeg;
+  if (name == "RGB3") return io::hw::CameraPixelFormat::kRgb24;
+  if (name == "GREY") return io::hw::CameraPixelFormat::kGrey;
+  return io::hw::CameraPixelFormat::kYuyv;
+}
+
+template <class T>
+T* keep(Backends& b, std::shared_ptr<T> device) {
+  b.owned.push_back(device);
+  return device.get();
+}
+
+io::DigitalOutputBank* single_line(Backends& b, const GpioSection& gpio, int offset,
+                                   bool active_low) {
+  if (offset < 0) return nullptr;
+  io::hw::GpioOutputBankConfig config;
+  config.chip = gpio.chip;
+  config.lines.push_back(io::hw::GpioLineConfig{.name = {}, .offset = offset,
+                                                .active_low = active_low, .safe_value = false});
+  return keep(b, std::make_shared<io::hw::GpioOutputBank>(config));
+}
+
+io::PulseInput* pulse_line(Backends& b, const GpioSection& gpio, int offset) {
+  if (offset < 0) return nullptr;
+  io::hw::GpioPulseInputConfig config;
+  config.chip = gpio.chip;
+  config.line.offset = offset;
+  return keep(b, std::make_shared<io::hw::GpioPulseInput>(config));
+}
+
+}  // namespace
+
+Backends make_hw_backends(const Config& config) {
+  Backends b;
+  b.mode = "hw";
+  b.clock = keep(b, std::make_shared<io::hw::MonotonicClock>());
+  const auto& gpio = config.gpio;
+  if (gpio.valve_offsets.empty()) {
+    throw std::runtime_error("gpio.valve_offsets is empty: no valve lines to drive (use --sim "
+                             "to run without hardware)");
+  }
+  io::hw::GpioOutputBankConfig valves;
+  valves.chip = gpio.chip;
+  for (int offset : gpio.valve_offsets) {
+    valves.lines.push_back(io::hw::GpioLineConfig{
+        .name = {}, .offset = offset, .active_low = gpio.valve_active_low, .safe_value = false});
+  }
+  // Lines are requested with their safe values as defaults: no valve glitches open here.
+  b.valves = keep(b, std::make_shared<io::hw::GpioOutputBank>(valves));
+  b.pump = single_line(b, gpio, gpio.pump_offset, gpio.pump_active_low);
+  b.buzzer = single_line(b, gpio, gpio.buzzer_offset, false);
+  b.led = single_line(b, gpio, gpio.led_offset, false);
+  b.flow = pulse_line(b, gpio, gpio.flow_offset);
+  b.wheel = config.wheel.source == "fixed" ? nullptr : pulse_line(b, gpio, gpio.wheel_offset);
+  if (config.wheel.source == "pulses" && b.wheel == nullptr) {
+    throw std::runtime_error("wheel.source = \"pulses\" needs gpio.wheel_offset");
+  }
+  if (gpio.key_offset >= 0) {
+    io::hw::GpioDigitalInputConfig key;
+    key.chip = gpio.chip;
+    key.line.offset = gpio.key_offset;
+    key.line.active_low = gpio.key_active_low;
+    b.key = keep(b, std::make_shared<io::hw::GpioDigitalInput>(key));
+  }
+
+  io::hw::IioChannelConfig adc;
+  adc.device = config.adc.iio_device;
+  adc.channel = config.adc.pressure_channel;
+  b.pressure_adc = keep(b, std::make_shared<io::hw::IioAnalogInput>(adc, *b.clock));
+  io::hw::IioAnalogOutputConfig dac;
+  dac.channel.device = config.dac.iio_device;
+  dac.channel.channel = config.dac.channel;
+  dac.full_scale_volts = config.dac.full_scale_v;
+  b.drive.dac_full_scale_volts = config.dac.full_scale_v;
+  b.drive.amplifier_gain = b.drive.valve_full_scale_volts / config.dac.full_scale_v;
+  // Safe: return valve fully open, so the line holds no pressure.
+  dac.safe_volts = io::dac_volts_from_valve_opening(1.0, b.drive);
+  b.return_valve = keep(b, std::make_shared<io::hw::IioAnalogOutput>(dac));
+  b.sensor.shunt_ohms = config.adc.shunt_ohms;
+  b.sensor.pressure_at_min_mpa = config.pressure.sensor_min_mpa;
+  b.sensor.pressure_at_max_mpa = config.pressure.sensor_max_mpa;
+  b.sensor.fault_below_ma = config.alarms.sensor_fault_low_ma;
+  b.sensor.fault_above_ma = config.alarms.sensor_fault_high_ma;
+
+  if (config.modbus.enabled) {
+    io::hw::ModbusTankLevelConfig modbus;
+    modbus.device = config.modbus.device;
+    modbus.baud = config.modbus.baud;
+    modbus.parity = config.modbus.parity.front();
+    modbus.slave_id = config.modbus.slave_id;
+    modbus.register_address = config.modbus.tank_register;
+    modbus.percent_per_count = config.modbus.tank_scale_pct_per_count;
+    modbus.response_timeout =
+        std::chrono::milliseconds(static_cast<int>(config.modbus.timeout_s * 1000));
+    b.tank = keep(b, std::make_shared<io::hw::ModbusTankLevel>(modbus, *b.clock));
+  }
+  for (const auto& camera : config.cameras) {
+    io::hw::V4l2CameraConfig v4l2;
+    v4l2.device = camera.device;
+    v4l2.width = camera.width;
+    v4l2.height = camera.height;
+    v4l2.fps = static_cast<int>(camera.fps);
+    v4l2.pixel_format = pixel_format(camera.format);
+    if (camera.exposure_us > 0) v4l2.exposure_absolute = (camera.exposure_us + 50) / 100;
+    b.cameras.push_back(keep(b, std::make_shared<io::hw::V4l2Camera>(v4l2, *b.clock)));
+  }
+  return b;
+}
+
+}  // namespace weedspray::daemon

@@ -1,0 +1,239 @@
+// The daemon's configuration: /etc/weedspray/weedspray.toml plus conf.d/*.toml drop-ins,
+// parsed once into this immutable, range-checked struct. Every key, with its type, default,
+// range, unit and documentation, is declared once in config_schema.cpp; the members below
+// carry no defaults of their own (default_config() applies the schema's).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace weedspray::daemon {
+
+struct DaemonSection {
+  bool autostart;
+  std::string log_level;  // trace|debug|info|warn|error
+  std::string state_dir;
+  double status_max_rate_hz;     // PropertiesChanged at most this often
+  double input_stale_timeout_s;  // any live input older than this -> valves off
+};
+
+struct BoomSection {
+  int nozzles;
+  double nozzle_width_m;
+  double valve_open_delay_s;
+  double valve_close_delay_s;
+};
+
+struct CameraSection {
+  std::string device;
+  int width;
+  int height;
+  double fps;
+  std::string format;  // YUYV|MJPG|RGB3|GREY
+  int exposure_us;     // 0 = automatic
+  double mount_height_m;
+  double tilt_deg;  // optical axis from vertical, looking forward
+  double vfov_deg;
+  double distance_to_nozzles_m;  // nozzle line behind the camera's nadir
+  int first_nozzle;
+  int nozzle_count;
+};
+
+struct VisionSection {
+  std::string index;
+  std::string threshold;
+  int fixed_threshold;
+  int grid_rows;
+};
+
+struct SpraySection {
+  double nominal_flow_l_per_min;
+  double nominal_speed_m_per_s;
+  double max_density;
+  double calibration_slope_l_per_min_per_pct;
+  double calibration_offset_l_per_min;
+  double calibration_pressure_mpa;
+  double duty_min_pct;
+  double duty_max_pct;
+  int quantiser_levels;
+  double hysteresis_pct;
+  double decision_threshold;
+  bool pressure_compensation;
+};
+
+struct PwmSection {
+  double frequency_hz;
+  bool staggered;
+  std::string order;  // outer_first|inner_first|left_to_right
+  double min_on_s;
+  double min_off_s;
+  double dead_man_s;
+};
+
+struct PressureSection {
+  double setpoint_mpa;
+  std::string controller;  // fuzzy_pid|pid
+  double loop_hz;
+  double kp;
+  double ki;
+  double kd;
+  double cp;
+  double ci;
+  double cd;
+  double range_mpa;       // Vmax - Vmin for the fuzzy quantisation
+  double sensor_min_mpa;  // pressure at 4 mA
+  double sensor_max_mpa;  // pressure at 20 mA
+  double output_min;      // return-valve closure 0..1
+  double output_max;
+};
+
+struct GpioSection {
+  std::string chip;
+  std::vector<int> valve_offsets;  // one per nozzle, boom order; empty = not wired
+  bool valve_active_low;
+  int pump_offset;  // -1 = not wired
+  bool pump_active_low;
+  int buzzer_offset;
+  int led_offset;
+  int key_offset;
+  bool key_active_low;
+  int flow_offset;
+  int wheel_offset;
+};
+
+struct AdcSection {
+  std::string iio_device;
+  int pressure_channel;
+  double shunt_ohms;  // I/V resistor of the 4-20 mA loop
+};
+
+struct DacSection {
+  std::string iio_device;
+  int channel;
+  double full_scale_v;
+};
+
+struct FlowSection {
+  double pulses_per_litre;
+};
+
+struct WheelSection {
+  std::string source;  // pulses|fixed
+  double pulses_per_metre;
+  double fixed_speed_m_per_s;
+};
+
+struct ModbusSection {
+  bool enabled;
+  std::string device;
+  int baud;
+  std::string parity;  // N|E|O
+  int slave_id;
+  int tank_register;
+  double tank_scale_pct_per_count;
+  double poll_period_s;
+  double timeout_s;
+};
+
+struct AlarmsSection {
+  double over_pressure_mpa;
+  double sensor_fault_low_ma;
+  double sensor_fault_high_ma;
+  double blocked_pressure_mpa;
+  double blocked_flow_l_per_min;
+  double no_flow_l_per_min;
+  double tank_low_pct;
+  double tank_empty_pct;
+  double modbus_silent_s;
+  double camera_stall_s;
+  double debounce_s;
+  int control_overrun_limit;
+};
+
+struct LogSection {
+  std::string dir;  // "" = <daemon.state_dir>/as-applied
+  int rotate_bytes;
+  int keep_files;
+};
+
+struct SimSection {
+  std::string speed_profile;  // constant|sine|ramp
+  double speed_min_m_per_s;
+  double speed_max_m_per_s;
+  double speed_period_s;
+  std::string images_dir;  // "" = the bundled field images
+  int seed;
+};
+
+// Where a key's value came from (file and line; line 0 = built-in default).
+struct KeySource {
+  std::string file;
+  int line = 0;
+};
+
+struct Config {
+  DaemonSection daemon;
+  BoomSection boom;
+  std::vector<CameraSection> cameras;
+  VisionSection vision;
+  SpraySection spray;
+  PwmSection pwm;
+  PressureSection pressure;
+  GpioSection gpio;
+  AdcSection adc;
+  DacSection dac;
+  FlowSection flow;
+  WheelSection wheel;
+  ModbusSection modbus;
+  AlarmsSection alarms;
+  LogSection log;
+  SimSection sim;
+
+  std::vector<std::string> files;            // files read, in order
+  std::map<std::string, KeySource> sources;  // "pressure.setpoint_mpa" -> where it was set
+
+  // <log.dir>, or <daemon.state_dir>/as-applied when log.dir is empty.
+  [[nodiscard]] std::filesystem::path as_applied_dir() const;
+};
+
+// A bad configuration: which file, line and key, and what is wrong with it.
+class ConfigError : public std::runtime_error {
+ public:
+  ConfigError(std::string file, int line, std::string key, const std::string& message);
+  const std::string& file() const { return file_; }
+  int line() const { return line_; }
+  const std::string& key() const { return key_; }
+
+ private:
+  std::string file_;
+  int line_;
+  std::string key_;
+};
+
+// Every key at its documented default, with one camera covering every nozzle.
+[[nodiscard]] Config default_config();
+
+// Reads `main_file` and then `<its folder>/conf.d/*.toml` in name order (later files win).
+// Throws ConfigError naming the file, line and key of the first problem.
+[[nodiscard]] Config load_config(const std::filesystem::path& main_file);
+
+// Same, from in-memory documents (name, text) in order; used by tests and --check-config.
+[[nodiscard]] Config load_config_from_strings(
+    const std::vector<std::pair<std::string, std::string>>& documents);
+
+// The effective configuration as TOML (every key, current values), parseable back.
+[[nodiscard]] std::string dump_config(const Config& config);
+
+using ConfigPtr = std::shared_ptr<const Config>;
+
+#ifndef WEEDSPRAY_CONFIG_PATH  // set by CMake from the install prefix's sysconfdir
+#define WEEDSPRAY_CONFIG_PATH "/etc/weedspray/weedspray.toml"
+#endif
+inline constexpr const char* kDefaultConfigPath = WEEDSPRAY_CONFIG_PATH;
+
+}  // namespace weedspray::daemon

@@ -1,0 +1,52 @@
+// weedsprayd: command line, then either a configuration check or the daemon itself.
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "daemon/config.hpp"
+#include "daemon/config_schema.hpp"
+#include "daemon/options.hpp"
+#include "daemon/run.hpp"
+
+int main(int argc, char** argv) {
+  using namespace weedspray::daemon;
+  Options options;
+  options.config_path = kDefaultConfigPath;
+  CLI::App app{"weedsprayd: camera-guided variable-rate weed sprayer controller"};
+  app.add_option("--config", options.config_path, "main configuration file (drop-ins: conf.d/)");
+  app.add_flag("--check-config", options.check_config, "validate the configuration and exit");
+  app.add_flag("--dump-config", options.dump_config, "print the effective configuration");
+  app.add_flag("--print-default-config", options.print_default_config,
+               "print every key, documented, at its default");
+  app.add_flag("--sim", options.sim, "simulated hydraulics, pulses and camera");
+  app.add_flag("--user", options.user_bus, "use the session bus instead of the system bus");
+  app.add_flag("--no-bus", options.no_bus, "run without D-Bus");
+  app.add_option("--sim-images", options.sim_images, "field image folder for --sim");
+  app.add_option("--state-dir", options.state_dir, "overrides daemon.state_dir");
+  app.add_option("--valve-state-file", options.valve_state_file,
+                 "sim: write the final valve states here on exit");
+  app.add_option("--run-seconds", options.run_seconds, "exit by itself after this long")
+      ->check(CLI::NonNegativeNumber);
+  CLI11_PARSE(app, argc, argv);
+
+  if (options.print_default_config) {
+    std::cout << documented_config();
+    return 0;
+  }
+  if (options.check_config || options.dump_config) {
+    try {
+      const Config config = load_config(options.config_path);
+      if (options.dump_config) {
+        std::cout << dump_config(config);
+      } else {
+        std::cout << "configuration OK:";
+        for (const auto& file : config.files) std::cout << " " << file;
+        std::cout << "\n";
+      }
+      return 0;
+    } catch (const ConfigError& error) {
+      std::cerr << "weedsprayd: " << error.what() << "\n";
+      return 1;
+    }
+  }
+  return run_daemon(options);
+}

@@ -1,0 +1,22 @@
+// Command line of weedsprayd.
+#pragma once
+
+#include <string>
+
+namespace weedspray::daemon {
+
+struct Options {
+  std::string config_path;  // main configuration file
+  bool check_config = false;
+  bool dump_config = false;
+  bool print_default_config = false;
+  bool sim = false;              // simulated hydraulics, pulses and camera
+  bool user_bus = false;         // session bus instead of the system bus
+  bool no_bus = false;           // run without D-Bus (sim on a machine without a session bus)
+  std::string sim_images;        // overrides sim.images_dir
+  std::string state_dir;         // overrides daemon.state_dir
+  std::string valve_state_file;  // sim: final valve states written here on exit
+  double run_seconds = 0;        // stop by itself after this long (0 = until a signal)
+};
+
+}  // namespace weedspray::daemon

@@ -1,0 +1,19 @@
+# CPack: a Debian package of the whole install tree (owner: daemon engineer).
+set(CPACK_GENERATOR "DEB")
+set(CPACK_PACKAGE_NAME "weedspray")
+set(CPACK_PACKAGE_VENDOR "weedspray")
+set(CPACK_PACKAGE_CONTACT "weedspray maintainers <weedspray@localhost>")
+set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "${PROJECT_DESCRIPTION}")
+set(CPACK_DEBIAN_PACKAGE_SECTION "misc")
+set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
+# Library dependencies from the binaries (dpkg-shlibdeps), plus the D-Bus daemon.
+set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "dbus, systemd")
+# The configuration file is a conffile: upgrades keep the user's edits.
+set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
+    "${CMAKE_CURRENT_BINARY_DIR}/conffiles;${PROJECT_SOURCE_DIR}/systemd/debian/postinst")
+set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
+file(WRITE "${CMAKE_CURRENT_BINARY_DIR}/conffiles"
+     "${CMAKE_INSTALL_FULL_SYSCONFDIR}/weedspray/weedspray.toml\n")
+set(CPACK_PACKAGING_INSTALL_PREFIX "/usr")
+include(CPack)

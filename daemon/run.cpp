@@ -1,0 +1,544 @@
+// The daemon's main thread: picks the backends, starts the sprayer's threads, and runs the
+// sd-event loop with the D-Bus service, signals (SIGTERM/SIGINT: safe exit, SIGHUP: reload),
+// the alarm evaluation and state machine, the status snapshots and the systemd watchdog.
+#include "daemon/run.hpp"
+
+#include <spdlog/spdlog.h>
+#include <systemd/sd-daemon.h>
+#include <systemd/sd-event.h>
+
+#include <algorithm>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <thread>
+
+#include "daemon/alarms.hpp"
+#include "daemon/as_applied_log.hpp"
+#include "daemon/backends.hpp"
+#include "daemon/config.hpp"
+#include "daemon/dbus_service.hpp"
+#include "daemon/logging.hpp"
+#include "daemon/sprayer.hpp"
+#include "daemon/state_machine.hpp"
+#include "daemon/status.hpp"
+#include "daemon/totals.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+using namespace std::chrono_literals;
+constexpr std::uint64_t kTickUsec = 50'000;  // 20 Hz main-loop tick
+constexpr std::size_t kLatencyWindow = 1000;
+
+double seconds(Nanos t) { return std::chrono::duration<double>(t).count(); }
+
+Config load_with_overrides(const Options& options) {
+  Config config = load_config(options.config_path);
+  if (!options.state_dir.empty()) config.daemon.state_dir = options.state_dir;
+  return config;
+}
+
+// Keys applied live on reload; every other change waits for a restart.
+Config with_live_sections_of(Config target, const Config& live_from) {
+  target.spray = live_from.spray;
+  target.alarms = live_from.alarms;
+  target.pressure.setpoint_mpa = live_from.pressure.setpoint_mpa;
+  target.daemon.log_level = live_from.daemon.log_level;
+  target.daemon.autostart = live_from.daemon.autostart;
+  target.daemon.status_max_rate_hz = live_from.daemon.status_max_rate_hz;
+  return target;
+}
+
+class Daemon final : public CommandHandler {
+ public:
+  Daemon(const Options& options, Config config)
+      : options_(options),
+        config_(std::move(config)),
+        alarms_(config_.alarms),
+        setpoint_mpa_(config_.pressure.setpoint_mpa) {}
+
+  ~Daemon() override {
+    if (tick_source_ != nullptr) sd_event_source_unref(tick_source_);
+    for (auto* source : signal_sources_) sd_event_source_unref(source);
+    dbus_.reset();
+    if (event_ != nullptr) sd_event_unref(event_);
+  }
+
+  int run() {
+    backends_ = options_.sim ? make_sim_backends(config_, options_) : make_hw_backends(config_);
+    spdlog::info("backends: {}", backends_.mode);
+    totals_file_ = std::filesystem::path(config_.daemon.state_dir) / "totals.toml";
+    std::filesystem::create_directories(config_.daemon.state_dir);
+    std::string totals_error;
+    base_totals_ = load_totals(totals_file_, &totals_error);
+    if (!totals_error.empty()) spdlog::warn("totals not restored: {}", totals_error);
+    log_ = std::make_unique<AsAppliedLog>(
+        config_.as_applied_dir(), static_cast<std::uintmax_t>(config_.log.rotate_bytes),
+        config_.log.keep_files);
+
+    check(sd_event_default(&event_), "sd_event_default");
+    for (int signal : {SIGTERM, SIGINT, SIGHUP}) {
+      sd_event_source* source = nullptr;
+      check(sd_event_add_signal(event_, &source, signal, &Daemon::on_signal, this),
+            "sd_event_add_signal");
+      signal_sources_.push_back(source);
+    }
+    if (!options_.no_bus) {
+      try {
+        dbus_ = std::make_unique<DbusService>(event_, options_.user_bus, *this);
+      } catch (const std::exception& error) {
+        if (!options_.sim) throw;
+        spdlog::warn("{}; simulating without D-Bus", error.what());
+      }
+    }
+
+    sprayer_ = std::make_unique<Sprayer>(config_, backends_);
+    if (backends_.drive_world) backends_.drive_world(0.0);
+    sprayer_->start();
+    for (const auto& warning : sprayer_->realtime_warnings()) {
+      spdlog::warn("real-time priority not granted ({}); running at normal priority", warning);
+    }
+    start_time_ = backends_.clock->now();
+    log_thread_ = std::jthread([this](std::stop_token stop) { log_writer(stop); });
+
+    uint64_t watchdog_usec = 0;
+    if (sd_watchdog_enabled(0, &watchdog_usec) > 0) watchdog_interval_ = Nanos(watchdog_usec * 1000 / 2);
+    check(sd_event_add_time_relative(event_, &tick_source_, CLOCK_MONOTONIC, kTickUsec, 0,
+                                     &Daemon::on_tick, this),
+          "sd_event_add_time_relative");
+    sd_event_source_set_enabled(tick_source_, SD_EVENT_ON);
+
+    spdlog::info("weedsprayd running ({} nozzles, {} camera(s), config {})", config_.boom.nozzles,
+                 config_.cameras.size(), options_.config_path);
+    const int r = sd_event_loop(event_);
+    sd_notify(0, "STOPPING=1");
+    shutdown();
+    return r < 0 ? 1 : exit_code_;
+  }
+
+  // Called on every exit path: threads stopped, outputs forced safe, state persisted.
+  void shutdown() noexcept {
+    if (sprayer_) sprayer_->stop();
+    backends_.force_safe();
+    spdlog::info("outputs safe: valves closed, pump off, return valve open");
+    if (!options_.valve_state_file.empty() && backends_.describe_outputs) {
+      std::ofstream(options_.valve_state_file) << backends_.describe_outputs();
+    }
+    log_thread_ = {};  // joins after draining
+    persist_totals();
+  }
+
+  // --- D-Bus commands (main thread) ---
+  CommandResult start() override { return request(StateEvent::kStart, "Start"); }
+  CommandResult stop() override { return request(StateEvent::kStop, "Stop"); }
+
+  CommandResult set_pressure_setpoint(double mpa) override {
+    constexpr double kMin = 0.05;
+    const double max = std::min(1.0, config_.alarms.over_pressure_mpa);
+    if (!(mpa >= kMin && mpa < max)) {
+      char message[160];
+      std::snprintf(message, sizeof message,
+                    "pressure %.3g MPa outside %.3g..%.3g MPa (below alarms.over_pressure_mpa)",
+                    mpa, kMin, max);
+      return {kErrorInvalidArgument, message};
+    }
+    setpoint_mpa_ = mpa;
+    spdlog::info("pressure set-point {:.3f} MPa", mpa);
+    publish_params();
+    return {};
+  }
+
+  CommandResult reload_config() override {
+    Config fresh;
+    try {
+      fresh = load_with_overrides(options_);
+    } catch (const ConfigError& error) {
+      spdlog::error("reload refused, running configuration kept: {}", error.what());
+      return {kErrorConfig, error.what()};
+    }
+    const Config comparable = with_live_sections_of(fresh, config_);
+    if (dump_config(comparable) != dump_config(config_)) {
+      spdlog::warn("reload: changes outside [spray], [alarms], pressure.setpoint_mpa and "
+                   "[daemon] levels take effect after a restart");
+    }
+    config_ = with_live_sections_of(config_, fresh);
+    setpoint_mpa_ = config_.pressure.setpoint_mpa;
+    alarms_.set_thresholds(config_.alarms);
+    set_log_level(config_.daemon.log_level);
+    publish_params();
+    spdlog::info("configuration reloaded from {}", options_.config_path);
+    return {};
+  }
+
+  CommandResult clear_alarms() override {
+    const AlarmMask cleared = alarms_.clear();
+    ++trip_reset_;
+    for (std::size_t i = 0; i < kAlarmCount; ++i) {
+      const auto id = static_cast<AlarmId>(i);
+      if (cleared & alarm_bit(id)) {
+        spdlog::info("alarm cleared: {}", alarm_name(id));
+        if (dbus_) dbus_->alarm_cleared(std::string(alarm_name(id)).c_str());
+      }
+    }
+    if (state_.state() == SprayerState::kFault) transition(StateEvent::kAlarmsCleared, "ClearAlarms");
+    publish_params();
+    return {};
+  }
+
+ private:
+  static void check(int r, const char* what) {
+    if (r < 0) throw std::runtime_error(std::string(what) + ": " + std::strerror(-r));
+  }
+
+  static int on_signal(sd_event_source*, const struct signalfd_siginfo* info, void* userdata) {
+    auto& self = *static_cast<Daemon*>(userdata);
+    if (info->ssi_signo == SIGHUP) {
+      self.reload_config();
+      return 0;
+    }
+    spdlog::info("signal {}: stopping", info->ssi_signo);
+    sd_event_exit(self.event_, 0);
+    return 0;
+  }
+
+  static int on_tick(sd_event_source* source, uint64_t, void* userdata) {
+    auto& self = *static_cast<Daemon*>(userdata);
+    try {
+      self.tick();
+    } catch (const std::exception& error) {
+      spdlog::critical("main loop: {}", error.what());
+      self.exit_code_ = 1;
+      sd_event_exit(self.event_, 1);
+    }
+    sd_event_source_set_time_relative(source, kTickUsec);
+    sd_event_source_set_enabled(source, SD_EVENT_ON);
+    return 0;
+  }
+
+  CommandResult request(StateEvent event, const char* what) {
+    const Transition t = transition(event, what);
+    if (!t.accepted) return {kErrorNotPermitted, std::string(what) + " refused: " + t.reason};
+    return {};
+  }
+
+  Transition transition(StateEvent event, const char* cause) {
+    const Transition t = state_.handle(event);
+    if (t.accepted && t.from != t.to) {
+      spdlog::info("state {} -> {} ({})", to_string(t.from), to_string(t.to), cause);
+      publish_params();
+      const std::string status = "STATUS=" + std::string(to_string(t.to));
+      sd_notify(0, status.c_str());
+    }
+    return t;
+  }
+
+  void publish_params() {
+    LiveParams params = live_params_from(config_);
+    params.setpoint_mpa = setpoint_mpa_;
+    params.pump_enabled = state_.pump_enabled();
+    params.valves_enabled = state_.valves_enabled();
+    params.trip_reset = trip_reset_;
+    sprayer_->set_params(params);
+  }
+
+  void tick() {
+    const Nanos now = backends_.clock->now();
+    const double t = seconds(now - start_time_);
+    if (backends_.drive_world) backends_.drive_world(t);
+    const PressureStatus pressure = sprayer_->pressure();
+    const ControlStatus control = sprayer_->control();
+
+    if (state_.state() == SprayerState::kStarting && pressure.cycles > 0 && control.cycles > 0) {
+      transition(StateEvent::kSetupDone, "loops running");
+      sd_notify(0, "READY=1");
+      if (config_.daemon.autostart) transition(StateEvent::kStart, "daemon.autostart");
+    }
+    if (backends_.key != nullptr) {
+      const io::DigitalInputSample key = backends_.key->sample();
+      if (key.change_count != key_changes_) {
+        key_changes_ = key.change_count;
+        if (key.active) transition(StateEvent::kKeyPressed, "start/stop key");
+      }
+    }
+    drain_latencies();
+    evaluate_alarms(now, pressure, control);
+    heartbeat(now, pressure, control);
+
+    const double status_period = 1.0 / config_.daemon.status_max_rate_hz;
+    if (t - last_status_s_ >= status_period) {
+      last_status_s_ = t;
+      const Status status = make_status(pressure, control);
+      if (dbus_) dbus_->update(status);
+      if (options_.sim && t - last_print_s_ >= 1.0) {
+        last_print_s_ = t;
+        print_status_line(status);
+      }
+    }
+    if (t - last_persist_s_ >= 60.0) {
+      last_persist_s_ = t;
+      persist_totals();
+    }
+    if (options_.run_seconds > 0 && t >= options_.run_seconds) sd_event_exit(event_, 0);
+  }
+
+  void drain_latencies() {
+    while (auto latency = sprayer_->latencies().try_pop()) {
+      if (latencies_.size() < kLatencyWindow) {
+        latencies_.push_back(*latency);
+      } else {
+        latencies_[latency_next_] = *latency;
+      }
+      latency_next_ = (latency_next_ + 1) % kLatencyWindow;
+    }
+  }
+
+  double latency_p99() const {
+    if (latencies_.empty()) return 0;
+    std::vector<float> sorted = latencies_;
+    const auto k = static_cast<std::size_t>(0.99 * static_cast<double>(sorted.size() - 1));
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
+    return sorted[k];
+  }
+
+  void evaluate_alarms(Nanos now, const PressureStatus& pressure, const ControlStatus& control) {
+    AlarmInputs in;
+    in.now = now;
+    in.spraying = state_.state() == SprayerState::kSpraying;
+    in.open_fraction = control.open_fraction;
+    in.pressure_valid = pressure.cycles == 0 || pressure.sensor_ok;
+    in.pressure_mpa = pressure.pressure_mpa;
+    in.over_pressure_trip = pressure.tripped;
+    in.sensor_current_ma = pressure.current_ma;
+    in.flow_l_per_min = control.flow_l_per_min;
+    in.tank_enabled = backends_.tank != nullptr && (config_.modbus.enabled || options_.sim);
+    const io::TankLevelSample tank = sprayer_->tank();
+    in.tank_valid = tank.ok;
+    in.tank_level_pct = tank.level_pct;
+    if (tank.ok) tank_last_ok_ = tank.time;
+    in.tank_last_ok = std::max(tank_last_ok_, start_time_);
+    in.camera_expected = state_.state() == SprayerState::kSpraying;
+    in.last_frame_time = now;
+    in.ground_coverage_m_per_s = 1e9;
+    double lead_m = 1e9;
+    for (std::size_t i = 0; i < sprayer_->camera_count(); ++i) {
+      const CameraStatus camera = sprayer_->camera(i);
+      const auto footprint = sprayer_->footprint(i);
+      const double length = footprint.far_m - footprint.near_m;
+      in.last_frame_time = std::min(in.last_frame_time, std::max(camera.last_frame_time, spraying_since_));
+      in.ground_coverage_m_per_s = std::min(in.ground_coverage_m_per_s, camera.frame_rate_hz * length);
+      lead_m = std::min(lead_m, footprint.near_m + config_.cameras[i].distance_to_nozzles_m);
+    }
+    in.speed_m_per_s = control.speed_m_per_s;
+    in.expected_frame_interval_s = 0;
+    if (backends_.mode == "sim" && control.speed_m_per_s > 0.05 && sprayer_->camera_count() > 0) {
+      const auto footprint = sprayer_->footprint(0);
+      in.expected_frame_interval_s = (footprint.far_m - footprint.near_m) / control.speed_m_per_s;
+    }
+    in.vision_latency_s = control.last_latency_ms / 1e3;
+    in.lead_distance_m = lead_m;
+    const std::uint64_t overruns = total_overruns(pressure, control);
+    if (seconds(now - overrun_window_start_) >= 1.0) {
+      overruns_last_second_ = overruns - overruns_at_window_start_;
+      overruns_at_window_start_ = overruns;
+      overrun_window_start_ = now;
+    }
+    in.overruns_last_second = overruns_last_second_;
+
+    const AlarmMask raised = alarms_.evaluate(in);
+    for (std::size_t i = 0; i < kAlarmCount; ++i) {
+      const auto id = static_cast<AlarmId>(i);
+      if (!(raised & alarm_bit(id))) continue;
+      const std::string name(alarm_name(id));
+      if (is_fault(id)) {
+        spdlog::error("alarm raised: {} (fault: valves closed, pump off)", name);
+      } else {
+        spdlog::warn("alarm raised: {}", name);
+      }
+      if (dbus_) dbus_->alarm_raised(name.c_str());
+    }
+    if (alarms_.fault_latched() && state_.state() != SprayerState::kFault) {
+      transition(StateEvent::kFault, "alarm");
+    }
+    if (state_.state() == SprayerState::kSpraying) {
+      if (!was_spraying_) spraying_since_ = now;
+      was_spraying_ = true;
+    } else {
+      was_spraying_ = false;
+    }
+    const bool any = alarms_.active() != 0;
+    if (backends_.led != nullptr) backends_.led->write(any ? 1 : 0);
+    if (backends_.buzzer != nullptr) backends_.buzzer->write(alarms_.fault_latched() ? 1 : 0);
+  }
+
+  std::uint64_t total_overruns(const PressureStatus& pressure, const ControlStatus& control) const {
+    return pressure.overruns + control.overruns + sprayer_->pwm().late_edges;
+  }
+
+  // The watchdog is fed only while the real-time loops make progress.
+  void heartbeat(Nanos now, const PressureStatus& pressure, const ControlStatus& control) {
+    if (watchdog_interval_.count() == 0 || now - last_watchdog_ < watchdog_interval_) return;
+    if (pressure.cycles == heartbeat_pressure_ || control.cycles == heartbeat_control_) {
+      spdlog::error("real-time loops stalled: watchdog not fed");
+      return;
+    }
+    heartbeat_pressure_ = pressure.cycles;
+    heartbeat_control_ = control.cycles;
+    last_watchdog_ = now;
+    sd_notify(0, "WATCHDOG=1");
+  }
+
+  Totals current_totals() const {
+    const ControlStatus control = sprayer_ ? sprayer_->control() : ControlStatus{};
+    Totals totals = base_totals_;
+    totals.area_m2 += control.area_m2;
+    totals.volume_l += control.volume_l;
+    totals.uniform_volume_l += control.uniform_volume_l;
+    return totals;
+  }
+
+  void persist_totals() noexcept {
+    if (totals_file_.empty()) return;
+    try {
+      save_totals(totals_file_, current_totals());
+    } catch (const std::exception& error) {
+      spdlog::error("totals not saved: {}", error.what());
+    }
+  }
+
+  Status make_status(const PressureStatus& pressure, const ControlStatus& control) const {
+    Status s;
+    s.state = std::string(to_string(state_.state()));
+    s.mode = backends_.mode;
+    s.pressure_mpa = pressure.pressure_mpa;
+    s.pressure_setpoint_mpa = setpoint_mpa_;
+    s.flow_l_per_min = control.flow_l_per_min;
+    s.tank_level_pct = sprayer_->tank().level_pct;
+    s.speed_m_per_s = control.speed_m_per_s;
+    s.distance_m = control.distance_m;
+    s.nozzle_duty_pct.assign(control.duty_pct.begin(), control.duty_pct.begin() + control.nozzles);
+    s.zone_density.assign(control.density.begin(), control.density.begin() + control.nozzles);
+    for (std::size_t i = 0; i < kAlarmCount; ++i) {
+      const auto id = static_cast<AlarmId>(i);
+      if (alarms_.active() & alarm_bit(id)) s.alarms.emplace_back(alarm_name(id));
+    }
+    const Totals totals = current_totals();
+    s.volume_sprayed_l = totals.volume_l;
+    s.area_covered_m2 = totals.area_m2;
+    s.savings_pct = totals.savings_pct();
+    for (std::size_t i = 0; i < sprayer_->camera_count(); ++i) {
+      s.frame_rate_hz += sprayer_->camera(i).frame_rate_hz;
+    }
+    s.vision_latency_ms = control.last_latency_ms;
+    s.vision_latency_p99_ms = latency_p99();
+    s.control_overruns = total_overruns(pressure, control);
+    return s;
+  }
+
+  static void print_status_line(const Status& s) {
+    std::printf("%-8s P %.3f/%.3f MPa  Q %.3f L/min  v %.2f m/s  d %.1f m  duty", s.state.c_str(),
+                s.pressure_mpa, s.pressure_setpoint_mpa, s.flow_l_per_min, s.speed_m_per_s,
+                s.distance_m);
+    for (double duty : s.nozzle_duty_pct) std::printf(" %3.0f", duty);
+    std::printf("  %.1f L %.0f m2 saved %.0f%%  lat %.2f ms (p99 %.2f)", s.volume_sprayed_l,
+                s.area_covered_m2, s.savings_pct, s.vision_latency_ms, s.vision_latency_p99_ms);
+    if (!s.alarms.empty()) {
+      std::printf("  ALARMS:");
+      for (const auto& alarm : s.alarms) std::printf(" %s", alarm.c_str());
+    }
+    std::printf("\n");
+    std::fflush(stdout);
+  }
+
+  // As-applied writer (normal priority): drains the control loop's queue, flushes every second
+  // so a crash loses at most the last second.
+  void log_writer(std::stop_token stop) {
+    auto last_flush = std::chrono::steady_clock::now();
+    bool reported = false;
+    const auto drain = [&] {
+      while (auto record = sprayer_->records().try_pop()) {
+        if (!log_->write(*record) && !reported) {
+          reported = true;
+          spdlog::error("as-applied log: cannot write {}", log_->current_file().string());
+        }
+      }
+    };
+    while (!stop.stop_requested()) {
+      drain();
+      if (std::chrono::steady_clock::now() - last_flush >= 1s) {
+        log_->flush();
+        last_flush = std::chrono::steady_clock::now();
+      }
+      std::this_thread::sleep_for(100ms);
+    }
+    drain();
+    log_->flush();
+  }
+
+  Options options_;
+  Config config_;
+  Backends backends_;
+  std::unique_ptr<Sprayer> sprayer_;
+  StateMachine state_;
+  AlarmEvaluator alarms_;
+  std::unique_ptr<DbusService> dbus_;
+  sd_event* event_ = nullptr;
+  sd_event_source* tick_source_ = nullptr;
+  std::vector<sd_event_source*> signal_sources_;
+  std::unique_ptr<AsAppliedLog> log_;
+  std::jthread log_thread_;
+  std::filesystem::path totals_file_;
+  Totals base_totals_;
+  double setpoint_mpa_;
+  std::uint64_t trip_reset_ = 0;
+  std::uint64_t key_changes_ = 0;
+  Nanos start_time_{};
+  Nanos tank_last_ok_{};
+  Nanos spraying_since_{};
+  bool was_spraying_ = false;
+  Nanos overrun_window_start_{};
+  std::uint64_t overruns_at_window_start_ = 0;
+  std::uint64_t overruns_last_second_ = 0;
+  Nanos watchdog_interval_{0};
+  Nanos last_watchdog_{};
+  std::uint64_t heartbeat_pressure_ = 0;
+  std::uint64_t heartbeat_control_ = 0;
+  std::vector<float> latencies_;
+  std::size_t latency_next_ = 0;
+  double last_status_s_ = -1e9;
+  double last_print_s_ = -1e9;
+  double last_persist_s_ = 0;
+  int exit_code_ = 0;
+};
+
+}  // namespace
+
+int run_daemon(const Options& options) {
+  Config config;
+  try {
+    config = load_with_overrides(options);
+  } catch (const ConfigError& error) {
+    std::fprintf(stderr, "weedsprayd: %s\n", error.what());
+    return 1;
+  }
+  setup_logging(config.daemon.log_level);
+  // Block the signals sd-event handles before any thread exists, so every thread inherits the
+  // mask and they arrive only through the event loop.
+  sigset_t signals;
+  sigemptyset(&signals);
+  for (int signal : {SIGTERM, SIGINT, SIGHUP}) sigaddset(&signals, signal);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  if (io::lock_memory() != 0) spdlog::info("memory not locked (mlockall not permitted)");
+
+  Daemon daemon(options, std::move(config));
+  try {
+    return daemon.run();
+  } catch (const std::exception& error) {
+    spdlog::critical("fatal: {}", error.what());
+    daemon.shutdown();
+    return 1;
+  }
+}
+
+}  // namespace weedspray::daemon

@@ -1,0 +1,95 @@
+// Values exchanged between the daemon's threads. All trivially copyable: they travel through
+// io::LatestValue slots and io::SpscQueue rings, never through locks.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+
+#include "control/spray_rate_law.hpp"
+#include "io/valve_pwm_driver.hpp"
+#include "vision/pipeline.hpp"
+
+namespace weedspray::daemon {
+
+using Nanos = std::chrono::nanoseconds;
+
+// Main thread -> real-time loops, re-read when their version changes.
+struct LiveParams {
+  double setpoint_mpa = 0;
+  bool pump_enabled = false;     // Idle or Spraying
+  bool valves_enabled = false;   // Spraying
+  std::uint64_t trip_reset = 0;  // incremented by ClearAlarms: re-arms the over-pressure trip
+  control::SprayLawConfig law{};
+  control::NozzleLine line{};
+  bool pressure_compensation = true;
+  double over_pressure_mpa = 1.0;
+  double stale_timeout_s = 0.5;
+};
+
+// Pressure loop -> everyone.
+struct PressureStatus {
+  Nanos time{};  // sample time
+  double pressure_mpa = 0;
+  double current_ma = 0;
+  bool sensor_ok = false;
+  double closure = 0;  // controller output, return-valve closure 0..1
+  bool pump_on = false;
+  bool tripped = false;  // over-pressure trip latched (pump off) until trip_reset
+  std::uint64_t cycles = 0;
+  std::uint64_t overruns = 0;
+  std::uint64_t adc_errors = 0;
+};
+
+// Camera worker -> control loop, one per processed frame.
+struct FrameDensities {
+  Nanos capture_time{};
+  Nanos ready_time{};  // vision done
+  int rows = 0;
+  int cols = 0;
+  std::array<double, vision::kMaxZones> density{};
+};
+
+// Camera worker -> main thread.
+struct CameraStatus {
+  Nanos last_frame_time{};
+  std::uint64_t frames = 0;
+  std::uint64_t errors = 0;
+  double frame_rate_hz = 0;
+  double vision_ms = 0;  // processing time of the last frame
+  bool started = false;
+};
+
+// Control loop -> main thread.
+struct ControlStatus {
+  Nanos time{};
+  double distance_m = 0;
+  double speed_m_per_s = 0;
+  double flow_l_per_min = 0;
+  std::uint32_t nozzles = 0;
+  std::array<double, io::kMaxValves> duty_pct{};
+  std::array<double, io::kMaxValves> density{};  // pinned density under each nozzle now
+  double volume_l = 0;          // measured by the flow meter while spraying (session)
+  double area_m2 = 0;           // ground covered while spraying (session)
+  double uniform_volume_l = 0;  // nominal dose x area: what uniform spraying would use
+  double last_latency_ms = 0;   // frame capture -> scheduled, latest frame
+  std::uint64_t frames_scheduled = 0;
+  std::uint64_t cycles = 0;
+  std::uint64_t overruns = 0;
+  double open_fraction = 0;
+  bool inputs_stale = false;  // valves held closed because an input is stale
+};
+
+// Control loop -> as-applied log writer, one per PWM period.
+struct AppliedRecord {
+  Nanos time{};
+  double distance_m = 0;
+  double speed_m_per_s = 0;
+  double pressure_mpa = 0;
+  double flow_l_per_min = 0;
+  std::uint32_t nozzles = 0;
+  std::array<float, io::kMaxValves> duty_pct{};
+  std::array<float, io::kMaxValves> density{};
+};
+
+}  // namespace weedspray::daemon

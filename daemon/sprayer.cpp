@@ -1,0 +1,454 @@
+#include "daemon/sprayer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "daemon/geometry.hpp"
+#include "io/signal_conversion.hpp"
+#include "vision/threshold.hpp"
+#include "vision/vegetation_index.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+using std::chrono::duration;
+using namespace std::chrono_literals;
+
+double seconds(Nanos t) {
+  return duration<double>(t).count();
+}
+Nanos from_seconds(double s) {
+  return Nanos(static_cast<std::int64_t>(s * 1e9));
+}
+
+control::PwmConfig pwm_config(const Config& config) {
+  control::PwmConfig pwm;
+  const auto n = static_cast<std::size_t>(config.boom.nozzles);
+  pwm.valve_count = n;
+  pwm.frequency_hz = config.pwm.frequency_hz;
+  pwm.phase_mode = config.pwm.staggered ? control::PwmPhaseMode::kStaggered
+                                        : control::PwmPhaseMode::kSynchronous;
+  if (config.pwm.order == "outer_first") {
+    pwm.order = control::outer_first_order(n);
+  } else if (config.pwm.order == "inner_first") {
+    pwm.order = control::outer_first_order(n);
+    std::reverse(pwm.order.begin(), pwm.order.end());
+  } else {
+    for (std::size_t i = 0; i < n; ++i) pwm.order.push_back(i);
+  }
+  pwm.min_on_time = from_seconds(config.pwm.min_on_s);
+  pwm.min_off_time = from_seconds(config.pwm.min_off_s);
+  return pwm;
+}
+
+control::FuzzyPidConfig controller_config(const Config& config) {
+  const auto& p = config.pressure;
+  control::FuzzyPidConfig c;
+  c.base.gains = {p.kp, p.ki, p.kd};
+  c.base.output_min = p.output_min;
+  c.base.output_max = p.output_max;
+  c.base.anti_windup = control::AntiWindup::kBackCalculation;
+  c.base.derivative_filter_s = 0.01;
+  c.correction_weights = {p.cp, p.ci, p.cd};
+  c.error_range = p.range_mpa;
+  return c;
+}
+
+vision::PipelineConfig pipeline_config(const Config& config, int cols) {
+  vision::PipelineConfig c = vision::default_pipeline_config();
+  if (auto index = vision::parse_vegetation_index(config.vision.index)) c.index = *index;
+  if (auto method = vision::parse_threshold_method(config.vision.threshold)) c.threshold = *method;
+  c.threshold_params.fixed_threshold = config.vision.fixed_threshold;
+  c.rows = config.vision.grid_rows;
+  c.cols = cols;
+  return c;
+}
+
+}  // namespace
+
+LiveParams live_params_from(const Config& config) {
+  LiveParams p;
+  p.setpoint_mpa = config.pressure.setpoint_mpa;
+  p.law.nominal_flow_l_per_min = config.spray.nominal_flow_l_per_min;
+  p.law.nozzle_width_m = config.boom.nozzle_width_m;
+  p.law.nominal_speed_m_per_s = config.spray.nominal_speed_m_per_s;
+  p.law.max_density = config.spray.max_density;
+  p.law.decision_threshold = config.spray.decision_threshold;
+  p.law.min_duty_pct = config.spray.duty_min_pct;
+  p.law.max_duty_pct = config.spray.duty_max_pct;
+  p.line.slope_l_per_min_per_pct = config.spray.calibration_slope_l_per_min_per_pct;
+  p.line.intercept_l_per_min = config.spray.calibration_offset_l_per_min;
+  p.line.calibration_pressure_mpa = config.spray.calibration_pressure_mpa;
+  p.pressure_compensation = config.spray.pressure_compensation;
+  p.over_pressure_mpa = config.alarms.over_pressure_mpa;
+  p.stale_timeout_s = config.daemon.input_stale_timeout_s;
+  control::validate(p.law);
+  control::validate(p.line);
+  return p;
+}
+
+Sprayer::Sprayer(const Config& config, Backends& backends)
+    : config_(config),
+      io_(backends),
+      controller_(std::make_unique<control::PressureController>(
+          config.pressure.controller == "pid" ? control::PressureControlMode::kPid
+                                              : control::PressureControlMode::kFuzzyPid,
+          controller_config(config))),
+      schedule_(std::make_unique<control::PwmSchedule>(pwm_config(config))),
+      flow_trim_(control::FlowTrimConfig{}) {
+  io::ValvePwmDriverConfig driver;
+  driver.command_expiry = from_seconds(config.pwm.dead_man_s);
+  pwm_driver_ = std::make_unique<io::ValvePwmDriver<control::PwmSchedule>>(*io_.clock, *io_.valves,
+                                                                           *schedule_, driver);
+  if (io_.wheel != nullptr) {
+    control::OdometryConfig odometry;
+    odometry.pulses_per_metre = config.wheel.pulses_per_metre;
+    odometry_.emplace(odometry);
+  }
+  const auto nozzles = static_cast<std::size_t>(config.boom.nozzles);
+  if (config.spray.quantiser_levels >= 2) {
+    std::vector<double> levels{0.0};
+    const int n = config.spray.quantiser_levels;
+    for (int i = 0; i < n; ++i) {
+      levels.push_back(config.spray.duty_min_pct +
+                       (config.spray.duty_max_pct - config.spray.duty_min_pct) * i / (n - 1));
+    }
+    levels.push_back(100.0);
+    for (std::size_t i = 0; i < nozzles; ++i) {
+      quantisers_.emplace_back(levels, config.spray.hysteresis_pct);
+    }
+  }
+  if (config.cameras.size() > kMaxCameras || config.cameras.size() != io_.cameras.size()) {
+    throw std::invalid_argument("camera count: at most 8, one backend per [[camera]]");
+  }
+  nozzle_owner_.assign(nozzles, -1);
+  camera_count_ = config.cameras.size();
+  for (std::size_t i = 0; i < camera_count_; ++i) {
+    const auto& c = config.cameras[i];
+    auto& worker = cameras_[i];
+    worker.camera = io_.cameras[i];
+    worker.first_nozzle = c.first_nozzle;
+    worker.nozzle_count = c.nozzle_count;
+    worker.pipeline = std::make_unique<vision::Pipeline>(pipeline_config(config, c.nozzle_count));
+    control::NozzleSchedulerConfig scheduler;
+    scheduler.geometry = camera_geometry(c);
+    scheduler.nozzles = static_cast<std::size_t>(c.nozzle_count);
+    scheduler.rows = static_cast<std::size_t>(config.vision.grid_rows);
+    scheduler.opening_delay_s = config.boom.valve_open_delay_s;
+    scheduler.closing_delay_s = config.boom.valve_close_delay_s;
+    scheduler.gap_policy = control::GapPolicy::kClose;
+    worker.scheduler = std::make_unique<control::NozzleScheduler>(scheduler);
+    for (int n = c.first_nozzle; n < c.first_nozzle + c.nozzle_count; ++n) {
+      nozzle_owner_[static_cast<std::size_t>(n)] = static_cast<int>(i);
+    }
+  }
+  params_.publish(live_params_from(config));
+}
+
+Sprayer::~Sprayer() {
+  stop();
+}
+
+control::GroundInterval Sprayer::footprint(std::size_t i) const noexcept {
+  return control::ground_footprint(cameras_[i].scheduler->config().geometry);
+}
+
+void Sprayer::start() {
+  stopped_ = false;
+  io_.force_safe();  // outputs start safe, explicitly
+  const auto add = [this](io::ThreadRole role, std::string name, auto body) {
+    threads_.emplace_back(role, std::move(body));
+    thread_names_.push_back(std::move(name));
+  };
+  add(io::ThreadRole::kValvePwm, "valve PWM", [this](std::stop_token st) { pwm_driver_->run(st); });
+  add(io::ThreadRole::kPressureLoop, "pressure loop",
+      [this](std::stop_token st) { pressure_loop(st); });
+  add(io::ThreadRole::kControl, "control loop", [this](std::stop_token st) { control_loop(st); });
+  for (std::size_t i = 0; i < camera_count_; ++i) {
+    add(io::ThreadRole::kCamera, "camera " + std::to_string(i),
+        [this, i](std::stop_token st) { camera_loop(st, cameras_[i]); });
+  }
+  if (io_.tank != nullptr) {
+    add(io::ThreadRole::kModbus, "tank level", [this](std::stop_token st) { tank_loop(st); });
+  }
+}
+
+std::vector<std::string> Sprayer::realtime_warnings() const {
+  std::vector<std::string> warnings;
+  for (std::size_t i = 0; i < threads_.size(); ++i) {
+    const auto status = threads_[i].status();
+    if (status == io::RtStatus::kNoPermission || status == io::RtStatus::kFailed) {
+      warnings.push_back(thread_names_[i] + ": " + std::string(io::to_string(status)));
+    }
+  }
+  return warnings;
+}
+
+void Sprayer::stop() noexcept {
+  if (stopped_.exchange(true)) return;
+  for (auto& thread : threads_) thread.request_stop();
+  for (auto& thread : threads_) thread.stop_and_join();
+  threads_.clear();
+  for (std::size_t i = 0; i < camera_count_; ++i) cameras_[i].camera->stop();
+  io_.force_safe();
+}
+
+void Sprayer::pressure_loop(std::stop_token stop) noexcept {
+  const Nanos period = from_seconds(1.0 / config_.pressure.loop_hz);
+  io::PeriodicLoop loop(*io_.clock, period, io_.clock->now());
+  LiveParams params = params_.read();
+  std::uint64_t params_version = params_.version();
+  std::uint64_t trip_reset_seen = params.trip_reset;
+  PressureStatus status;
+  bool outputs_safe = false;
+  const double dt = seconds(period);
+  while (!stop.stop_requested()) {
+    loop.wait_next();
+    if (params_.version() != params_version) {
+      params_version = params_.version();
+      params_.try_read(params);
+    }
+    const io::AnalogSample sample = io_.pressure_adc->read();
+    const io::PressureReading reading = io::pressure_from_sensor_volts(sample.volts, io_.sensor);
+    status.time = sample.time;
+    status.current_ma = reading.current_ma;
+    status.sensor_ok = sample.ok && reading.ok();
+    status.pressure_mpa = status.sensor_ok ? reading.pressure_mpa : 0.0;
+    status.adc_errors = sample.error_count;
+    if (params.trip_reset != trip_reset_seen) {
+      trip_reset_seen = params.trip_reset;
+      status.tripped = false;
+    }
+    // Over-pressure: pump off in this very cycle; the main loop raises the alarm.
+    if (status.sensor_ok && status.pressure_mpa > params.over_pressure_mpa) status.tripped = true;
+
+    if (params.pump_enabled && status.sensor_ok && !status.tripped) {
+      if (io_.pump != nullptr && !status.pump_on) io_.pump->write(1);
+      status.pump_on = true;
+      outputs_safe = false;
+      if (!controller_->enabled()) {
+        controller_->enable(0.0, params.setpoint_mpa, status.pressure_mpa);
+      }
+      status.closure = controller_->update(params.setpoint_mpa, status.pressure_mpa, dt);
+      io_.return_valve->write(io::dac_volts_from_valve_opening(1.0 - status.closure, io_.drive));
+    } else if (!outputs_safe) {
+      if (io_.pump != nullptr) io_.pump->force_safe();
+      io_.return_valve->force_safe();
+      controller_->disable();
+      status.pump_on = false;
+      status.closure = 0.0;
+      outputs_safe = true;
+    }
+    status.cycles = loop.cycles();
+    status.overruns = loop.overruns();
+    pressure_.publish(status);
+  }
+  if (io_.pump != nullptr) io_.pump->force_safe();
+  io_.return_valve->force_safe();
+}
+
+void Sprayer::control_loop(std::stop_token stop) noexcept {
+  // 500 Hz: a frame waits at most 2 ms to be scheduled, and at 2.5 m/s the vehicle moves
+  // 5 mm per cycle.
+  constexpr Nanos kPeriod = 2ms;
+  constexpr Nanos kFlowWindow = 250ms;
+  io::PeriodicLoop loop(*io_.clock, kPeriod, io_.clock->now());
+  const std::size_t nozzles = nozzle_owner_.size();
+  const double boom_width_m = config_.boom.nozzle_width_m * static_cast<double>(nozzles);
+  const double flow_ppl = config_.flow.pulses_per_litre;
+  const Nanos record_period = from_seconds(1.0 / config_.pwm.frequency_hz);
+  LiveParams params = params_.read();
+  std::uint64_t params_version = params_.version();
+  ControlStatus status;
+  status.nozzles = static_cast<std::uint32_t>(nozzles);
+  Nanos last = io_.clock->now();
+  Nanos next_record = last + record_period;
+  std::uint64_t flow_count_start = io_.flow != nullptr ? io_.flow->snapshot().count : 0;
+  Nanos flow_window_start = last;
+  double fixed_distance = 0;
+  std::uint64_t frames_lost = 0;
+  while (!stop.stop_requested()) {
+    loop.wait_next();
+    const Nanos now = io_.clock->now();
+    const double dt = seconds(now - last);
+    last = now;
+    if (params_.version() != params_version) {
+      params_version = params_.version();
+      params_.try_read(params);
+    }
+    // Travel.
+    if (odometry_) {
+      const io::PulseSnapshot wheel = io_.wheel->snapshot();
+      odometry_->update(wheel.count, wheel.last_edge_time, now);
+      status.distance_m = odometry_->distance_m();
+      status.speed_m_per_s = odometry_->speed_m_per_s();
+    } else {
+      status.speed_m_per_s = config_.wheel.fixed_speed_m_per_s;
+      fixed_distance += status.speed_m_per_s * dt;
+      status.distance_m = fixed_distance;
+    }
+    // Measured flow over a sliding window.
+    if (io_.flow != nullptr && now - flow_window_start >= kFlowWindow) {
+      const io::PulseSnapshot flow = io_.flow->snapshot();
+      status.flow_l_per_min = static_cast<double>(flow.count - flow_count_start) / flow_ppl /
+                              seconds(now - flow_window_start) * 60.0;
+      flow_count_start = flow.count;
+      flow_window_start = now;
+    }
+    // New frames: pin their densities to the ground they imaged. Densities (not duties) are
+    // pinned so the rate law uses the speed and pressure at the moment the patch is sprayed.
+    for (std::size_t c = 0; c < camera_count_; ++c) {
+      auto& worker = cameras_[c];
+      while (auto frame = worker.frames.try_pop()) {
+        const double frame_distance =
+            odometry_
+                ? odometry_->distance_at(frame->capture_time)
+                : status.distance_m - status.speed_m_per_s * seconds(now - frame->capture_time);
+        const auto zones = static_cast<std::size_t>(frame->rows * frame->cols);
+        worker.scheduler->add_frame(frame_distance,
+                                    std::span<const double>(frame->density.data(), zones));
+        const Nanos scheduled = io_.clock->now();
+        status.last_latency_ms = seconds(scheduled - frame->capture_time) * 1e3;
+        ++status.frames_scheduled;
+        if (!latencies_.try_push(static_cast<float>(status.last_latency_ms))) ++frames_lost;
+      }
+    }
+    PressureStatus pressure;
+    const bool have_pressure = pressure_.try_read(pressure);
+    const bool pressure_stale = !have_pressure || !pressure.sensor_ok ||
+                                seconds(now - pressure.time) > params.stale_timeout_s;
+    status.inputs_stale = pressure_stale;
+    const bool spray = params.valves_enabled && !pressure_stale;
+    const double compensation_pressure = params.pressure_compensation ? pressure.pressure_mpa : 0.0;
+
+    io::ValveCommand command;
+    command.valve_count = static_cast<std::uint32_t>(nozzles);
+    double requested_l_per_min = 0;
+    double open_sum = 0;
+    for (std::size_t n = 0; n < nozzles; ++n) {
+      const int owner = nozzle_owner_[n];
+      double density = 0;
+      if (owner >= 0) {
+        const auto& worker = cameras_[static_cast<std::size_t>(owner)];
+        density = worker.scheduler->duty_at(n - static_cast<std::size_t>(worker.first_nozzle),
+                                            status.distance_m, status.speed_m_per_s);
+      }
+      status.density[n] = density;
+      double duty = 0;
+      if (spray) {
+        const control::SprayDecision decision = control::spray_decision(
+            params.law, params.line, density, status.speed_m_per_s, compensation_pressure);
+        duty = decision.duty_pct;
+        if (!quantisers_.empty()) {
+          duty = control::clamp_duty_pct(
+              params.law, quantisers_[n].quantise(std::clamp(decision.raw_duty_pct, 0.0, 100.0)));
+        }
+        requested_l_per_min +=
+            control::flow_for_duty_l_per_min(params.line, duty, compensation_pressure);
+      } else if (!quantisers_.empty()) {
+        quantisers_[n].reset();
+      }
+      command.duty_pct[n] = duty;
+      open_sum += duty / 100.0;
+    }
+    status.open_fraction = nozzles > 0 ? open_sum / static_cast<double>(nozzles) : 0.0;
+    if (io_.flow != nullptr && spray) {
+      const double correction =
+          flow_trim_.update(requested_l_per_min, status.flow_l_per_min, status.open_fraction, dt);
+      for (std::size_t n = 0; n < nozzles; ++n) {
+        const double d = command.duty_pct[n];
+        if (d > 0 && d < 100) command.duty_pct[n] = std::clamp(d * correction, 0.0, 100.0);
+      }
+    }
+    command.issued_at = now;
+    pwm_driver_->command(command);
+    for (std::size_t n = 0; n < nozzles; ++n) status.duty_pct[n] = command.duty_pct[n];
+
+    if (spray && status.speed_m_per_s > 0) {
+      const double area = status.speed_m_per_s * dt * boom_width_m;
+      status.area_m2 += area;
+      status.uniform_volume_l += control::nominal_dose_l_per_m2(params.law) * area;
+      status.volume_l += status.flow_l_per_min / 60.0 * dt;
+    }
+    if (now >= next_record) {
+      next_record += record_period;
+      if (next_record <= now) next_record = now + record_period;
+      AppliedRecord record;
+      record.time = now;
+      record.distance_m = status.distance_m;
+      record.speed_m_per_s = status.speed_m_per_s;
+      record.pressure_mpa = pressure.pressure_mpa;
+      record.flow_l_per_min = status.flow_l_per_min;
+      record.nozzles = status.nozzles;
+      for (std::size_t n = 0; n < nozzles; ++n) {
+        record.duty_pct[n] = static_cast<float>(status.duty_pct[n]);
+        record.density[n] = static_cast<float>(status.density[n]);
+      }
+      records_.try_push(record);  // a full queue drops the record (the writer is stuck)
+    }
+    status.time = now;
+    status.cycles = loop.cycles();
+    status.overruns = loop.overruns();
+    control_.publish(status);
+  }
+}
+
+void Sprayer::camera_loop(std::stop_token stop, CameraWorker& worker) noexcept {
+  CameraStatus status;
+  while (!stop.stop_requested() && !status.started) {
+    status.started = worker.camera->start();
+    if (!status.started) {
+      ++status.errors;
+      worker.status.publish(status);
+      io_.clock->sleep_until(io_.clock->now() + 1s);
+    }
+  }
+  Nanos previous_frame{};
+  io::Frame frame;
+  while (!stop.stop_requested()) {
+    const io::FrameStatus got = worker.camera->next_frame(frame, 100ms);
+    if (got == io::FrameStatus::kEnd) break;
+    if (got != io::FrameStatus::kOk) {
+      if (got == io::FrameStatus::kError) ++status.errors;
+      continue;
+    }
+    const Nanos t0 = io_.clock->now();
+    const vision::FrameResult& result = worker.pipeline->process(frame.view);
+    FrameDensities densities;
+    densities.capture_time = frame.timestamp;
+    densities.ready_time = io_.clock->now();
+    densities.rows = result.rows;
+    densities.cols = result.cols;
+    std::copy(result.zone_density.begin(), result.zone_density.end(), densities.density.begin());
+    worker.frames.try_push(densities);
+    ++status.frames;
+    status.vision_ms = seconds(densities.ready_time - t0) * 1e3;
+    if (previous_frame.count() > 0) {
+      const double interval = seconds(frame.timestamp - previous_frame);
+      if (interval > 0) {
+        status.frame_rate_hz = status.frame_rate_hz == 0
+                                   ? 1.0 / interval
+                                   : 0.8 * status.frame_rate_hz + 0.2 / interval;
+      }
+    }
+    previous_frame = frame.timestamp;
+    status.last_frame_time = frame.timestamp;
+    worker.status.publish(status);
+  }
+}
+
+void Sprayer::tank_loop(std::stop_token stop) noexcept {
+  const Nanos period = from_seconds(config_.modbus.poll_period_s);
+  Nanos next = io_.clock->now();
+  while (!stop.stop_requested()) {
+    tank_.publish(io_.tank->read());
+    next += period;
+    // Sleep in short slices so a stop request is honoured promptly.
+    while (!stop.stop_requested() && io_.clock->now() < next) {
+      io_.clock->sleep_until(std::min(next, io_.clock->now() + 100ms));
+    }
+  }
+}
+
+}  // namespace weedspray::daemon

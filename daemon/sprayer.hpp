@@ -1,0 +1,110 @@
+// The running sprayer: the real-time loops and workers, wired to the backends.
+//   ws-valve-pwm  io::ValvePwmDriver executing control::PwmSchedule edges (highest priority)
+//   ws-pressure   ADC -> fuzzy PID / PID -> DAC, pump relay, over-pressure trip
+//   ws-control    wheel odometry, flow, frames -> NozzleScheduler -> spray-rate law -> duties
+//   ws-camera     one per camera: frame -> vision::Pipeline -> zone densities
+//   ws-modbus     tank level
+// Threads exchange trivially copyable values through LatestValue slots and SPSC queues; the
+// loops allocate nothing, lock nothing and log nothing after start().
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "control/flow_feedback.hpp"
+#include "control/nozzle_scheduler.hpp"
+#include "control/odometry.hpp"
+#include "control/pressure_controller.hpp"
+#include "control/pwm_schedule.hpp"
+#include "control/spray_rate_law.hpp"
+#include "daemon/backends.hpp"
+#include "daemon/config.hpp"
+#include "daemon/runtime_types.hpp"
+#include "io/latest_value.hpp"
+#include "io/realtime.hpp"
+#include "io/spsc_queue.hpp"
+#include "io/tank_level.hpp"
+#include "io/valve_pwm_driver.hpp"
+#include "vision/pipeline.hpp"
+
+namespace weedspray::daemon {
+
+// Build the parameters the loops re-read live from a configuration.
+LiveParams live_params_from(const Config& config);
+
+class Sprayer {
+ public:
+  static constexpr std::size_t kMaxCameras = 8;
+  using FrameQueue = io::SpscQueue<FrameDensities, 16>;
+  using LatencyQueue = io::SpscQueue<float, 1024>;
+  using RecordQueue = io::SpscQueue<AppliedRecord, 256>;
+
+  // Builds every algorithm object (throws std::invalid_argument naming a bad value).
+  Sprayer(const Config& config, Backends& backends);
+  ~Sprayer();
+  Sprayer(const Sprayer&) = delete;
+  Sprayer& operator=(const Sprayer&) = delete;
+
+  void start();
+  // Stops and joins every thread, then forces every output safe. Idempotent.
+  void stop() noexcept;
+
+  void set_params(const LiveParams& params) noexcept { params_.publish(params); }
+  LiveParams params() const noexcept { return params_.read(); }
+
+  PressureStatus pressure() const noexcept { return pressure_.read(); }
+  ControlStatus control() const noexcept { return control_.read(); }
+  CameraStatus camera(std::size_t i) const noexcept { return cameras_[i].status.read(); }
+  std::size_t camera_count() const noexcept { return camera_count_; }
+  io::TankLevelSample tank() const noexcept { return tank_.read(); }
+  io::ValvePwmStats pwm() const noexcept { return pwm_driver_->stats(); }
+  // Threads that asked for SCHED_FIFO but did not get it.
+  std::vector<std::string> realtime_warnings() const;
+
+  LatencyQueue& latencies() noexcept { return latencies_; }
+  RecordQueue& records() noexcept { return records_; }
+
+  // Ground geometry of camera i (footprint relative to its nadir, for alarms and tests).
+  control::GroundInterval footprint(std::size_t i) const noexcept;
+
+ private:
+  struct CameraWorker {
+    io::Camera* camera = nullptr;
+    std::unique_ptr<vision::Pipeline> pipeline;
+    std::unique_ptr<control::NozzleScheduler> scheduler;  // owned by the control loop
+    FrameQueue frames;
+    io::LatestValue<CameraStatus> status;
+    int first_nozzle = 0;
+    int nozzle_count = 0;
+  };
+
+  void pressure_loop(std::stop_token stop) noexcept;
+  void control_loop(std::stop_token stop) noexcept;
+  void camera_loop(std::stop_token stop, CameraWorker& worker) noexcept;
+  void tank_loop(std::stop_token stop) noexcept;
+
+  const Config config_;
+  Backends& io_;
+  io::LatestValue<LiveParams> params_;
+  io::LatestValue<PressureStatus> pressure_;
+  io::LatestValue<ControlStatus> control_;
+  io::LatestValue<io::TankLevelSample> tank_;
+  std::unique_ptr<control::PressureController> controller_;
+  std::unique_ptr<control::PwmSchedule> schedule_;
+  std::unique_ptr<io::ValvePwmDriver<control::PwmSchedule>> pwm_driver_;
+  std::optional<control::Odometry> odometry_;
+  control::FlowTrim flow_trim_;
+  std::vector<control::DutyQuantiser> quantisers_;
+  std::array<CameraWorker, kMaxCameras> cameras_;
+  std::size_t camera_count_ = 0;
+  std::vector<int> nozzle_owner_;  // camera index per nozzle, -1 = none
+  LatencyQueue latencies_;
+  RecordQueue records_;
+  std::vector<io::RealtimeThread> threads_;
+  std::vector<std::string> thread_names_;
+  std::atomic<bool> stopped_{true};
+};
+
+}  // namespace weedspray::daemon

@@ -1,0 +1,37 @@
+// Analog input (pressure sensor via I/V resistor and ADC) and analog output (DAC driving the
+// proportional return valve through its amplifier). Volts at the converter pins; conversion to
+// physical quantities lives in io/signal_conversion.hpp.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+
+namespace weedspray::io {
+
+struct AnalogSample {
+  double volts = 0.0;
+  std::chrono::nanoseconds time{};  // when the sample was taken
+  std::uint64_t error_count = 0;    // failed reads since start
+  bool ok = false;                  // false: this read failed, `volts` is not a measurement
+};
+
+class AnalogInput {
+ public:
+  virtual ~AnalogInput() = default;
+  // Takes one sample. Call it from the loop that owns the converter (one fast read of an
+  // already-open file for IIO).
+  virtual AnalogSample read() noexcept = 0;
+};
+
+class AnalogOutput {
+ public:
+  virtual ~AnalogOutput() = default;
+  // Writes `volts` (clamped to [0, full_scale_volts()]). Returns 0 or -errno.
+  virtual int write(double volts) noexcept = 0;
+  // Writes the declared safe voltage (return valve fully open = no line pressure).
+  virtual void force_safe() noexcept = 0;
+  virtual double full_scale_volts() const noexcept = 0;
+  virtual std::uint64_t error_count() const noexcept = 0;
+};
+
+}  // namespace weedspray::io

@@ -1,0 +1,25 @@
+// A bank of digital outputs switched together: the nozzle valves, the pump relay, buzzer/LED.
+// Bit i of a mask is line i in LOGICAL terms (1 = energised/on); active-low wiring is the
+// backend's business.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace weedspray::io {
+
+class DigitalOutputBank {
+ public:
+  virtual ~DigitalOutputBank() = default;
+  // Number of lines (at most 32).
+  virtual std::size_t size() const noexcept = 0;
+  // Sets every line of the bank at one instant (one driver call). Returns 0 or -errno.
+  virtual int write(std::uint32_t mask) noexcept = 0;
+  // Drives every line to its declared safe value. Called explicitly on every exit and fault
+  // path: the kernel does not promise what a released line does.
+  virtual void force_safe() noexcept = 0;
+  // The logical mask force_safe() writes.
+  virtual std::uint32_t safe_mask() const noexcept = 0;
+};
+
+}  // namespace weedspray::io

@@ -1,0 +1,26 @@
+// Internal helpers shared by the libgpiod backends: find a chip and a line from the
+// configuration with errors that name what was looked for.
+#pragma once
+
+#include <bitset>
+#include <gpiod.hpp>
+#include <string>
+
+#include "io/linux/gpio_config.hpp"
+
+namespace weedspray::io::hw::detail {
+
+// Opens `chip` by path, name, label or number. Throws std::runtime_error naming it.
+gpiod::chip open_chip(const std::string& chip);
+
+// The line `line` names: by name (on `chip` if given, else on any chip) or by offset on
+// `chip`. Throws std::runtime_error naming the chip and line; also when the line is already
+// used by another consumer ("line busy").
+gpiod::line find_line(const std::string& chip, const GpioLineConfig& line);
+
+// Human-readable "chip X line Y" for messages.
+std::string describe(const std::string& chip, const GpioLineConfig& line);
+
+std::bitset<32> bias_flags(GpioBias bias);
+
+}  // namespace weedspray::io::hw::detail

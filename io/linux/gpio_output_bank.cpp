@@ -1,0 +1,94 @@
+#include "io/linux/gpio_output_bank.hpp"
+
+#include <gpiod.hpp>
+#include <stdexcept>
+#include <system_error>
+
+#include "io/linux/gpio_lines.hpp"
+
+namespace weedspray::io::hw {
+
+struct GpioOutputBank::Impl {
+  gpiod::line_bulk bulk;
+  std::string chip_name;
+  std::uint32_t invert_mask = 0;  // active-low lines: logical 1 = physical 0
+  std::uint32_t safe_mask = 0;    // logical
+  std::vector<int> values;        // reused by write(): no allocation at run time
+};
+
+GpioOutputBank::GpioOutputBank(const GpioOutputBankConfig& config)
+    : impl_(std::make_unique<Impl>()) {
+  if (config.lines.empty() || config.lines.size() > 32)
+    throw std::runtime_error("GPIO output bank: needs 1..32 lines, got " +
+                             std::to_string(config.lines.size()));
+  std::vector<int> defaults;
+  for (std::size_t i = 0; i < config.lines.size(); ++i) {
+    const GpioLineConfig& lc = config.lines[i];
+    gpiod::line line = detail::find_line(config.chip, lc);
+    if (!impl_->bulk.empty() && line.get_chip().name() != impl_->chip_name)
+      throw std::runtime_error("GPIO output bank: " + detail::describe(config.chip, lc) +
+                               " is on " + line.get_chip().name() + " but line 0 is on " +
+                               impl_->chip_name + "; one bank must be on one chip");
+    if (impl_->bulk.empty()) impl_->chip_name = line.get_chip().name();
+    impl_->bulk.append(line);
+    if (lc.active_low) impl_->invert_mask |= 1U << i;
+    if (lc.safe_value) impl_->safe_mask |= 1U << i;
+    defaults.push_back((lc.safe_value != lc.active_low) ? 1 : 0);
+  }
+  // Active-low is applied here, per line, because a bulk request shares one flag set.
+  // The request's default values are the safe values: no glitch at start-up.
+  try {
+    impl_->bulk.request({config.consumer, gpiod::line_request::DIRECTION_OUTPUT, 0}, defaults);
+  } catch (const std::system_error& e) {
+    throw std::runtime_error("GPIO output bank on " + impl_->chip_name +
+                             ": requesting the lines failed (" + e.code().message() +
+                             (e.code().value() == EBUSY ? ": line busy" : "") + ")");
+  }
+  impl_->values.resize(config.lines.size());
+}
+
+GpioOutputBank::~GpioOutputBank() {
+  force_safe();
+  try {
+    impl_->bulk.release();
+  } catch (...) {
+  }
+}
+
+std::size_t GpioOutputBank::size() const noexcept {
+  return impl_->values.size();
+}
+
+int GpioOutputBank::write(std::uint32_t mask) noexcept {
+  const std::uint32_t physical = mask ^ impl_->invert_mask;
+  for (std::size_t i = 0; i < impl_->values.size(); ++i)
+    impl_->values[i] = static_cast<int>((physical >> i) & 1U);
+  try {
+    impl_->bulk.set_values(impl_->values);  // one GPIOHANDLE_SET_LINE_VALUES ioctl
+  } catch (const std::system_error& e) {
+    return -e.code().value();
+  } catch (...) {
+    return -EIO;
+  }
+  return 0;
+}
+
+void GpioOutputBank::force_safe() noexcept {
+  write(impl_->safe_mask);
+}
+
+std::uint32_t GpioOutputBank::safe_mask() const noexcept {
+  return impl_->safe_mask;
+}
+
+std::string GpioOutputBank::chip_name() const {
+  return impl_->chip_name;
+}
+
+std::vector<unsigned int> GpioOutputBank::offsets() const {
+  std::vector<unsigned int> out;
+  for (unsigned i = 0; i < impl_->bulk.size(); ++i) out.push_back(impl_->bulk.get(i).offset());
+  return out;
+}
+
+}  // namespace weedspray::io::hw

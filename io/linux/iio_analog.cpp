@@ -1,0 +1,138 @@
+#include "io/linux/iio_analog.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+namespace weedspray::io::hw {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path);
+  std::string text;
+  if (!in || !std::getline(in, text)) return {};
+  return text;
+}
+
+// Scale in millivolts per count: the channel's own _scale, else the shared one.
+double read_scale_mv(const fs::path& dir, const std::string& prefix, int channel) {
+  for (const fs::path& p :
+       {dir / (prefix + std::to_string(channel) + "_scale"), dir / (prefix + "_scale")}) {
+    if (!fs::exists(p)) continue;
+    const std::string text = read_text(p);
+    char* end = nullptr;
+    const double scale = std::strtod(text.c_str(), &end);
+    if (text.empty() || end == text.c_str() || !(scale > 0.0) || !std::isfinite(scale))
+      throw std::runtime_error("IIO: cannot parse a positive scale from " + p.string() + ": '" +
+                               text + "'");
+    return scale;
+  }
+  throw std::runtime_error("IIO: no " + prefix + std::to_string(channel) + "_scale or " + prefix +
+                           "_scale in " + dir.string() + " (set scale_mv_override)");
+}
+
+int open_attribute(const fs::path& path, int flags) {
+  const int fd = ::open(path.c_str(), flags | O_CLOEXEC);
+  if (fd < 0)
+    throw std::runtime_error("IIO: cannot open " + path.string() + ": " + std::strerror(errno));
+  return fd;
+}
+
+}  // namespace
+
+std::string resolve_iio_device_dir(const std::string& device, const std::string& sysfs_root) {
+  if (device.empty()) throw std::runtime_error("IIO: no device configured");
+  if (device.front() == '/') {
+    if (!fs::is_directory(device)) throw std::runtime_error("IIO: no device directory " + device);
+    return device;
+  }
+  const fs::path direct = fs::path(sysfs_root) / device;
+  if (fs::is_directory(direct)) return direct.string();
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(sysfs_root, ec)) {
+    if (read_text(entry.path() / "name") == device) return entry.path().string();
+  }
+  throw std::runtime_error("IIO: device '" + device + "' not found under " + sysfs_root +
+                           " (neither a directory nor a device name)");
+}
+
+IioAnalogInput::IioAnalogInput(const IioChannelConfig& config, const Clock& clock) : clock_(clock) {
+  const fs::path dir = resolve_iio_device_dir(config.device, config.sysfs_root);
+  scale_mv_ = config.scale_mv_override > 0.0 ? config.scale_mv_override
+                                             : read_scale_mv(dir, "in_voltage", config.channel);
+  raw_fd_ =
+      open_attribute(dir / ("in_voltage" + std::to_string(config.channel) + "_raw"), O_RDONLY);
+}
+
+IioAnalogInput::~IioAnalogInput() {
+  if (raw_fd_ >= 0) ::close(raw_fd_);
+}
+
+AnalogSample IioAnalogInput::read() noexcept {
+  AnalogSample s;
+  char buffer[32];
+  // sysfs attributes are re-read from offset 0 on the open fd: one pread per sample.
+  const ssize_t n = ::pread(raw_fd_, buffer, sizeof(buffer) - 1, 0);
+  s.time = clock_.now();
+  if (n <= 0) {
+    ++errors_;
+  } else {
+    buffer[n] = '\0';
+    char* end = nullptr;
+    const long raw = std::strtol(buffer, &end, 10);
+    if (end == buffer) {
+      ++errors_;
+    } else {
+      s.volts = static_cast<double>(raw) * scale_mv_ / 1000.0;
+      s.ok = true;
+    }
+  }
+  s.error_count = errors_;
+  return s;
+}
+
+IioAnalogOutput::IioAnalogOutput(const IioAnalogOutputConfig& config) : config_(config) {
+  const IioChannelConfig& c = config.channel;
+  const fs::path dir = resolve_iio_device_dir(c.device, c.sysfs_root);
+  scale_mv_ = c.scale_mv_override > 0.0 ? c.scale_mv_override
+                                        : read_scale_mv(dir, "out_voltage", c.channel);
+  raw_fd_ = open_attribute(dir / ("out_voltage" + std::to_string(c.channel) + "_raw"), O_WRONLY);
+  if (write(config.safe_volts) != 0)
+    throw std::runtime_error("IIO: writing the safe value to " + dir.string() + "/out_voltage" +
+                             std::to_string(c.channel) + "_raw failed");
+}
+
+IioAnalogOutput::~IioAnalogOutput() {
+  force_safe();
+  if (raw_fd_ >= 0) ::close(raw_fd_);
+}
+
+int IioAnalogOutput::write(double volts) noexcept {
+  const double clamped =
+      std::clamp(std::isfinite(volts) ? volts : config_.safe_volts, 0.0, config_.full_scale_volts);
+  const long raw = std::clamp(std::lround(clamped * 1000.0 / scale_mv_), 0L, config_.max_raw);
+  char buffer[32];
+  const int len = std::snprintf(buffer, sizeof(buffer), "%ld\n", raw);
+  if (::pwrite(raw_fd_, buffer, static_cast<std::size_t>(len), 0) != len) {
+    ++errors_;
+    return errno != 0 ? -errno : -EIO;
+  }
+  return 0;
+}
+
+void IioAnalogOutput::force_safe() noexcept {
+  write(config_.safe_volts);
+}
+
+}  // namespace weedspray::io::hw

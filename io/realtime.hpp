@@ -1,0 +1,126 @@
+// Real-time threads: ALL thread priorities in one table, SCHED_FIFO when permitted (normal
+// priority plus a returned status otherwise, so an unprivileged run still works), mlockall, and
+// a periodic loop on absolute deadlines of the injected clock with an overrun counter.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <stop_token>
+#include <string>
+#include <string_view>
+#include <thread>
+
+#include "io/clock.hpp"
+
+namespace weedspray::io {
+
+enum class ThreadRole {
+  kValvePwm,      // valve edges: the tightest deadline in the system
+  kPulseInput,    // flow meter / wheel edge readers
+  kPressureLoop,  // ADC -> fuzzy PID -> DAC
+  kControl,       // spray-rate law and distance scheduling
+  kDigitalInput,  // start/stop key
+  kCamera,        // capture + vision (normal priority)
+  kModbus,        // tank level (normal priority; blocking reads)
+};
+
+struct ThreadPriority {
+  ThreadRole role;
+  std::string_view name;  // thread name (max 15 chars, shown by ps/top)
+  int fifo_priority;      // SCHED_FIFO priority 1..99; 0 = normal (SCHED_OTHER)
+};
+
+// The one table. Above the kernel's threaded IRQ handlers (50) only for the valve edges.
+inline constexpr std::array<ThreadPriority, 7> kThreadPriorities{{
+    {ThreadRole::kValvePwm, "ws-valve-pwm", 80},
+    {ThreadRole::kPulseInput, "ws-pulses", 70},
+    {ThreadRole::kPressureLoop, "ws-pressure", 60},
+    {ThreadRole::kControl, "ws-control", 40},
+    {ThreadRole::kDigitalInput, "ws-key", 30},
+    {ThreadRole::kCamera, "ws-camera", 0},
+    {ThreadRole::kModbus, "ws-modbus", 0},
+}};
+
+constexpr const ThreadPriority& thread_priority(ThreadRole role) noexcept {
+  for (const auto& p : kThreadPriorities)
+    if (p.role == role) return p;
+  return kThreadPriorities.back();
+}
+
+enum class RtStatus {
+  kRealtime,        // running SCHED_FIFO at the table's priority
+  kNormalPriority,  // the table asks for normal priority
+  kNoPermission,    // SCHED_FIFO refused (no CAP_SYS_NICE / RLIMIT_RTPRIO): running normally
+  kFailed,          // another error setting the policy: running normally
+};
+
+std::string_view to_string(RtStatus status) noexcept;
+
+// Applies the table's policy and name to the calling thread.
+RtStatus apply_thread_role(ThreadRole role) noexcept;
+
+// mlockall(MCL_CURRENT | MCL_FUTURE). Returns 0 or -errno (e.g. -EPERM unprivileged).
+int lock_memory() noexcept;
+
+// A std::jthread running `body(stop_token)` with the role's policy applied first. The
+// constructor waits until the thread has applied its policy, so status() is final.
+class RealtimeThread {
+ public:
+  RealtimeThread() = default;
+  RealtimeThread(ThreadRole role, std::function<void(std::stop_token)> body);
+  RealtimeThread(RealtimeThread&&) noexcept = default;
+  RealtimeThread& operator=(RealtimeThread&&) noexcept = default;
+  ~RealtimeThread() { stop_and_join(); }
+
+  RtStatus status() const noexcept { return status_; }
+  bool joinable() const noexcept { return thread_.joinable(); }
+  void request_stop() noexcept { thread_.request_stop(); }
+  void stop_and_join() noexcept;
+
+ private:
+  std::jthread thread_;
+  RtStatus status_ = RtStatus::kFailed;
+};
+
+// Periodic loop on absolute deadlines: deadline k = start + k * period. A wake-up later than
+// the next deadline counts as an overrun and skips the missed deadlines (no burst catch-up).
+class PeriodicLoop {
+ public:
+  PeriodicLoop(Clock& clock, std::chrono::nanoseconds period,
+               std::chrono::nanoseconds start) noexcept
+      : clock_(clock), period_(period), next_(start) {}
+
+  // Sleeps until the next deadline; returns the deadline that was due.
+  std::chrono::nanoseconds wait_next() noexcept {
+    clock_.sleep_until(next_);
+    const std::chrono::nanoseconds due = next_;
+    const std::chrono::nanoseconds now = clock_.now();
+    const std::chrono::nanoseconds late = now - due;
+    if (late > max_lateness_) max_lateness_ = late;
+    next_ += period_;
+    if (now >= next_) {
+      const auto missed = (now - next_) / period_ + 1;
+      overruns_ += static_cast<std::uint64_t>(missed);
+      next_ += missed * period_;
+    }
+    ++cycles_;
+    return due;
+  }
+
+  std::uint64_t cycles() const noexcept { return cycles_; }
+  std::uint64_t overruns() const noexcept { return overruns_; }
+  std::chrono::nanoseconds max_lateness() const noexcept { return max_lateness_; }
+  std::chrono::nanoseconds period() const noexcept { return period_; }
+
+ private:
+  Clock& clock_;
+  std::chrono::nanoseconds period_;
+  std::chrono::nanoseconds next_;
+  std::uint64_t cycles_ = 0;
+  std::uint64_t overruns_ = 0;
+  std::chrono::nanoseconds max_lateness_{0};
+};
+
+}  // namespace weedspray::io

@@ -1,0 +1,155 @@
+// The simulated machine: owns a control::plant::HydraulicPlant and steps it up to the injected
+// clock's time whenever any simulated device touches it (so it follows a ManualClock as fast as
+// the loops run, or a PacedClock in real time). The device adapters below expose it through the
+// io interfaces, exactly as the Linux backends expose the real machine.
+//
+// Sim only: a mutex serialises the plant between the loops' threads; real-time guarantees are
+// not a goal here.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <mutex>
+
+#include "control/plant/hydraulic_plant.hpp"
+#include "io/analog.hpp"
+#include "io/clock.hpp"
+#include "io/digital_output.hpp"
+#include "io/pulse_input.hpp"
+#include "io/signal_conversion.hpp"
+#include "io/tank_level.hpp"
+
+namespace weedspray::io::sim {
+
+struct RigConfig {
+  control::plant::PlantParams plant;
+  std::uint64_t seed = 1;
+  // Longest plant step per chunk; pulse edges are timestamped at chunk ends.
+  std::chrono::nanoseconds max_chunk = std::chrono::microseconds(500);
+};
+
+class HydraulicRig {
+ public:
+  HydraulicRig(const RigConfig& config, const Clock& clock);
+
+  // Steps the plant to the clock's current time (no-op if already there).
+  void advance() noexcept;
+
+  // Runs `fn(plant)` with the plant advanced to now and locked (tests, fault injection, speed).
+  void with_plant(const std::function<void(control::plant::HydraulicPlant&)>& fn);
+
+  // --- used by the adapters; each advances first ---
+  void set_valves(std::uint32_t mask) noexcept;
+  void set_pump(bool on) noexcept;
+  void set_return_valve_volts(double volts) noexcept;
+  double pressure_sensor_volts() noexcept;
+  PulseSnapshot flow_pulses() noexcept;
+  PulseSnapshot wheel_pulses() noexcept;
+  double tank_level_pct() noexcept;
+  int nozzle_count() const noexcept { return nozzle_count_; }
+  std::uint32_t valve_mask() const noexcept;
+  bool pump_on() const noexcept;
+
+  std::chrono::nanoseconds plant_time() const noexcept;
+
+ private:
+  void advance_locked() noexcept;
+
+  const Clock& clock_;
+  std::chrono::nanoseconds max_chunk_;
+  int nozzle_count_;
+  mutable std::mutex mutex_;
+  control::plant::HydraulicPlant plant_;
+  std::chrono::nanoseconds start_;
+  std::chrono::nanoseconds plant_time_;
+  std::uint32_t valve_mask_ = 0;
+  bool pump_on_ = false;
+  PulseSnapshot flow_{};
+  PulseSnapshot wheel_{};
+};
+
+// Nozzle valves -> plant valves. Safe = all closed.
+class RigValveBank final : public DigitalOutputBank {
+ public:
+  explicit RigValveBank(HydraulicRig& rig) noexcept : rig_(rig) {}
+  std::size_t size() const noexcept override;
+  int write(std::uint32_t mask) noexcept override;
+  void force_safe() noexcept override;
+  std::uint32_t safe_mask() const noexcept override { return 0; }
+  // What the plant's valves are commanded to now: a test checks it is 0 at the end.
+  std::uint32_t mask() const noexcept { return rig_.valve_mask(); }
+
+ private:
+  HydraulicRig& rig_;
+};
+
+// Pump relay (one line) -> plant pump. Safe = off.
+class RigPumpRelay final : public DigitalOutputBank {
+ public:
+  explicit RigPumpRelay(HydraulicRig& rig) noexcept : rig_(rig) {}
+  std::size_t size() const noexcept override { return 1; }
+  int write(std::uint32_t mask) noexcept override;
+  void force_safe() noexcept override;
+  std::uint32_t safe_mask() const noexcept override { return 0; }
+
+ private:
+  HydraulicRig& rig_;
+};
+
+enum class RigPulseSource { kFlowMeter, kWheel };
+
+class RigPulseInput final : public PulseInput {
+ public:
+  RigPulseInput(HydraulicRig& rig, RigPulseSource source) noexcept : rig_(rig), source_(source) {}
+  PulseSnapshot snapshot() const noexcept override;
+
+ private:
+  HydraulicRig& rig_;
+  RigPulseSource source_;
+};
+
+// ADC pin of the pressure sensor's I/V stage.
+class RigPressureAdc final : public AnalogInput {
+ public:
+  RigPressureAdc(HydraulicRig& rig, const Clock& clock) noexcept : rig_(rig), clock_(clock) {}
+  AnalogSample read() noexcept override;
+
+ private:
+  HydraulicRig& rig_;
+  const Clock& clock_;
+};
+
+// DAC -> amplifier -> return valve volts. Safe: return valve fully open (no line pressure).
+class RigReturnValveDac final : public AnalogOutput {
+ public:
+  RigReturnValveDac(HydraulicRig& rig, const ValveDriveConfig& drive) noexcept;
+  int write(double volts) noexcept override;
+  void force_safe() noexcept override;
+  double full_scale_volts() const noexcept override { return drive_.dac_full_scale_volts; }
+  std::uint64_t error_count() const noexcept override { return 0; }
+  double last_volts() const noexcept { return last_volts_; }
+
+ private:
+  HydraulicRig& rig_;
+  ValveDriveConfig drive_;
+  double last_volts_ = 0.0;
+};
+
+// Tank level from the plant's tank (drains as the pump delivers), with optional injected
+// failures for alarm tests.
+class RigTankLevel final : public TankLevelSensor {
+ public:
+  RigTankLevel(HydraulicRig& rig, const Clock& clock) noexcept : rig_(rig), clock_(clock) {}
+  TankLevelSample read() noexcept override;
+  // The next `n` reads time out.
+  void inject_timeouts(int n) noexcept { pending_timeouts_ = n; }
+
+ private:
+  HydraulicRig& rig_;
+  const Clock& clock_;
+  TankLevelSample counters_;
+  int pending_timeouts_ = 0;
+};
+
+}  // namespace weedspray::io::sim

@@ -1,0 +1,210 @@
+#include "io/sim/replay_camera.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
+
+namespace weedspray::io::sim {
+
+namespace fs = std::filesystem;
+using std::chrono::nanoseconds;
+
+namespace {
+
+std::string lower_extension(const fs::path& p) {
+  std::string ext = p.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
+}
+
+bool is_image(const fs::path& p) {
+  const std::string ext = lower_extension(p);
+  return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp";
+}
+
+bool is_video(const fs::path& p) {
+  const std::string ext = lower_extension(p);
+  return ext == ".mp4" || ext == ".avi" || ext == ".mkv" || ext == ".mov";
+}
+
+}  // namespace
+
+struct ReplayCamera::Impl {
+  ReplayCameraConfig config;
+  Clock& clock;
+  std::vector<fs::path> images;
+  cv::VideoCapture video;
+  bool use_video = false;
+  bool started = false;
+  std::size_t next_index = 0;
+  cv::Mat current;
+  std::string current_name;
+  std::uint64_t sequence = 0;
+  nanoseconds next_due{};
+  std::string error;
+  CameraCounters counters;
+
+  Impl(ReplayCameraConfig c, Clock& k) : config(std::move(c)), clock(k) {}
+
+  // Time until the next frame is due, from the ground speed now (or the fixed rate).
+  // Returns false when standing still.
+  bool frame_interval(nanoseconds& interval) const {
+    double seconds;
+    if (config.ground_speed_m_per_s) {
+      const double speed = config.ground_speed_m_per_s();
+      if (!(speed >= config.min_speed_m_per_s)) return false;
+      seconds = config.footprint_length_m / speed;
+    } else {
+      seconds = 1.0 / config.fps;
+    }
+    interval = std::chrono::duration_cast<nanoseconds>(std::chrono::duration<double>(seconds));
+    return true;
+  }
+
+  // Loads the next frame into `current`. Returns kOk, kEnd or kError.
+  FrameStatus load_next() {
+    if (use_video) {
+      if (!video.read(current) || current.empty()) {
+        if (!config.loop) return FrameStatus::kEnd;
+        video.set(cv::CAP_PROP_POS_FRAMES, 0);
+        if (!video.read(current) || current.empty()) {
+          error = "replay camera: cannot read a frame from " + config.source;
+          return FrameStatus::kError;
+        }
+      }
+      current_name = config.source;
+      return FrameStatus::kOk;
+    }
+    if (next_index >= images.size()) {
+      if (!config.loop) return FrameStatus::kEnd;
+      next_index = 0;
+    }
+    const fs::path& path = images[next_index++];
+    current = cv::imread(path.string(), cv::IMREAD_COLOR);
+    if (current.empty()) {
+      error = "replay camera: cannot decode image " + path.string();
+      return FrameStatus::kError;
+    }
+    current_name = path.filename().string();
+    return FrameStatus::kOk;
+  }
+};
+
+ReplayCamera::ReplayCamera(ReplayCameraConfig config, Clock& clock)
+    : impl_(std::make_unique<Impl>(std::move(config), clock)) {}
+
+ReplayCamera::~ReplayCamera() = default;
+
+bool ReplayCamera::start() {
+  Impl& m = *impl_;
+  m.images.clear();
+  m.use_video = false;
+  m.error.clear();
+  if (!(m.config.footprint_length_m > 0.0) ||
+      (!m.config.ground_speed_m_per_s && !(m.config.fps > 0.0))) {
+    m.error = "replay camera: footprint_length_m and fps must be > 0";
+    return false;
+  }
+  const fs::path source(m.config.source);
+  std::error_code ec;
+  if (fs::is_directory(source, ec)) {
+    for (const auto& entry : fs::directory_iterator(source, ec))
+      if (entry.is_regular_file() && is_image(entry.path())) m.images.push_back(entry.path());
+    std::sort(m.images.begin(), m.images.end());
+    if (m.images.empty()) {
+      m.error =
+          "replay camera: no images (*.png, *.jpg, *.jpeg, *.bmp) in directory " + m.config.source;
+      return false;
+    }
+  } else if (fs::is_regular_file(source, ec) && is_image(source)) {
+    m.images.push_back(source);
+  } else if (fs::is_regular_file(source, ec) && is_video(source)) {
+    if (!m.video.open(m.config.source)) {
+      m.error = "replay camera: OpenCV cannot open video file " + m.config.source;
+      return false;
+    }
+    m.use_video = true;
+  } else {
+    m.error = "replay camera: source " + m.config.source +
+              " is neither a directory, an image nor a video file (or does not exist)";
+    return false;
+  }
+  m.next_index = 0;
+  m.sequence = 0;
+  m.next_due = m.clock.now();
+  m.started = true;
+  return true;
+}
+
+FrameStatus ReplayCamera::next_frame(Frame& frame, std::chrono::milliseconds timeout) {
+  Impl& m = *impl_;
+  if (!m.started) {
+    m.error = "replay camera: next_frame() before start()";
+    ++m.counters.errors;
+    return FrameStatus::kError;
+  }
+  const nanoseconds give_up = m.clock.now() + timeout;
+  // Standing still: no new ground, no new frame; poll the speed until the timeout.
+  while (true) {
+    nanoseconds interval{};
+    if (m.frame_interval(interval)) break;
+    const nanoseconds poll = m.clock.now() + std::chrono::milliseconds(10);
+    if (poll > give_up) {
+      m.clock.sleep_until(give_up);
+      ++m.counters.timeouts;
+      return FrameStatus::kTimeout;
+    }
+    m.clock.sleep_until(poll);
+    m.next_due = m.clock.now();
+  }
+  if (m.next_due > give_up) {
+    m.clock.sleep_until(give_up);
+    ++m.counters.timeouts;
+    return FrameStatus::kTimeout;
+  }
+  m.clock.sleep_until(m.next_due);
+  const FrameStatus status = m.load_next();
+  if (status == FrameStatus::kError) ++m.counters.errors;
+  if (status != FrameStatus::kOk) return status;
+
+  frame.timestamp = m.clock.now();
+  frame.sequence = m.sequence++;
+  frame.view.data = m.current.data;
+  frame.view.width = m.current.cols;
+  frame.view.height = m.current.rows;
+  frame.view.stride = m.current.step[0];
+  frame.view.format = vision::PixelFormat::kBgr24;
+  ++m.counters.frames;
+  nanoseconds interval{};
+  if (!m.frame_interval(interval)) interval = std::chrono::milliseconds(10);
+  m.next_due += interval;
+  // Fell behind by more than a frame (slow consumer): restart pacing from now.
+  if (m.next_due < frame.timestamp) m.next_due = frame.timestamp;
+  return FrameStatus::kOk;
+}
+
+void ReplayCamera::stop() noexcept {
+  impl_->started = false;
+  impl_->video.release();
+}
+
+std::string ReplayCamera::last_error() const {
+  return impl_->error;
+}
+
+CameraCounters ReplayCamera::counters() const noexcept {
+  return impl_->counters;
+}
+
+std::size_t ReplayCamera::image_count() const noexcept {
+  return impl_->images.size();
+}
+
+std::string ReplayCamera::current_source_name() const {
+  return impl_->current_name;
+}
+
+}  // namespace weedspray::io::sim

@@ -1,0 +1,52 @@
+// A Camera replaying recorded field images (a directory or a list of files, read with OpenCV
+// imread) or a video file (VideoCapture). Frames are paced so consecutive images tile the
+// ground: one frame per `footprint_length_m` travelled at the current ground speed (or at a
+// fixed `fps` when no speed is given). Timestamps come from the injected clock.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "io/camera.hpp"
+#include "io/clock.hpp"
+
+namespace weedspray::io::sim {
+
+struct ReplayCameraConfig {
+  // A directory (its *.png / *.jpg / *.jpeg / *.bmp files, sorted by name), one image file, or
+  // one video file (*.mp4, *.avi, *.mkv, *.mov).
+  std::string source;
+  bool loop = true;
+  // Ground distance covered by one image along the direction of travel.
+  double footprint_length_m = 1.0;
+  // Ground speed [m/s] at the moment a frame is due; empty = use `fps`.
+  std::function<double()> ground_speed_m_per_s;
+  double fps = 10.0;
+  // Speeds below this do not produce frames (standing still: the camera sees the same patch).
+  double min_speed_m_per_s = 0.05;
+};
+
+class ReplayCamera final : public Camera {
+ public:
+  ReplayCamera(ReplayCameraConfig config, Clock& clock);
+  ~ReplayCamera() override;
+
+  bool start() override;  // lists/opens the source; false with last_error() if nothing usable
+  FrameStatus next_frame(Frame& frame, std::chrono::milliseconds timeout) override;
+  void stop() noexcept override;
+  std::string last_error() const override;
+  CameraCounters counters() const noexcept override;
+
+  std::size_t image_count() const noexcept;  // images listed (0 for video)
+  std::string current_source_name() const;   // file name of the last frame's image
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace weedspray::io::sim

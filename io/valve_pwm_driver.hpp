@@ -1,0 +1,187 @@
+// The valve PWM driver: the highest-priority RT loop. It executes a stream of PWM edges (from
+// control's staggered PwmSchedule) on an output bank: sleep until the edge on the injected
+// clock, write the whole valve mask with one call. Duty commands arrive wait-free through a
+// LatestValue slot; a DEAD-MAN rule closes every valve (force_safe) when commands are not
+// refreshed within `command_expiry`, and keeps them closed until a fresh command arrives.
+//
+// The schedule is control::PwmSchedule (control/pwm_schedule.hpp); it is a template parameter
+// only so tests can substitute a scripted one. The driver uses:
+//   void start(std::chrono::nanoseconds t0) noexcept;   // restart phases at t0
+//   void set_duties(std::span<const double> duty_pct) noexcept;  // latched at period starts
+//   std::uint32_t force_closed() noexcept;              // all duties -> 0
+//   PwmEdge next_edge() noexcept;                       // .time, .valve_mask (all valves)
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <span>
+#include <stop_token>
+#include <utility>
+
+#include "io/clock.hpp"
+#include "io/digital_output.hpp"
+#include "io/latest_value.hpp"
+
+namespace weedspray::io {
+
+inline constexpr std::size_t kMaxValves = 32;
+
+struct ValveCommand {
+  std::array<double, kMaxValves> duty_pct{};  // per valve, 0..100
+  std::uint32_t valve_count = 0;
+  std::chrono::nanoseconds issued_at{};  // producer's clock time; the dead-man measures from it
+};
+
+struct ValvePwmDriverConfig {
+  // Commands older than this close all valves (dead-man).
+  std::chrono::nanoseconds command_expiry = std::chrono::milliseconds(500);
+  // Longest sleep between checks of stop requests, new commands and expiry.
+  std::chrono::nanoseconds max_sleep = std::chrono::milliseconds(20);
+  // An edge written later than this after its time counts as late.
+  std::chrono::nanoseconds late_threshold = std::chrono::microseconds(500);
+};
+
+struct ValvePwmStats {
+  std::uint64_t edges_written = 0;
+  std::uint64_t late_edges = 0;     // written > late_threshold after their time
+  std::uint64_t skipped_edges = 0;  // already a whole edge behind: state applied at once
+  std::uint64_t write_errors = 0;
+  std::uint64_t commands_applied = 0;
+  std::uint64_t deadman_expiries = 0;
+  std::chrono::nanoseconds max_lateness{0};
+  std::uint32_t last_mask = 0;
+  std::chrono::nanoseconds schedule_start{0};  // t0 of the schedule's current run
+  bool expired = true;  // valves held closed: no fresh command
+};
+
+template <class Schedule>
+class ValvePwmDriver {
+ public:
+  ValvePwmDriver(Clock& clock, DigitalOutputBank& bank, Schedule& schedule,
+                 ValvePwmDriverConfig config) noexcept
+      : clock_(clock), bank_(bank), schedule_(schedule), config_(config) {}
+
+  // Producer side (any one thread): a fresh command also refreshes the dead-man.
+  void command(const ValveCommand& cmd) noexcept { commands_.publish(cmd); }
+
+  // Counters, readable from any thread.
+  ValvePwmStats stats() const noexcept { return published_stats_.read(); }
+
+  // The RT loop. Starts with the valves safe; returns with the valves safe.
+  void run(std::stop_token stop) noexcept {
+    bank_.force_safe();
+    stats_.last_mask = bank_.safe_mask();
+    bool have_edge = false;
+    PwmEdgeT edge{};
+    std::uint64_t seen_version = 0;
+    std::chrono::nanoseconds refreshed_at{};
+    bool have_command = false;
+
+    while (!stop.stop_requested()) {
+      const std::uint64_t version = commands_.version();
+      if (version != seen_version) {
+        ValveCommand cmd;
+        if (commands_.try_read(cmd)) {
+          seen_version = version;
+          const std::uint32_t n = std::min<std::uint32_t>(
+              cmd.valve_count, static_cast<std::uint32_t>(std::min(bank_.size(), kMaxValves)));
+          schedule_.set_duties(std::span<const double>(cmd.duty_pct.data(), n));
+          refreshed_at = cmd.issued_at;
+          have_command = true;
+          ++stats_.commands_applied;
+        }
+      }
+
+      std::chrono::nanoseconds now = clock_.now();
+      const std::chrono::nanoseconds expires_at = refreshed_at + config_.command_expiry;
+      if (!have_command || now >= expires_at) {
+        if (!stats_.expired) {
+          schedule_.force_closed();
+          bank_.force_safe();
+          stats_.last_mask = bank_.safe_mask();
+          stats_.expired = true;
+          ++stats_.deadman_expiries;
+        }
+        have_edge = false;  // resynchronise with the schedule once commands return
+        publish_stats();
+        clock_.sleep_until(now + config_.max_sleep);
+        continue;
+      }
+      if (stats_.expired) {
+        // Fresh commands after start-up or an expiry: restart the staggered phases now.
+        stats_.expired = false;
+        schedule_.start(now);
+        stats_.schedule_start = now;
+        have_edge = false;
+        have_pending_ = false;
+      }
+
+      if (!have_edge) {
+        edge = schedule_.next_edge();
+        have_edge = true;
+        // Behind by more than one edge (e.g. resuming after expiry): skip to the latest due
+        // edge, which carries the current state of every valve.
+        for (int guard = 0; guard < kMaxSkip; ++guard) {
+          const PwmEdgeT following = schedule_.next_edge();
+          if (following.time > now) {
+            pending_ = following;
+            have_pending_ = true;
+            break;
+          }
+          ++stats_.skipped_edges;
+          edge = following;
+        }
+      }
+
+      const std::chrono::nanoseconds wake =
+          std::min({edge.time, expires_at, now + config_.max_sleep});
+      if (wake > now) {
+        clock_.sleep_until(wake);
+        continue;  // re-check stop, commands and expiry before the edge
+      }
+
+      // The edge is due.
+      write_mask(edge.valve_mask);
+      now = clock_.now();
+      const std::chrono::nanoseconds lateness = now - edge.time;
+      if (lateness > stats_.max_lateness) stats_.max_lateness = lateness;
+      if (lateness > config_.late_threshold) ++stats_.late_edges;
+      ++stats_.edges_written;
+      if (have_pending_) {
+        edge = pending_;
+        have_pending_ = false;
+      } else {
+        edge = schedule_.next_edge();
+      }
+      publish_stats();
+    }
+    bank_.force_safe();
+    stats_.last_mask = bank_.safe_mask();
+    stats_.expired = true;
+    publish_stats();
+  }
+
+ private:
+  using PwmEdgeT = decltype(std::declval<Schedule&>().next_edge());
+  static constexpr int kMaxSkip = 100000;
+
+  void write_mask(std::uint32_t mask) noexcept {
+    if (bank_.write(mask) != 0) ++stats_.write_errors;
+    stats_.last_mask = mask;
+  }
+  void publish_stats() noexcept { published_stats_.publish(stats_); }
+
+  Clock& clock_;
+  DigitalOutputBank& bank_;
+  Schedule& schedule_;
+  ValvePwmDriverConfig config_;
+  LatestValue<ValveCommand> commands_;
+  LatestValue<ValvePwmStats> published_stats_;
+  ValvePwmStats stats_;
+  PwmEdgeT pending_{};
+  bool have_pending_ = false;
+};
+
+}  // namespace weedspray::io

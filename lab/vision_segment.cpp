@@ -1,0 +1,217 @@
+// segment: threshold, zone densities and density levels of field images, with an optional
+// overlay PNG showing the mask, the zone grid and each zone's density.
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "lab/vision_dataset.hpp"
+#include "lab/vision_tools.hpp"
+#include "vision/pipeline.hpp"
+
+namespace weedspray::lab {
+namespace {
+
+struct SegmentOptions {
+  std::vector<std::string> images;
+  std::string index;
+  std::string threshold;
+  std::string grid = "1x4";
+  std::string overlay;
+  bool json = false;
+};
+
+std::string join_names(std::span<const std::string_view> names) {
+  std::string joined;
+  for (std::string_view name : names) joined += (joined.empty() ? "" : ", ") + std::string(name);
+  return joined;
+}
+
+vision::PipelineConfig config_from(const SegmentOptions& options) {
+  vision::PipelineConfig config = vision::default_pipeline_config();
+  if (!options.index.empty()) {
+    const auto index = vision::parse_vegetation_index(options.index);
+    if (!index) {
+      throw std::runtime_error("--index " + options.index + ": unknown (one of " +
+                               join_names(vision::vegetation_index_names()) + ")");
+    }
+    config.index = *index;
+  }
+  if (!options.threshold.empty()) {
+    const auto method = vision::parse_threshold_method(options.threshold);
+    if (!method) {
+      throw std::runtime_error("--threshold " + options.threshold + ": unknown (one of " +
+                               join_names(vision::threshold_method_names()) + ")");
+    }
+    config.threshold = *method;
+  }
+  int rows = 0, cols = 0;
+  char separator = 0, extra = 0;
+  if (std::sscanf(options.grid.c_str(), "%d%c%d%c", &rows, &separator, &cols, &extra) != 3 ||
+      (separator != 'x' && separator != 'X')) {
+    throw std::runtime_error("--grid " + options.grid + ": expected ROWSxCOLS, e.g. 2x4");
+  }
+  config.rows = rows;
+  config.cols = cols;
+  config.inter_row_map = true;
+  try {
+    vision::validate(config);
+  } catch (const std::invalid_argument& error) {
+    throw std::runtime_error("--grid " + options.grid + ": " + error.what());
+  }
+  return config;
+}
+
+// OUT.png for one image; OUT_<stem>.png for each of several.
+std::filesystem::path overlay_path(const std::string& out, const std::filesystem::path& image,
+                                   bool several) {
+  if (!several) return out;
+  std::filesystem::path path = out;
+  const std::string extension = path.has_extension() ? path.extension().string() : ".png";
+  path.replace_filename(path.stem().string() + "_" + image.stem().string() + extension);
+  return path;
+}
+
+void write_overlay(const cv::Mat& bgr, const vision::Pipeline& pipeline,
+                   const vision::FrameResult& result, const std::filesystem::path& path) {
+  cv::Mat overlay = bgr.clone();
+  const vision::PixelRect region = pipeline.region();
+  const vision::ImageView index = pipeline.index_image();
+  const cv::Mat index_mat(index.height, index.width, CV_8UC1, const_cast<std::uint8_t*>(index.data),
+                          index.stride);
+  const cv::Mat plant = index_mat > result.threshold;
+  cv::Mat roi = overlay(cv::Rect(region.x, region.y, region.width, region.height));
+  // Plants in magenta (never seen in a field), soil dimmed so the mask reads at a glance.
+  roi = roi * 0.6;
+  roi.setTo(cv::Scalar(255, 0, 255), plant);
+  const double font_scale = std::max(0.4, region.width / 900.0);
+  const int thickness = std::max(1, region.width / 500);
+  for (int row = 0; row < result.rows; ++row) {
+    for (int col = 0; col < result.cols; ++col) {
+      const cv::Point top_left(region.x + col * region.width / result.cols,
+                               region.y + row * region.height / result.rows);
+      const cv::Point bottom_right(region.x + (col + 1) * region.width / result.cols - 1,
+                                   region.y + (row + 1) * region.height / result.rows - 1);
+      cv::rectangle(overlay, top_left, bottom_right, cv::Scalar(0, 255, 255), thickness);
+      char label[32];
+      std::snprintf(label, sizeof label, "%.1f%%", 100.0 * result.density(row, col));
+      const cv::Point text_at(top_left.x + 4 * thickness,
+                              top_left.y + static_cast<int>(24 * font_scale) + 4 * thickness);
+      cv::putText(overlay, label, text_at, cv::FONT_HERSHEY_SIMPLEX, font_scale,
+                  cv::Scalar(0, 0, 0), thickness + 2, cv::LINE_AA);
+      cv::putText(overlay, label, text_at, cv::FONT_HERSHEY_SIMPLEX, font_scale,
+                  cv::Scalar(255, 255, 255), thickness, cv::LINE_AA);
+    }
+  }
+  if (!cv::imwrite(path.string(), overlay)) {
+    throw std::runtime_error(path.string() + ": cannot write overlay");
+  }
+}
+
+int run_segment(const SegmentOptions& options) {
+  const vision::PipelineConfig config = config_from(options);
+  vision::Pipeline pipeline(config);
+  const bool several = options.images.size() > 1;
+  if (options.json) std::printf("{\"images\": [");
+  for (std::size_t i = 0; i < options.images.size(); ++i) {
+    const std::filesystem::path path = options.images[i];
+    const cv::Mat bgr = read_bgr_image(path);
+    const vision::FrameResult& result =
+        pipeline.process({bgr.data, bgr.cols, bgr.rows, bgr.step[0], vision::PixelFormat::kBgr24});
+    if (!pipeline.last_frame_ok()) {
+      throw std::runtime_error(path.string() + ": image too small for a " + options.grid + " grid");
+    }
+    std::string overlay;
+    if (!options.overlay.empty()) {
+      overlay = overlay_path(options.overlay, path, several).string();
+      write_overlay(bgr, pipeline, result, overlay);
+    }
+    if (options.json) {
+      std::printf(
+          "%s{\"file\": \"%s\", \"index\": \"%s\", \"threshold_method\": \"%s\", "
+          "\"threshold\": %d, \"bimodal\": %s, \"vegetation_fraction\": %.5f, "
+          "\"rows\": %d, \"cols\": %d, \"zones\": [",
+          i == 0 ? "" : ", ", path.string().c_str(), std::string(to_string(config.index)).c_str(),
+          std::string(to_string(config.threshold)).c_str(), result.threshold,
+          result.bimodal ? "true" : "false", result.vegetation_fraction, result.rows, result.cols);
+      for (int zone = 0; zone < result.rows * result.cols; ++zone) {
+        std::printf("%s{\"row\": %d, \"col\": %d, \"density\": %.5f, \"level\": \"%s\"}",
+                    zone == 0 ? "" : ", ", zone / result.cols, zone % result.cols,
+                    result.zone_density[zone],
+                    std::string(to_string(result.zone_level[zone])).c_str());
+      }
+      std::printf("], \"inter_row\": [");
+      const auto intervals = result.inter_row.view();
+      for (std::size_t k = 0; k < intervals.size(); ++k) {
+        std::printf(
+            "%s{\"first_column\": %d, \"last_column\": %d, \"share\": %.5f, "
+            "\"level\": \"%s\"}",
+            k == 0 ? "" : ", ", intervals[k].first_column, intervals[k].last_column,
+            intervals[k].share, std::string(to_string(intervals[k].level)).c_str());
+      }
+      std::printf("]%s%s%s}", overlay.empty() ? "" : ", \"overlay\": \"", overlay.c_str(),
+                  overlay.empty() ? "" : "\"");
+      continue;
+    }
+    std::printf("%s: index %s, threshold %s = %d (%s), vegetation %.2f%%\n", path.string().c_str(),
+                std::string(to_string(config.index)).c_str(),
+                std::string(to_string(config.threshold)).c_str(), result.threshold,
+                result.bimodal ? "bimodal" : "not bimodal: fixed level",
+                100.0 * result.vegetation_fraction);
+    for (int row = 0; row < result.rows; ++row) {
+      std::printf("  row %d:", row);
+      for (int col = 0; col < result.cols; ++col) {
+        const int zone = row * result.cols + col;
+        std::printf("  %6.2f%% %-11s", 100.0 * result.zone_density[zone],
+                    std::string(to_string(result.zone_level[zone])).c_str());
+      }
+      std::printf("\n");
+    }
+    std::printf("  inter-row intervals (columns <= %.2f of the max):", config.inter_row_fraction);
+    for (const vision::InterRowInterval& interval : result.inter_row.view()) {
+      std::printf(" [%d-%d] p=%.4f %s;", interval.first_column, interval.last_column,
+                  interval.share, std::string(to_string(interval.level)).c_str());
+    }
+    std::printf("\n");
+    if (!overlay.empty()) std::printf("  overlay: %s\n", overlay.c_str());
+  }
+  if (options.json) std::printf("]}\n");
+  return 0;
+}
+
+}  // namespace
+
+void add_segment_command(CLI::App& app) {
+  auto options = std::make_shared<SegmentOptions>();
+  CLI::App* segment = app.add_subcommand(
+      "segment", "Threshold, zone densities and levels of field images (optional overlay PNG)");
+  segment->add_option("images", options->images, "Field images")
+      ->required()
+      ->check(CLI::ExistingFile);
+  segment->add_option("--index", options->index,
+                      "Vegetation index: " + join_names(vision::vegetation_index_names()) +
+                          " (default: the pipeline default)");
+  segment->add_option("--threshold", options->threshold,
+                      "Threshold method: " + join_names(vision::threshold_method_names()) +
+                          " (default: the pipeline default)");
+  segment->add_option("--grid", options->grid, "Zone grid ROWSxCOLS")->capture_default_str();
+  segment->add_option("--overlay", options->overlay,
+                      "Write the mask, grid and densities to this PNG (OUT_<stem>.png for "
+                      "several images)");
+  segment->add_flag("--json", options->json, "Print one JSON object");
+  segment->callback([options] {
+    try {
+      run_segment(*options);
+    } catch (const std::exception& error) {
+      std::cerr << "weedspray-lab segment: " << error.what() << "\n";
+      throw CLI::RuntimeError(1);
+    }
+  });
+}
+
+}  // namespace weedspray::lab

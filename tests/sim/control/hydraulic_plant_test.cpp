@@ -1,0 +1,169 @@
+// Unit-level checks of the hydraulic plant model (label sim: they integrate seconds of
+// simulated time).
+#include "control/plant/hydraulic_plant.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+
+namespace weedspray::control::plant {
+namespace {
+
+// Run the pump with all valves in `mask` and the return valve at `volts` until steady.
+HydraulicPlant settled(std::uint32_t mask, double volts, std::uint64_t seed = 7) {
+  HydraulicPlant plant(PlantParams{}, seed);
+  plant.set_pump(true);
+  plant.set_valves(mask);
+  plant.set_return_valve_volts(volts);
+  plant.step(8.0);
+  return plant;
+}
+
+TEST(HydraulicPlant, NozzleFlowFollowsOrificeLaw) {
+  HydraulicPlant plant = settled(0xF, 4.0);
+  const double p = plant.line_pressure_mpa();
+  ASSERT_GT(p, 0.1);
+  for (int i = 0; i < plant.nozzle_count(); ++i) {
+    const double k = plant.nozzle_truth(i).k_l_per_min_sqrt_mpa;
+    EXPECT_NEAR(plant.nozzle_flow_l_per_min(i), k * std::sqrt(p), 1e-6);
+  }
+}
+
+TEST(HydraulicPlant, DefaultNozzleGivesAboutTwoThirdsLitrePerMinuteAtPointTwoMpa) {
+  HydraulicPlant plant(PlantParams{}, 1);
+  for (int i = 0; i < plant.nozzle_count(); ++i) {
+    const double q = plant.nozzle_full_open_flow_l_per_min(i, 0.2);
+    EXPECT_GT(q, 0.58);
+    EXPECT_LT(q, 0.72);
+  }
+}
+
+TEST(HydraulicPlant, PressureRisesWhenReturnValveCloses) {
+  const double open = settled(0xF, 10.0).line_pressure_mpa();
+  const double half = settled(0xF, 5.0).line_pressure_mpa();
+  const double closed = settled(0xF, 0.0).line_pressure_mpa();
+  EXPECT_LT(open, half);
+  EXPECT_LT(half, closed);
+  // The controllable range must span the papers' set-points 0.2 and 0.4 MPa.
+  EXPECT_LT(open, 0.2);
+  EXPECT_GT(closed, 0.4);
+}
+
+TEST(HydraulicPlant, VolumeBalanceHoldsInSteadyState) {
+  HydraulicPlant plant = settled(0x5, 3.0);
+  EXPECT_NEAR(plant.pump_flow_l_per_min(),
+              plant.return_flow_l_per_min() + plant.total_nozzle_flow_l_per_min(), 1e-3);
+}
+
+TEST(HydraulicPlant, FlowMeterCountsTruePulsesPerLitre) {
+  HydraulicPlant plant = settled(0xF, 4.0);
+  const double litres = plant.total_delivered_l();
+  ASSERT_GT(litres, 0.05);
+  const double per_litre = static_cast<double>(plant.flow_meter_pulses()) / litres;
+  EXPECT_NEAR(per_litre, plant.true_meter_pulses_per_l(), 1.0 / litres + 1e-6);
+  // The meter is not perfect: its true K-factor differs from the 8500 on the label.
+  EXPECT_NEAR(plant.true_meter_pulses_per_l() / 8500.0 - 1.0,
+              PlantParams{}.flow_meter.k_factor_error, 1e-12);
+}
+
+TEST(HydraulicPlant, SensorMapsPressureToFourToTwentyMilliamps) {
+  PlantParams params;
+  params.pressure_sensor.noise_volts_sigma = 0.0;
+  HydraulicPlant plant(params, 3);
+  EXPECT_NEAR(plant.sensor_current_ma(), 4.0, 1e-9);
+  plant.set_pump(true);
+  plant.set_valves(0xF);
+  plant.set_return_valve_volts(4.0);
+  plant.step(3.0);
+  const double expected_ma = 4.0 + 16.0 * plant.line_pressure_mpa();
+  EXPECT_NEAR(plant.sensor_current_ma(), expected_ma, 1e-3);
+  EXPECT_NEAR(plant.pressure_sensor_volts(), expected_ma * 0.165, 1e-3);
+  plant.set_sensor_wire_broken(true);
+  EXPECT_LT(plant.sensor_current_ma(), 3.6);  // SPEC §4: below 3.6 mA is a fault
+  plant.set_sensor_wire_broken(false);
+  plant.set_sensor_shorted(true);
+  EXPECT_GT(plant.sensor_current_ma(), 21.0);
+}
+
+TEST(HydraulicPlant, WheelPulsesFollowDistance) {
+  HydraulicPlant plant(PlantParams{}, 1);
+  plant.set_ground_speed(1.5);
+  plant.step(10.0);
+  EXPECT_NEAR(plant.distance_m(), 15.0, 1e-6);
+  EXPECT_NEAR(static_cast<double>(plant.wheel_pulses()), 15.0 * 20.0, 1.0);
+}
+
+TEST(HydraulicPlant, ValveOpensAfterItsDelayAndClosesLater) {
+  HydraulicPlant plant = settled(0x0, 4.0);
+  const NozzleTruth& truth = plant.nozzle_truth(0);
+  plant.set_valves(0x1);
+  plant.step(truth.open_delay_s * 0.9);
+  EXPECT_EQ(plant.valve_opening(0), 0.0);
+  plant.step(truth.open_delay_s * 0.1 + PlantParams{}.nozzle.open_travel_s + 1e-4);
+  EXPECT_EQ(plant.valve_opening(0), 1.0);
+  plant.set_valves(0x0);
+  plant.step(truth.close_delay_s * 0.9);
+  EXPECT_EQ(plant.valve_opening(0), 1.0);
+  plant.step(truth.close_delay_s * 0.1 + PlantParams{}.nozzle.close_travel_s + 1e-4);
+  EXPECT_EQ(plant.valve_opening(0), 0.0);
+}
+
+TEST(HydraulicPlant, SameSeedReproducesExactlyAndOtherSeedDiffers) {
+  auto run = [](std::uint64_t seed) {
+    HydraulicPlant plant(PlantParams{}, seed);
+    plant.set_pump(true);
+    plant.set_return_valve_volts(4.0);
+    for (int k = 0; k < 300; ++k) {
+      plant.set_valves(static_cast<std::uint32_t>(k % 16));
+      plant.step(0.01);
+    }
+    return std::make_pair(plant.total_delivered_l(), plant.pressure_sensor_volts());
+  };
+  EXPECT_EQ(run(11), run(11));
+  EXPECT_NE(run(11).first, run(12).first);
+}
+
+TEST(HydraulicPlant, NozzlesDifferByAFewPercent) {
+  HydraulicPlant plant(PlantParams{}, 5);
+  double lo = 1e9, hi = 0;
+  for (int i = 0; i < plant.nozzle_count(); ++i) {
+    lo = std::min(lo, plant.nozzle_truth(i).k_l_per_min_sqrt_mpa);
+    hi = std::max(hi, plant.nozzle_truth(i).k_l_per_min_sqrt_mpa);
+  }
+  EXPECT_GT(hi / lo - 1.0, 0.001);
+  EXPECT_LT(hi / lo - 1.0, 0.11);
+}
+
+TEST(HydraulicPlant, EmptyTankStarvesThePump) {
+  HydraulicPlant plant = settled(0xF, 4.0);
+  plant.set_tank_level_l(0.0);
+  plant.step(2.0);
+  EXPECT_LT(plant.line_pressure_mpa(), 0.01);
+}
+
+TEST(HydraulicPlant, BlockedNozzleRaisesPressureAndStopsItsFlow) {
+  HydraulicPlant plant = settled(0xF, 4.0);
+  const double before = plant.line_pressure_mpa();
+  plant.set_nozzle_blockage(2, 1.0);
+  plant.step(3.0);
+  EXPECT_GT(plant.line_pressure_mpa(), before + 0.01);
+  EXPECT_EQ(plant.nozzle_flow_l_per_min(2), 0.0);
+}
+
+TEST(HydraulicPlant, RejectsBadParametersByName) {
+  PlantParams params;
+  params.nozzle_count = 0;
+  try {
+    HydraulicPlant plant(params, 1);
+    FAIL() << "accepted nozzle_count = 0";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("nozzle_count"), std::string::npos);
+  }
+  params = PlantParams{};
+  params.integration_step_s = 0.01;
+  EXPECT_THROW(HydraulicPlant(params, 1), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace weedspray::control::plant

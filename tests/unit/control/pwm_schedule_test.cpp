@@ -1,0 +1,224 @@
+#include "control/pwm_schedule.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+namespace weedspray::control {
+namespace {
+
+using namespace std::chrono_literals;
+using std::chrono::nanoseconds;
+
+PwmConfig four_valves(PwmPhaseMode mode = PwmPhaseMode::kStaggered) {
+  PwmConfig config;
+  config.valve_count = 4;
+  config.frequency_hz = 5.0;  // T = 200 ms
+  config.phase_mode = mode;
+  return config;
+}
+
+TEST(PwmSchedule, OuterFirstOrder) {
+  EXPECT_EQ(outer_first_order(4), (std::vector<std::size_t>{0, 3, 1, 2}));
+  EXPECT_EQ(outer_first_order(5), (std::vector<std::size_t>{0, 4, 1, 3, 2}));
+  EXPECT_EQ(outer_first_order(1), (std::vector<std::size_t>{0}));
+}
+
+TEST(PwmSchedule, OffsetsFollowTheOrder) {
+  const PwmSchedule pwm(four_valves());
+  EXPECT_EQ(pwm.period(), 200ms);
+  EXPECT_EQ(pwm.phase_offset(0), 0ms);    // A first
+  EXPECT_EQ(pwm.phase_offset(3), 50ms);   // then D
+  EXPECT_EQ(pwm.phase_offset(1), 100ms);  // B
+  EXPECT_EQ(pwm.phase_offset(2), 150ms);  // C
+  PwmConfig custom = four_valves();
+  custom.order = {2, 1, 0, 3};
+  const PwmSchedule other(custom);
+  EXPECT_EQ(other.phase_offset(2), 0ms);
+  EXPECT_EQ(other.phase_offset(3), 150ms);
+}
+
+TEST(PwmSchedule, StaggeredEdgesAtHalfDuty) {
+  PwmSchedule pwm(four_valves());
+  const std::vector<double> duties{50, 50, 50, 50};
+  pwm.set_duties(duties);
+  const nanoseconds t0 = 1s;
+  pwm.start(t0);
+  const std::vector<PwmEdge> expected{
+      {t0, 0b0001},          // A opens
+      {t0 + 50ms, 0b1001},   // D opens
+      {t0 + 100ms, 0b1010},  // A closes, B opens (merged)
+      {t0 + 150ms, 0b0110},  // D closes, C opens
+      {t0 + 200ms, 0b0101},  // A opens, B closes
+      {t0 + 250ms, 0b1001},  // D opens, C closes
+  };
+  for (const PwmEdge& e : expected) {
+    const PwmEdge got = pwm.next_edge();
+    EXPECT_EQ(got.time, e.time);
+    EXPECT_EQ(got.valve_mask, e.valve_mask) << "at " << (e.time - t0).count() / 1000000 << " ms";
+  }
+}
+
+TEST(PwmSchedule, SynchronousModeSwitchesTogether) {
+  PwmSchedule pwm(four_valves(PwmPhaseMode::kSynchronous));
+  pwm.set_duties(std::vector<double>{25, 50, 75, 100});
+  pwm.start(0ns);
+  EXPECT_EQ(pwm.next_edge().valve_mask, 0b1111u);
+  PwmEdge e = pwm.next_edge();
+  EXPECT_EQ(e.time, 50ms);
+  EXPECT_EQ(e.valve_mask, 0b1110u);
+  e = pwm.next_edge();
+  EXPECT_EQ(e.time, 100ms);
+  EXPECT_EQ(e.valve_mask, 0b1100u);
+  e = pwm.next_edge();
+  EXPECT_EQ(e.time, 150ms);
+  EXPECT_EQ(e.valve_mask, 0b1000u);
+  e = pwm.next_edge();
+  EXPECT_EQ(e.time, 200ms);
+  EXPECT_EQ(e.valve_mask, 0b1111u);
+}
+
+TEST(PwmSchedule, DutyIsLatchedAtThePeriodStart) {
+  PwmConfig config = four_valves();
+  config.valve_count = 1;
+  PwmSchedule pwm(config);
+  pwm.set_duty(0, 50);
+  pwm.start(0ns);
+  EXPECT_EQ(pwm.next_edge().valve_mask, 1u);  // t = 0, open for 100 ms
+  pwm.set_duty(0, 10);                        // mid-period: must not shorten this pulse
+  EXPECT_DOUBLE_EQ(pwm.valve_state(0).latched_duty_pct, 50.0);
+  PwmEdge e = pwm.next_edge();
+  EXPECT_EQ(e.time, 100ms);
+  EXPECT_EQ(e.valve_mask, 0u);
+  e = pwm.next_edge();
+  EXPECT_EQ(e.time, 200ms);
+  EXPECT_EQ(e.valve_mask, 1u);
+  EXPECT_DOUBLE_EQ(pwm.valve_state(0).latched_duty_pct, 10.0);
+  EXPECT_EQ(pwm.valve_state(0).on_time, 20ms);
+  EXPECT_EQ(pwm.next_edge().time, 220ms);
+}
+
+TEST(PwmSchedule, MinimumOnAndOffTimesRoundToTheNearer) {
+  PwmConfig config = four_valves();
+  config.min_on_time = 20ms;
+  config.min_off_time = 20ms;
+  const PwmSchedule pwm(config);
+  EXPECT_EQ(pwm.on_time_for(4.0), 0ms);     // 8 ms < 10 ms: closed
+  EXPECT_EQ(pwm.on_time_for(5.0), 20ms);    // 10 ms: half-way rounds up to the minimum
+  EXPECT_EQ(pwm.on_time_for(7.5), 20ms);    // 15 ms -> 20 ms
+  EXPECT_EQ(pwm.on_time_for(10.0), 20ms);   // exactly the minimum
+  EXPECT_EQ(pwm.on_time_for(96.0), 200ms);  // off 8 ms: open all period
+  EXPECT_EQ(pwm.on_time_for(95.0), 180ms);  // off 10 ms -> 20 ms
+  EXPECT_EQ(pwm.on_time_for(50.0), 100ms);
+  EXPECT_DOUBLE_EQ(pwm.effective_duty_pct(7.5), 10.0);
+}
+
+TEST(PwmSchedule, OpenTimeOverManyPeriodsMatchesLatchedDuties) {
+  PwmConfig config = four_valves();
+  config.valve_count = 7;
+  config.frequency_hz = 3.0;  // T = 333333333 ns: the offsets do not divide evenly
+  config.min_on_time = 15ms;
+  config.min_off_time = 10ms;
+  PwmSchedule pwm(config);
+  const nanoseconds period = pwm.period();
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> duty(0.0, 100.0);
+  const nanoseconds t0 = 5s;
+  pwm.start(t0);
+  constexpr int kPeriods = 150;
+  // Per valve: the on-time latched at each of its first kPeriods period starts.
+  std::vector<nanoseconds> expected(7, 0ns);
+  std::vector<int> periods_seen(7, 0);
+  std::vector<PwmEdge> edges;
+  nanoseconds last = t0 - 1ns;
+  while (last < t0 + (kPeriods + 1) * period) {
+    if (rng() % 3 == 0) pwm.set_duty(rng() % 7, duty(rng));
+    const PwmEdge e = pwm.next_edge();
+    ASSERT_GT(e.time, last);
+    ASSERT_LE(e.time - last, period / 7 + 1ns);  // staggered: a period start every T/N
+    last = e.time;
+    edges.push_back(e);
+    for (std::size_t v = 0; v < 7; ++v) {
+      const PwmValveState s = pwm.valve_state(v);
+      if (s.period_start == e.time && periods_seen[v] < kPeriods) {
+        ++periods_seen[v];
+        expected[v] += s.on_time;
+        EXPECT_EQ(s.on_time, pwm.on_time_for(s.latched_duty_pct));
+        EXPECT_EQ(s.open, s.on_time > 0ns);
+      }
+    }
+  }
+  for (std::size_t v = 0; v < 7; ++v) {
+    // Integrate the valve's bit of the edge masks over its first kPeriods periods.
+    const nanoseconds from = t0 + pwm.phase_offset(v);
+    const nanoseconds to = from + kPeriods * period;
+    nanoseconds open = 0ns;
+    for (std::size_t i = 0; i + 1 < edges.size(); ++i) {
+      if (!(edges[i].valve_mask >> v & 1u)) continue;
+      const nanoseconds a = std::max(edges[i].time, from);
+      const nanoseconds b = std::min(edges[i + 1].time, to);
+      if (b > a) open += b - a;
+    }
+    EXPECT_EQ(periods_seen[v], kPeriods);
+    EXPECT_EQ(open, expected[v]) << "valve " << v;
+  }
+}
+
+TEST(PwmSchedule, ClosedValvesStillGiveEdgesAtPeriodStarts) {
+  PwmSchedule pwm(four_valves());
+  pwm.start(0ns);
+  for (int i = 0; i < 8; ++i) {
+    const PwmEdge e = pwm.next_edge();
+    EXPECT_EQ(e.time, i * 50ms);
+    EXPECT_EQ(e.valve_mask, 0u);
+  }
+}
+
+TEST(PwmSchedule, ForceClosedStopsEverything) {
+  PwmSchedule pwm(four_valves());
+  pwm.set_duties(std::vector<double>{100, 100, 100, 100});
+  pwm.start(0ns);
+  for (int i = 0; i < 4; ++i) pwm.next_edge();
+  EXPECT_EQ(pwm.current_mask(), 0b1111u);
+  EXPECT_EQ(pwm.force_closed(), 0u);
+  for (int i = 0; i < 8; ++i) EXPECT_EQ(pwm.next_edge().valve_mask, 0u);
+}
+
+TEST(PwmSchedule, ThirtyTwoValves) {
+  PwmConfig config;
+  config.valve_count = 32;
+  config.frequency_hz = 20.0;
+  PwmSchedule pwm(config);
+  pwm.set_duty(31, 100);
+  pwm.start(0ns);
+  std::uint32_t mask = 0;
+  for (int i = 0; i < 40; ++i) mask = pwm.next_edge().valve_mask;
+  EXPECT_EQ(mask, 1u << 31);
+  EXPECT_EQ(pwm.phase_offset(31), nanoseconds(50ms) / 32);  // outer-first: valve 31 is second
+}
+
+TEST(PwmSchedule, RejectsBadConfig) {
+  PwmConfig config = four_valves();
+  config.frequency_hz = 0.5;
+  EXPECT_THROW(PwmSchedule{config}, std::invalid_argument);
+  config = four_valves();
+  config.frequency_hz = 25;
+  EXPECT_THROW(PwmSchedule{config}, std::invalid_argument);
+  config = four_valves();
+  config.valve_count = 33;
+  EXPECT_THROW(PwmSchedule{config}, std::invalid_argument);
+  config = four_valves();
+  config.order = {0, 1, 1, 2};
+  EXPECT_THROW(PwmSchedule{config}, std::invalid_argument);
+  config = four_valves();
+  config.order = {0, 1, 2};
+  EXPECT_THROW(PwmSchedule{config}, std::invalid_argument);
+  config = four_valves();
+  config.min_on_time = 150ms;
+  config.min_off_time = 60ms;
+  EXPECT_THROW(PwmSchedule{config}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace weedspray::control

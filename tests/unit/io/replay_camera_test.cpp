@@ -1,0 +1,93 @@
+#include "io/sim/replay_camera.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "io/sim/manual_clock.hpp"
+
+namespace weedspray::io::sim {
+namespace {
+
+using namespace std::chrono_literals;
+
+std::string images_dir() {
+  const char* data = std::getenv("WEEDSPRAY_DATA_DIR");
+  if (data == nullptr) {
+    ADD_FAILURE() << "WEEDSPRAY_DATA_DIR is not set (ctest sets it)";
+    return {};
+  }
+  return std::string(data) + "/ews-train/images";
+}
+
+TEST(ReplayCamera, FixedRatePacingAndTimestampsFromTheClock) {
+  ManualClock clock(1s);
+  ReplayCameraConfig config;
+  config.source = images_dir();
+  config.fps = 10.0;
+  ReplayCamera camera(config, clock);
+  ASSERT_TRUE(camera.start()) << camera.last_error();
+  EXPECT_GT(camera.image_count(), 100U);
+  Frame f;
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_EQ(camera.next_frame(f, 1s), FrameStatus::kOk) << camera.last_error();
+    EXPECT_EQ(f.timestamp, 1s + i * 100ms);
+    EXPECT_EQ(f.sequence, static_cast<std::uint64_t>(i));
+    EXPECT_GT(f.view.width, 0);
+    EXPECT_GT(f.view.height, 0);
+    EXPECT_GE(f.view.stride, static_cast<std::size_t>(f.view.width) * 3);
+    EXPECT_EQ(f.view.format, vision::PixelFormat::kBgr24);
+    ASSERT_NE(f.view.data, nullptr);
+  }
+  EXPECT_EQ(camera.counters().frames, 3U);
+}
+
+TEST(ReplayCamera, PacedByGroundSpeedAndFootprint) {
+  ManualClock clock;
+  std::atomic<double> speed{2.0};
+  ReplayCameraConfig config;
+  config.source = images_dir();
+  config.footprint_length_m = 1.0;
+  config.ground_speed_m_per_s = [&] { return speed.load(); };
+  ReplayCamera camera(config, clock);
+  ASSERT_TRUE(camera.start()) << camera.last_error();
+  Frame f;
+  ASSERT_EQ(camera.next_frame(f, 1s), FrameStatus::kOk);
+  EXPECT_EQ(f.timestamp, 0s);
+  ASSERT_EQ(camera.next_frame(f, 1s), FrameStatus::kOk);
+  EXPECT_EQ(f.timestamp, 500ms) << "1 m footprint at 2 m/s";
+  speed = 0.0;
+  EXPECT_EQ(camera.next_frame(f, 200ms), FrameStatus::kTimeout) << "standing still";
+  EXPECT_EQ(camera.counters().timeouts, 1U);
+}
+
+TEST(ReplayCamera, SingleImageWithoutLoopEnds) {
+  ManualClock clock;
+  ReplayCameraConfig config;
+  const auto first = *std::filesystem::directory_iterator(images_dir());
+  config.source = first.path().string();
+  config.loop = false;
+  ReplayCamera camera(config, clock);
+  ASSERT_TRUE(camera.start()) << camera.last_error();
+  Frame f;
+  EXPECT_EQ(camera.next_frame(f, 1s), FrameStatus::kOk);
+  EXPECT_EQ(camera.next_frame(f, 1s), FrameStatus::kEnd);
+}
+
+TEST(ReplayCamera, MissingSourceIsAClearError) {
+  ManualClock clock;
+  ReplayCameraConfig config;
+  config.source = "/nonexistent/field-run";
+  ReplayCamera camera(config, clock);
+  EXPECT_FALSE(camera.start());
+  EXPECT_NE(camera.last_error().find("/nonexistent/field-run"), std::string::npos)
+      << camera.last_error();
+  Frame f;
+  EXPECT_EQ(camera.next_frame(f, 10ms), FrameStatus::kError);
+}
+
+}  // namespace
+}  // namespace weedspray::io::sim

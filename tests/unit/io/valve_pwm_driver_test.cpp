@@ -1,0 +1,197 @@
+#include "io/valve_pwm_driver.hpp"
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <stop_token>
+
+#include "control/pwm_schedule.hpp"
+#include "io/sim/manual_clock.hpp"
+#include "io/sim/memory_output_bank.hpp"
+
+namespace weedspray::io {
+namespace {
+
+using namespace std::chrono_literals;
+using std::chrono::nanoseconds;
+
+// Simulated time that advances when slept on, with a hook run at every sleep (the test's
+// "other threads": command refreshes) and a stop at a given time, so run() executes
+// deterministically on the test thread.
+class ScriptedClock final : public Clock {
+ public:
+  nanoseconds now() const noexcept override { return inner.now(); }
+  void sleep_until(nanoseconds t) noexcept override {
+    inner.sleep_until(t);
+    if (on_sleep) on_sleep(inner.now());
+    if (inner.now() >= stop_at) stop.request_stop();
+  }
+  sim::ManualClock inner;
+  std::function<void(nanoseconds)> on_sleep;
+  nanoseconds stop_at{1s};
+  std::stop_source stop;
+};
+
+struct Rig {
+  ScriptedClock clock;
+  sim::MemoryOutputBank bank{4, 0, clock, 100000};
+  control::PwmConfig pwm_config{};
+  control::PwmSchedule schedule{pwm_config};
+  ValvePwmDriver<control::PwmSchedule> driver;
+
+  explicit Rig(ValvePwmDriverConfig config) : driver(clock, bank, schedule, config) {}
+
+  static ValveCommand command(nanoseconds at) {
+    ValveCommand c;
+    c.valve_count = 4;
+    c.duty_pct[0] = 25;
+    c.duty_pct[1] = 50;
+    c.duty_pct[2] = 75;
+    c.duty_pct[3] = 40;
+    c.issued_at = at;
+    return c;
+  }
+};
+
+// Time each valve spent open in [from, to), from the bank's write history.
+std::array<double, 4> open_fraction(const std::vector<sim::OutputWrite>& writes, nanoseconds from,
+                                    nanoseconds to) {
+  std::array<double, 4> open_ns{};
+  std::uint32_t mask = 0;
+  nanoseconds t = from;
+  for (const auto& w : writes) {
+    if (w.time >= to) break;
+    if (w.time > t) {
+      for (int v = 0; v < 4; ++v)
+        if (mask & (1U << v)) open_ns[v] += static_cast<double>((w.time - t).count());
+      t = w.time;
+    }
+    mask = w.mask;
+  }
+  for (int v = 0; v < 4; ++v)
+    if (mask & (1U << v)) open_ns[v] += static_cast<double>((to - t).count());
+  for (auto& o : open_ns) o /= static_cast<double>((to - from).count());
+  return open_ns;
+}
+
+TEST(ValvePwmDriver, ExecutesTheScheduleEdgeForEdgeOnTime) {
+  ValvePwmDriverConfig config;
+  config.command_expiry = 10s;
+  Rig rig(config);
+  rig.driver.command(Rig::command(0ns));
+  rig.clock.stop_at = 2s;
+  rig.driver.run(rig.clock.stop.get_token());
+
+  const ValvePwmStats stats = rig.driver.stats();
+  EXPECT_EQ(stats.deadman_expiries, 0U);
+  EXPECT_EQ(stats.late_edges, 0U);
+  EXPECT_EQ(stats.skipped_edges, 0U);
+  EXPECT_EQ(stats.schedule_start, 0ns);
+
+  // The same schedule, computed independently, gives every write's time and mask.
+  control::PwmSchedule reference(rig.pwm_config);
+  const auto cmd = Rig::command(0ns);
+  reference.set_duties(std::span<const double>(cmd.duty_pct.data(), 4));
+  reference.start(0ns);
+  const auto writes = rig.bank.history();
+  ASSERT_GT(writes.size(), 40U);
+  EXPECT_EQ(writes.size(), stats.edges_written);
+  for (const auto& w : writes) {
+    const control::PwmEdge edge = reference.next_edge();
+    EXPECT_EQ(w.time, edge.time);
+    EXPECT_EQ(w.mask, edge.valve_mask);
+  }
+  // Duties over whole periods after the first (latching) period.
+  const auto duty = open_fraction(writes, 400ms, 1800ms);
+  EXPECT_NEAR(duty[0], 0.25, 1e-6);
+  EXPECT_NEAR(duty[1], 0.50, 1e-6);
+  EXPECT_NEAR(duty[2], 0.75, 1e-6);
+  EXPECT_NEAR(duty[3], 0.40, 1e-6);
+  EXPECT_EQ(rig.bank.mask(), 0U) << "valves closed after run() returns";
+  EXPECT_GE(rig.bank.force_safe_count(), 2U) << "force_safe at start and at stop";
+}
+
+TEST(ValvePwmDriver, DeadManClosesAllValvesWhenCommandsStop) {
+  ValvePwmDriverConfig config;
+  config.command_expiry = 300ms;
+  Rig rig(config);
+  rig.driver.command(Rig::command(0ns));
+  nanoseconds expired_seen{-1};
+  std::uint64_t force_safe_before = 0;
+  rig.clock.on_sleep = [&](nanoseconds now) {
+    if (expired_seen < 0ns && rig.driver.stats().expired && now > 0ns) {
+      expired_seen = now;
+      force_safe_before = rig.bank.force_safe_count();
+    }
+  };
+  rig.clock.stop_at = 1s;
+  rig.driver.run(rig.clock.stop.get_token());
+
+  const ValvePwmStats stats = rig.driver.stats();
+  EXPECT_EQ(stats.deadman_expiries, 1U);
+  EXPECT_GE(expired_seen, 300ms);
+  EXPECT_LE(expired_seen, 300ms + config.max_sleep);
+  EXPECT_GE(force_safe_before, 2U) << "force_safe at start and at expiry";
+  for (const auto& w : rig.bank.history())
+    EXPECT_LT(w.time, 300ms) << "no valve write after the command expired";
+  EXPECT_EQ(rig.bank.mask(), 0U);
+}
+
+TEST(ValvePwmDriver, RefreshedCommandsKeepValvesRunning) {
+  ValvePwmDriverConfig config;
+  config.command_expiry = 300ms;
+  Rig rig(config);
+  rig.driver.command(Rig::command(0ns));
+  nanoseconds last_refresh = 0ns;
+  rig.clock.on_sleep = [&](nanoseconds now) {
+    if (now - last_refresh >= 100ms) {
+      last_refresh = now;
+      rig.driver.command(Rig::command(now));
+    }
+  };
+  rig.clock.stop_at = 3s;
+  rig.driver.run(rig.clock.stop.get_token());
+  const ValvePwmStats stats = rig.driver.stats();
+  EXPECT_EQ(stats.deadman_expiries, 0U);
+  EXPECT_GT(stats.commands_applied, 25U);
+  const auto duty = open_fraction(rig.bank.history(), 400ms, 2800ms);
+  EXPECT_NEAR(duty[1], 0.50, 1e-6);
+}
+
+TEST(ValvePwmDriver, ResumesAfterExpiryWhenCommandsReturn) {
+  ValvePwmDriverConfig config;
+  config.command_expiry = 200ms;
+  Rig rig(config);
+  rig.driver.command(Rig::command(0ns));
+  bool resumed = false;
+  rig.clock.on_sleep = [&](nanoseconds now) {
+    if (!resumed && now >= 1s) {
+      resumed = true;
+      ValveCommand c = Rig::command(now);
+      c.issued_at = now;
+      rig.driver.command(c);
+    }
+  };
+  rig.clock.stop_at = 1150ms;
+  rig.driver.run(rig.clock.stop.get_token());
+  const ValvePwmStats stats = rig.driver.stats();
+  EXPECT_EQ(stats.deadman_expiries, 1U);
+  EXPECT_GE(stats.schedule_start, 1s) << "phases restarted when commands returned";
+  bool wrote_after_resume = false;
+  for (const auto& w : rig.bank.history())
+    if (w.time >= 1s && w.mask != 0) wrote_after_resume = true;
+  EXPECT_TRUE(wrote_after_resume);
+  EXPECT_EQ(stats.late_edges, 0U);
+}
+
+TEST(ValvePwmDriver, NoCommandMeansNoValveEverOpens) {
+  Rig rig(ValvePwmDriverConfig{});
+  rig.clock.stop_at = 1s;
+  rig.driver.run(rig.clock.stop.get_token());
+  EXPECT_TRUE(rig.bank.history().empty());
+  EXPECT_EQ(rig.bank.mask(), 0U);
+  EXPECT_EQ(rig.driver.stats().edges_written, 0U);
+}
+
+}  // namespace
+}  // namespace weedspray::io

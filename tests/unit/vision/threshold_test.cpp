@@ -1,0 +1,176 @@
+#include "vision/threshold.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <set>
+
+namespace weedspray::vision {
+namespace {
+
+ThresholdParams params_with_fixed(int level) {
+  ThresholdParams params;
+  params.fixed_threshold = level;
+  return params;
+}
+
+// Two clean clusters: 2 px at 10, 1 px at 12, 3 px at 100.
+Histogram two_clusters() {
+  Histogram histogram{};
+  histogram[10] = 2;
+  histogram[12] = 1;
+  histogram[100] = 3;
+  return histogram;
+}
+
+// A Gaussian-shaped bump of `count` pixels around `mean`.
+void add_bump(Histogram& histogram, double mean, double sigma, double count) {
+  for (int level = 0; level < 256; ++level) {
+    const double z = (level - mean) / sigma;
+    histogram[level] += static_cast<std::uint32_t>(
+        std::lround(count * std::exp(-0.5 * z * z) / (sigma * std::sqrt(2 * M_PI))));
+  }
+}
+
+TEST(ThresholdNames, RoundTripAndRejectUnknown) {
+  ASSERT_EQ(all_threshold_methods().size(), threshold_method_names().size());
+  for (ThresholdMethod method : all_threshold_methods()) {
+    EXPECT_EQ(parse_threshold_method(to_string(method)), method);
+  }
+  EXPECT_EQ(parse_threshold_method("fit"), ThresholdMethod::kFit);
+  EXPECT_FALSE(parse_threshold_method("FIT").has_value());
+}
+
+TEST(BetweenClassVariance, HandComputed) {
+  // Split at 12: w0 = w1 = 1/2, means 32/3 and 100: 1/4 * (89.333)^2 = 1995.11.
+  EXPECT_NEAR(between_class_variance(two_clusters(), 12), 1995.111, 1e-3);
+  // Split at 10: w0 = 1/3 (mean 10), w1 = 2/3 (mean 312/4 = 78): 2/9 * 68^2 = 1027.56.
+  EXPECT_NEAR(between_class_variance(two_clusters(), 10), 1027.556, 1e-3);
+  EXPECT_EQ(between_class_variance(two_clusters(), 200), 0.0);  // one class empty
+}
+
+TEST(Thresholds, TwoClustersHandComputed) {
+  const Histogram histogram = two_clusters();
+  const ThresholdParams params = params_with_fixed(50);
+  // Otsu: the variance is flat for t in [12, 99]; the first maximum is 12.
+  EXPECT_EQ(compute_threshold(histogram, ThresholdMethod::kOtsu, params).threshold, 12);
+  // FIT: mean 332/6 = 55.33; means below/above 10.67 and 100 -> 55.33 again: converged, 55.
+  EXPECT_EQ(compute_threshold(histogram, ThresholdMethod::kFit, params).threshold, 55);
+  // K-means from centres 10 and 100: split 55, centres 10.67 and 100 -> 55.
+  EXPECT_EQ(compute_threshold(histogram, ThresholdMethod::kKmeans, params).threshold, 55);
+  EXPECT_EQ(compute_threshold(histogram, ThresholdMethod::kFixed, params).threshold, 50);
+  for (ThresholdMethod method : all_threshold_methods()) {
+    const ThresholdResult result = compute_threshold(histogram, method, params);
+    EXPECT_TRUE(result.bimodal) << to_string(method);
+    EXPECT_GE(result.threshold, 12) << to_string(method);
+    EXPECT_LT(result.threshold, 100) << to_string(method);
+  }
+}
+
+TEST(Thresholds, GaussianBimodalAgreesWithOtsu) {
+  Histogram histogram{};
+  add_bump(histogram, 80, 6, 60000);   // soil
+  add_bump(histogram, 160, 10, 20000);  // plants
+  const ThresholdParams params = params_with_fixed(120);
+  const ThresholdResult otsu = compute_threshold(histogram, ThresholdMethod::kOtsu, params);
+  ASSERT_TRUE(otsu.bimodal);
+  EXPECT_GT(otsu.threshold, 100);
+  EXPECT_LT(otsu.threshold, 140);
+  // IPSO's local search reaches Otsu's optimum (the 2018 paper's 0.1 % error).
+  EXPECT_EQ(compute_threshold(histogram, ThresholdMethod::kIpso, params).threshold, otsu.threshold);
+  for (ThresholdMethod method : {ThresholdMethod::kFit, ThresholdMethod::kKmeans,
+                                 ThresholdMethod::kHbt, ThresholdMethod::kPso}) {
+    const ThresholdResult result = compute_threshold(histogram, method, params);
+    EXPECT_TRUE(result.bimodal) << to_string(method);
+    EXPECT_NEAR(result.threshold, otsu.threshold, 15) << to_string(method);
+  }
+  // HBT: the valley between the modes lies between them, nearer the narrow soil peak.
+  const int hbt = compute_threshold(histogram, ThresholdMethod::kHbt, params).threshold;
+  EXPECT_GT(hbt, 95);
+  EXPECT_LT(hbt, 145);
+}
+
+TEST(Thresholds, PsoIsReproducibleForASeed) {
+  Histogram histogram{};
+  add_bump(histogram, 70, 12, 50000);
+  add_bump(histogram, 150, 15, 30000);
+  ThresholdParams params = params_with_fixed(120);
+  for (ThresholdMethod method : {ThresholdMethod::kPso, ThresholdMethod::kIpso}) {
+    const int first = compute_threshold(histogram, method, params).threshold;
+    for (int repeat = 0; repeat < 5; ++repeat) {
+      EXPECT_EQ(compute_threshold(histogram, method, params).threshold, first);
+    }
+  }
+  // A 3-particle, 1-iteration swarm with another seed lands elsewhere: the seed matters.
+  params.pso_particles = 3;
+  params.pso_iterations = 1;
+  std::set<int> results;
+  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+    params.seed = seed;
+    results.insert(compute_threshold(histogram, ThresholdMethod::kPso, params).threshold);
+  }
+  EXPECT_GT(results.size(), 1u);
+}
+
+// Degenerate frames: never a split of one population, always the fixed level, not bimodal.
+TEST(Thresholds, DegenerateHistogramsGiveTheFixedLevel) {
+  Histogram empty{};
+  Histogram uniform{};
+  uniform[128] = 1000;  // black, white, grey card on the CIVE scale: one level
+  Histogram black{};
+  black[0] = 1000;
+  Histogram saturated{};
+  saturated[255] = 1000;
+  Histogram two_levels{};  // quantisation noise of a flat surface
+  two_levels[120] = 700;
+  two_levels[121] = 300;
+  const ThresholdParams params = params_with_fixed(131);
+  for (const Histogram* histogram : {&empty, &uniform, &black, &saturated}) {
+    for (ThresholdMethod method : all_threshold_methods()) {
+      const ThresholdResult result = compute_threshold(*histogram, method, params);
+      EXPECT_EQ(result.threshold, 131) << to_string(method);
+      EXPECT_FALSE(result.bimodal) << to_string(method);
+    }
+  }
+  for (ThresholdMethod method : all_threshold_methods()) {
+    const ThresholdResult result = compute_threshold(two_levels, method, params);
+    EXPECT_EQ(result.threshold, 131) << to_string(method);
+  }
+}
+
+TEST(Thresholds, UnimodalBareSoilAndFullCanopyAreJudgedOnTheFixedScale) {
+  Histogram bare_soil{};
+  add_bump(bare_soil, 120, 3, 100000);
+  Histogram full_canopy{};
+  add_bump(full_canopy, 165, 8, 100000);
+  const ThresholdParams params = params_with_fixed(131);
+  for (ThresholdMethod method : all_threshold_methods()) {
+    const ThresholdResult soil = compute_threshold(bare_soil, method, params);
+    EXPECT_FALSE(soil.bimodal) << to_string(method);
+    EXPECT_EQ(soil.threshold, 131) << to_string(method);  // no pixel above: no plants
+    const ThresholdResult canopy = compute_threshold(full_canopy, method, params);
+    EXPECT_FALSE(canopy.bimodal) << to_string(method);
+    EXPECT_EQ(canopy.threshold, 131) << to_string(method);  // every pixel above: all plants
+  }
+  // The papers' behaviour on request: FIT then splits the soil near its mean.
+  ThresholdParams keep = params;
+  keep.unimodal = UnimodalPolicy::kKeepSplit;
+  const ThresholdResult split = compute_threshold(bare_soil, ThresholdMethod::kFit, keep);
+  EXPECT_FALSE(split.bimodal);
+  EXPECT_NEAR(split.threshold, 120, 1);
+}
+
+TEST(LooksBimodal, SparsePlantsOnSoilAreBimodal) {
+  Histogram histogram{};
+  add_bump(histogram, 120, 3, 97000);
+  add_bump(histogram, 160, 6, 3000);  // 3 % seedlings
+  const ThresholdParams params = params_with_fixed(131);
+  const ThresholdResult result = compute_threshold(histogram, ThresholdMethod::kOtsu, params);
+  EXPECT_TRUE(result.bimodal);
+  EXPECT_GT(result.threshold, 125);
+  EXPECT_LT(result.threshold, 150);
+}
+
+}  // namespace
+}  // namespace weedspray::vision

@@ -1,0 +1,89 @@
+#!/bin/busybox sh
+# PID 1 of the test guest (run-vm-tests.sh packs it as /init with busybox, the kernel modules
+# listed in /modules.load and the programs under test in /tests).
+#
+# It sets up what the programs expect, then runs each one and reports on the serial console:
+#   WEEDSPRAY-VM-SETUP OK                       simulated GPIO chips and camera are ready
+#   WEEDSPRAY-VM-RESULT <program> PASS|FAIL rc=N  one line per program
+#   WEEDSPRAY-VM-DONE                           every program has run
+# and leaves through QEMU's isa-debug-exit port.
+#
+# Guest fixtures (the tests find them through configfs, never by assuming gpiochip numbers):
+#   gpio-sim chip labelled "weedspray-out", 8 lines: valve0 valve1 valve2 valve3 pump buzzer lamp aux
+#   gpio-sim chip labelled "weedspray-in",  3 lines: flow wheel key
+#   vivid with one video capture node (/dev/video*)
+/bin/busybox --install -s /bin
+export PATH=/bin:/usr/bin
+export HOME=/tmp
+export GTEST_COLOR=no # the console log is read as text
+
+# QEMU exits with status (code << 1) | 1 when a byte is written to port 0xf4.
+leave() {
+  printf "\\$(printf '%03o' "$1")" | dd of=/dev/port bs=1 seek=244 count=1 2>/dev/null
+  poweroff -f
+}
+setup_failed() {
+  echo "WEEDSPRAY-VM-SETUP FAIL: $*"
+  leave 2
+}
+
+mount -t proc proc /proc
+mount -t sysfs sysfs /sys
+mount -t devtmpfs devtmpfs /dev
+mount -t tmpfs tmpfs /tmp
+mount -t tmpfs tmpfs /run
+
+while read -r module; do
+  parameters=""
+  # One video capture node only; webcam input first (vivid's default input list).
+  case "$module" in */vivid.ko) parameters="n_devs=1 node_types=0x1" ;; esac
+  # shellcheck disable=SC2086 # parameters are words
+  insmod "$module" $parameters || setup_failed "insmod $module failed"
+done </modules.load
+
+mount -t configfs configfs /sys/kernel/config || setup_failed "cannot mount configfs"
+
+make_gpio_sim_chip() { # NAME LINE_NAME...
+  chip="/sys/kernel/config/gpio-sim/$1"
+  shift
+  mkdir "$chip" "$chip/bank0" || setup_failed "cannot create gpio-sim chip $chip"
+  echo $# >"$chip/bank0/num_lines"
+  echo "$(basename "$chip")" >"$chip/bank0/label" # the chip label tests may look it up by
+  offset=0
+  for line_name in "$@"; do
+    mkdir "$chip/bank0/line$offset"
+    echo "$line_name" >"$chip/bank0/line$offset/name"
+    offset=$((offset + 1))
+  done
+  echo 1 >"$chip/live" || setup_failed "cannot make gpio-sim chip $chip live"
+  echo "gpio-sim $(basename "$chip"): $(cat "$chip/dev_name")/$(cat "$chip/bank0/chip_name") lines: $*"
+}
+make_gpio_sim_chip weedspray-out valve0 valve1 valve2 valve3 pump buzzer lamp aux
+make_gpio_sim_chip weedspray-in flow wheel key
+
+video_node=""
+for _ in 1 2 3 4 5 6 7 8 9 10; do
+  for node in /dev/video*; do [ -c "$node" ] && video_node="$node" && break 2; done
+  sleep 0.2
+done
+[ -n "$video_node" ] || setup_failed "vivid created no /dev/video* node"
+echo "vivid: $video_node ($(cat /sys/class/video4linux/"$(basename "$video_node")"/name))"
+echo "WEEDSPRAY-VM-SETUP OK"
+
+cd /tmp || setup_failed "no /tmp"
+failed=0
+for program in /tests/*; do
+  name="$(basename "$program")"
+  echo "WEEDSPRAY-VM-BEGIN $name"
+  # A hung program must not eat the whole boot timeout.
+  timeout 180 "$program"
+  status=$?
+  if [ "$status" -eq 0 ]; then
+    echo "WEEDSPRAY-VM-RESULT $name PASS"
+  else
+    echo "WEEDSPRAY-VM-RESULT $name FAIL rc=$status"
+    failed=1
+  fi
+done
+echo "WEEDSPRAY-VM-DONE"
+leave "$failed"

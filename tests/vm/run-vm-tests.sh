@@ -1,0 +1,286 @@
+#!/usr/bin/env bash
+# Runs guest test programs inside a QEMU x86-64 guest booted with Debian's own kernel, which
+# gets the kernel's gpio-sim (built out of tree here: Debian does not ship it) and vivid.
+#
+#   run-vm-tests.sh [--cache DIR] [--log FILE] [--timeout SECONDS] GUEST_PROGRAM...
+#
+# Each GUEST_PROGRAM (an executable, e.g. a gtest binary or a busybox sh script) is run in the
+# guest after the simulated GPIO chips and the virtual camera are set up (see guest-init.sh).
+# Exits 0 only when every program ran and exited 0; any missing prerequisite, download,
+# build or boot problem is an error, never a skip.
+#
+# The kernel, headers and sources come from the Debian archive (`apt-get download`), chosen at
+# run time from what linux-image-amd64 depends on, and are cached in DIR (default
+# $WEEDSPRAY_BUILD_DIR/vm-cache) so that later runs only build the initramfs and boot.
+set -Eeuo pipefail
+
+script_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+cache_dir="${WEEDSPRAY_VM_CACHE:-${WEEDSPRAY_BUILD_DIR:-$PWD}/vm-cache}"
+log_file=""
+boot_timeout_s=420
+guest_programs=()
+
+die() {
+  echo "run-vm-tests: error: $*" >&2
+  exit 2
+}
+note() { echo "run-vm-tests: $*" >&2; }
+trap 'echo "run-vm-tests: error: command failed at line $LINENO: $BASH_COMMAND" >&2' ERR
+
+while (($#)); do
+  case "$1" in
+    --cache) cache_dir="${2:?--cache needs a directory}"; shift 2 ;;
+    --log) log_file="${2:?--log needs a file}"; shift 2 ;;
+    --timeout) boot_timeout_s="${2:?--timeout needs seconds}"; shift 2 ;;
+    -h | --help) sed -n '2,13p' "$0"; exit 0 ;;
+    -*) die "unknown option '$1' (see --help)" ;;
+    *) guest_programs+=("$1"); shift ;;
+  esac
+done
+((${#guest_programs[@]})) || die "no guest program given (see --help)"
+for program in "${guest_programs[@]}"; do
+  [ -x "$program" ] || die "guest program '$program' does not exist or is not executable"
+done
+
+# --- prerequisites -----------------------------------------------------------------------
+require_tool() { # TOOL DEBIAN_PACKAGE
+  command -v "$1" >/dev/null 2>&1 ||
+    die "'$1' not found: install the Debian package '$2' (./dev deps installs it)"
+}
+require_tool qemu-system-x86_64 qemu-system-x86
+require_tool apt-get apt
+require_tool apt-cache apt
+require_tool dpkg-deb dpkg
+require_tool cpio cpio
+require_tool gzip gzip
+require_tool xz xz-utils
+require_tool modprobe kmod
+require_tool depmod kmod
+require_tool make make
+require_tool gcc gcc
+require_tool ldd libc-bin
+guest_tools=(gpiodetect gpioinfo gpioget gpioset gpiomon v4l2-ctl)
+for tool in "${guest_tools[@]:0:5}"; do require_tool "$tool" gpiod; done
+require_tool v4l2-ctl v4l-utils
+[ -x /bin/busybox ] || die "/bin/busybox not found: install the Debian package 'busybox-static'"
+if ldd /bin/busybox >/dev/null 2>&1; then
+  die "/bin/busybox is dynamically linked: install 'busybox-static' (not 'busybox')"
+fi
+
+# --- which kernel --------------------------------------------------------------------------
+# The ABI (6.1.0-NN) moves with Debian's point releases, so ask the package index.
+kernel_image_package() {
+  apt-cache depends linux-image-amd64 2>/dev/null |
+    sed -n 's/^ *Depends: \(linux-image-[0-9][^ ]*-amd64\)$/\1/p' | head -n1 || true
+}
+image_package="$(kernel_image_package)"
+if [ -z "$image_package" ] && [ "$(id -u)" -eq 0 ]; then
+  note "linux-image-amd64 is not in the package index; running apt-get update"
+  apt-get update -qq || die "apt-get update failed"
+  image_package="$(kernel_image_package)"
+fi
+[ -n "$image_package" ] ||
+  die "cannot find what linux-image-amd64 depends on in the package index (run apt-get update)"
+kernel_release="${image_package#linux-image-}"
+kernel_version="$(apt-cache show --no-all-versions "$image_package" 2>/dev/null |
+  sed -n 's/^Version: //p' || true)"
+[ -n "$kernel_version" ] || die "no version of $image_package in the package index"
+abi="${kernel_release%-amd64}"
+gcc_for_kernel="gcc-$(apt-cache depends "linux-headers-$kernel_release" |
+  sed -n 's/^ *Depends: linux-compiler-gcc-\([0-9]*\)-x86$/\1/p' | head -n1)"
+require_tool "$gcc_for_kernel" "$gcc_for_kernel"
+
+kernel_dir="$cache_dir/$kernel_release-$kernel_version"
+vmlinux="$kernel_dir/vmlinux"
+module_root="$kernel_dir/modules" # lib/modules/$kernel_release with only what the guest needs
+module_load_list="$kernel_dir/modules.load"
+guest_modules=(configfs gpio-sim vivid)
+
+fetch_packages() { # -> $kernel_dir/debs
+  local debs="$kernel_dir/debs"
+  mkdir -p "$debs"
+  local packages=("$image_package=$kernel_version" "linux-headers-$kernel_release=$kernel_version"
+    "linux-headers-$abi-common=$kernel_version" "linux-kbuild-6.1=$kernel_version"
+    "linux-source-6.1=$kernel_version")
+  note "downloading ${packages[*]} from the Debian archive"
+  (cd "$debs" && apt-get download -q "${packages[@]}") >"$kernel_dir/download.log" 2>&1 || {
+    cat "$kernel_dir/download.log" >&2
+    die "apt-get download failed (network? stale index: run apt-get update)"
+  }
+}
+
+extract_vmlinux() { # vmlinuz -> vmlinux: booting the ELF via PVH skips emulated decompression
+  local vmlinuz="$1" offset
+  offset="$(LC_ALL=C grep -m1 -obUaP '\xFD7zXZ\x00' "$vmlinuz" | cut -d: -f1)"
+  [ -n "$offset" ] || die "no xz payload in $vmlinuz (kernel compression changed?)"
+  # xz stops reading at the end of its stream, so tail must not be part of a checked pipe.
+  xz -dc --single-stream <(tail -c +$((offset + 1)) "$vmlinuz" 2>/dev/null || true) >"$vmlinux.tmp"
+  [ "$(head -c4 "$vmlinux.tmp" | od -An -c | tr -d ' ')" = '177ELF' ] ||
+    die "the xz payload of $vmlinuz is not an ELF vmlinux"
+  mv "$vmlinux.tmp" "$vmlinux"
+}
+
+build_gpio_sim() { # ROOT -> ROOT/lib/modules/$kernel_release/extra/gpio-sim.ko
+  local root="$1" src="$kernel_dir/gpio-sim-src"
+  local headers="$root/usr/src/linux-headers-$kernel_release"
+  rm -rf "$src" && mkdir -p "$src"
+  note "extracting gpio-sim sources from linux-source-6.1"
+  dpkg-deb --fsys-tarfile "$kernel_dir"/debs/linux-source-6.1_*.deb |
+    tar -xO ./usr/src/linux-source-6.1.tar.xz | xz -dc |
+    tar -x -C "$src" --strip-components=1 linux-source-6.1/drivers/gpio/gpio-sim.c \
+      linux-source-6.1/drivers/gpio/gpiolib.h linux-source-6.1/kernel/irq/irq_sim.c
+  mv "$src/drivers/gpio/gpio-sim.c" "$src/gpio-sim-main.c"
+  mv "$src/drivers/gpio/gpiolib.h" "$src/kernel/irq/irq_sim.c" "$src/"
+  # irq_to_desc() is not exported to modules; generic_handle_irq() does the same lookup.
+  grep -q 'handle_simple_irq(irq_to_desc(irqnum));' "$src/irq_sim.c" ||
+    die "irq_sim.c no longer has the line this script patches; update build_gpio_sim"
+  sed -i 's/handle_simple_irq(irq_to_desc(irqnum));/generic_handle_irq(irqnum);/' "$src/irq_sim.c"
+  printf 'obj-m := gpio-sim.o\ngpio-sim-y := gpio-sim-main.o irq_sim.o\n' >"$src/Kbuild"
+  # The headers' Makefile includes the -common one by absolute /usr/src path.
+  sed -i "s#^include /usr/src/#include $root/usr/src/#" "$headers/Makefile"
+  note "building gpio-sim.ko against linux-headers-$kernel_release"
+  make -C "$headers" M="$src" -j2 modules >"$kernel_dir/gpio-sim-build.log" 2>&1 || {
+    cat "$kernel_dir/gpio-sim-build.log" >&2
+    die "building gpio-sim.ko failed"
+  }
+  mkdir -p "$root/lib/modules/$kernel_release/extra"
+  cp "$src/gpio-sim.ko" "$root/lib/modules/$kernel_release/extra/"
+}
+
+stage_modules() { # ROOT -> $module_root + $module_load_list (insmod order, dependencies first)
+  local root="$1"
+  depmod -b "$root" "$kernel_release"
+  rm -rf "$module_root" && mkdir -p "$module_root"
+  : >"$module_load_list.tmp"
+  local line path
+  while read -r line; do
+    case "$line" in
+      insmod\ *) ;;
+      builtin\ *) continue ;;
+      *) die "unexpected modprobe output: $line" ;;
+    esac
+    path="${line#insmod }"
+    path="${path%% *}"
+    path="${path#"$root"}"
+    grep -qxF "$path" "$module_load_list.tmp" && continue
+    mkdir -p "$module_root$(dirname "$path")"
+    cp "$root$path" "$module_root$path"
+    echo "$path" >>"$module_load_list.tmp"
+  done < <(for m in "${guest_modules[@]}"; do
+    modprobe -d "$root" -S "$kernel_release" --show-depends "$m" ||
+      die "modprobe cannot resolve module '$m' for $kernel_release"
+  done)
+  mv "$module_load_list.tmp" "$module_load_list"
+}
+
+prepare_kernel() {
+  [ -f "$kernel_dir/ready" ] && return 0
+  local started=$SECONDS root="$kernel_dir/root"
+  rm -rf "$kernel_dir" && mkdir -p "$kernel_dir"
+  fetch_packages
+  note "unpacking the kernel packages"
+  mkdir -p "$root"
+  for deb in "$kernel_dir"/debs/linux-{image,headers,kbuild}-*.deb; do dpkg-deb -x "$deb" "$root"; done
+  extract_vmlinux "$root/boot/vmlinuz-$kernel_release"
+  build_gpio_sim "$root"
+  stage_modules "$root"
+  rm -rf "$root" "$kernel_dir/gpio-sim-src" "$kernel_dir/debs" # keep what boots, ~80 MB
+  # Keep only this kernel: older ABIs are never booted again.
+  find "$cache_dir" -mindepth 1 -maxdepth 1 -type d ! -path "$kernel_dir" -exec rm -rf {} +
+  touch "$kernel_dir/ready"
+  note "kernel $kernel_release ($kernel_version) prepared in $((SECONDS - started)) s"
+}
+
+# --- initramfs ----------------------------------------------------------------------------
+copy_with_libraries() { # FILE DEST_ROOT DEST_PATH: the file plus every shared library it loads
+  local file="$1" dest_root="$2" dest_path="$3" lib
+  mkdir -p "$dest_root$(dirname "$dest_path")"
+  cp -L "$file" "$dest_root$dest_path"
+  ldd "$file" >/dev/null 2>&1 || return 0 # static executable or script
+  while read -r lib; do
+    [ -e "$dest_root$lib" ] && continue
+    mkdir -p "$dest_root$(dirname "$lib")"
+    cp -L "$lib" "$dest_root$lib"
+  done < <(ldd "$file" | awk '/=> \// { print $3 } /^\t\// { print $1 }')
+  if ldd "$file" | grep -q 'not found'; then
+    ldd "$file" >&2
+    die "'$file' needs a shared library that is not installed"
+  fi
+}
+
+build_initramfs() { # -> $work_dir/initrd.cpio.gz
+  local root="$work_dir/initramfs" i=0 tool
+  rm -rf "$root"
+  mkdir -p "$root"/{bin,dev,proc,sys,tmp,run,tests,lib/modules}
+  cp /bin/busybox "$root/bin/busybox"
+  cp "$script_dir/guest-init.sh" "$root/init"
+  chmod 755 "$root/init"
+  cp -a "$module_root/." "$root/"
+  cp "$module_load_list" "$root/modules.load"
+  # Debian's gpiod tools and v4l2-ctl: for diagnosis inside the guest and the smoke test.
+  for tool in "${guest_tools[@]}"; do
+    copy_with_libraries "$(command -v "$tool")" "$root" "/usr/bin/$tool"
+  done
+  for program in "${guest_programs[@]}"; do
+    i=$((i + 1))
+    copy_with_libraries "$program" "$root" "/tests/$(printf '%02d' "$i")-$(basename "$program")"
+  done
+  (cd "$root" && find . -print0 | cpio --null -o -H newc --quiet | gzip -1) >"$work_dir/initrd.cpio.gz"
+}
+
+# --- boot and judge -----------------------------------------------------------------------
+run_guest() { # -> $guest_log; returns QEMU's status
+  local status=0
+  # isa-debug-exit: the guest writes its result to port 0xf4 and QEMU exits at once.
+  timeout --foreground "$boot_timeout_s" qemu-system-x86_64 -accel tcg -cpu qemu64 -smp 2 -m 1024 \
+    -nographic -no-reboot -nodefaults -serial stdio \
+    -device isa-debug-exit,iobase=0xf4,iosize=0x04 \
+    -kernel "$vmlinux" -initrd "$work_dir/initrd.cpio.gz" \
+    -append "console=ttyS0 quiet loglevel=3 panic=-1 oops=panic" \
+    </dev/null >"$guest_log" 2>&1 || status=$?
+  return "$status"
+}
+
+mkdir -p "$cache_dir"
+exec 9>"$cache_dir/.lock"
+flock 9 # two builds sharing a cache must not prepare the kernel at once
+prepare_kernel
+work_dir="$(mktemp -d "$cache_dir/run.XXXXXX")"
+trap 'rm -rf "$work_dir"' EXIT
+guest_log="${log_file:-$work_dir/guest.log}"
+build_initramfs
+note "booting $kernel_release with $(du -h "$work_dir/initrd.cpio.gz" | cut -f1) initramfs"
+boot_started=$SECONDS
+qemu_status=0
+run_guest || qemu_status=$?
+note "guest ran for $((SECONDS - boot_started)) s (QEMU status $qemu_status)"
+sed -i 's/\r$//' "$guest_log" # the serial console ends lines with CR LF
+
+# The markers (see guest-init.sh) are the verdict; QEMU's status only tells how it ended.
+failures=()
+i=0
+for program in "${guest_programs[@]}"; do
+  i=$((i + 1))
+  name="$(basename "$program")"
+  if grep -qaxF "WEEDSPRAY-VM-RESULT $(printf '%02d' "$i")-$name PASS" "$guest_log"; then
+    note "PASS $name"
+  else
+    failures+=("$name")
+  fi
+done
+setup_ok=1
+grep -qaE '^WEEDSPRAY-VM-SETUP OK$' "$guest_log" || setup_ok=0
+done_ok=1
+grep -qaE '^WEEDSPRAY-VM-DONE$' "$guest_log" || done_ok=0
+
+if ((${#failures[@]} == 0 && setup_ok && done_ok)); then
+  note "all ${#guest_programs[@]} guest programs passed"
+  exit 0
+fi
+echo "===== guest console =====" >&2
+cat -v "$guest_log" >&2
+echo "===== end of guest console =====" >&2
+((setup_ok)) || note "FAIL: guest setup did not complete (no WEEDSPRAY-VM-SETUP OK)"
+((done_ok)) || note "FAIL: guest did not finish (no WEEDSPRAY-VM-DONE; QEMU status $qemu_status, 124 = timeout after $boot_timeout_s s)"
+for name in "${failures[@]}"; do note "FAIL $name"; done
+exit 1

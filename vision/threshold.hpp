@@ -1,0 +1,79 @@
+// Automatic thresholds on the 256-bin histogram of an 8-bit vegetation index.
+// Convention everywhere: a pixel is vegetation when its index value is > threshold.
+//
+// Degenerate histograms (empty, one level, all black, all saturated, one class only) return
+// bimodal = false and a threshold chosen so the frame is classified as a whole by where its
+// values sit on the fixed index scale (see ThresholdParams::fixed_threshold), never a split
+// of a uniform soil into two "classes".
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string_view>
+
+#include "vision/histogram.hpp"
+
+namespace weedspray::vision {
+
+enum class ThresholdMethod : std::uint8_t {
+  kFit,     // fast iterative: from the mean, t = (mean below + mean above) / 2 until |dt| < 0.5
+  kOtsu,    // maximum between-class variance (the reference for the error metrics)
+  kKmeans,  // two-cluster K-means on the histogram
+  kHbt,     // valley between the two main peaks of the smoothed histogram
+  kPso,     // particle swarm on Otsu's between-class variance, full range (2018 baseline)
+  kIpso,    // the 2018 paper's improved PSO (narrowed range, scaled swarm, local search)
+  kFixed,   // ThresholdParams::fixed_threshold on the fixed index scale
+};
+
+// Config names: "fit", "otsu", "kmeans", "hbt", "pso", "ipso", "fixed".
+std::string_view to_string(ThresholdMethod method);
+std::optional<ThresholdMethod> parse_threshold_method(std::string_view name);
+std::span<const ThresholdMethod> all_threshold_methods();
+std::span<const std::string_view> threshold_method_names();
+
+// What a method's answer becomes when the histogram does not look bimodal.
+enum class UnimodalPolicy : std::uint8_t {
+  kFixedScale,  // use fixed_threshold: the frame is judged on the fixed index scale (default)
+  kKeepSplit,   // keep the method's own split (the papers' behaviour; splits bare soil)
+};
+
+struct ThresholdParams {
+  UnimodalPolicy unimodal = UnimodalPolicy::kFixedScale;
+  // Bimodality test at the chosen threshold t: each class holds at least min_class_share of
+  // the pixels and Otsu's separability sigma_between^2 / sigma_total^2 >= min_separability
+  // (a single Gaussian split at its mean gives 2/pi = 0.637; two clean modes approach 1).
+  double min_class_share = 0.001;
+  double min_separability = 0.65;
+  // Level on the index scale used by kFixed and as the answer for unimodal/degenerate frames.
+  // kIndexDefault: the Pipeline puts the index's own level (default_fixed_threshold);
+  // compute_threshold itself needs a level in [0, 255].
+  static constexpr int kIndexDefault = -1;
+  int fixed_threshold = kIndexDefault;
+  // PSO / IPSO (2018 paper): M particles, iterations, c1 = c2, inertia from w_max to w_min.
+  int pso_particles = 15;
+  int pso_iterations = 30;
+  double pso_c1 = 2.0;
+  double pso_c2 = 2.0;
+  double pso_w_max = 0.8;
+  double pso_w_min = 0.4;
+  int ipso_local_radius = 2;   // P: exhaustive search within +-P levels of the best particle
+  std::uint64_t seed = 12345;  // PSO random stream; the same seed gives the same threshold
+};
+
+struct ThresholdResult {
+  int threshold = 0;  // vegetation is value > threshold; 0..255
+  bool bimodal = false;
+};
+
+ThresholdResult compute_threshold(const Histogram& histogram, ThresholdMethod method,
+                                  const ThresholdParams& params = {});
+
+// The bimodality test above at threshold t (see ThresholdParams).
+bool looks_bimodal(const Histogram& histogram, int t, const ThresholdParams& params);
+
+// Otsu's between-class variance of splitting at t (class 0 = values <= t); 0 if a class is
+// empty. Exposed for tests and the PSO fitness.
+double between_class_variance(const Histogram& histogram, int t);
+
+}  // namespace weedspray::vision
