@@ -66,11 +66,27 @@ double fuzzy_defuzzify(const FuzzyRuleTable& rules, const StrengthTable& strengt
   } else {
     const double step = config.output_step > 0.0 ? config.output_step : 0.01;
     const auto samples = static_cast<long>(std::lround(2.0 * kDomain / step));
-    for (long k = 0; k <= samples; ++k) {
+    // Only the fired terms (at most four for two inputs) and only their support are sampled:
+    // membership is zero elsewhere, so the sum is unchanged and the table builds faster.
+    std::array<int, kFuzzyTermCount> active{};
+    int active_count = 0;
+    double lo = kDomain, hi = -kDomain;
+    for (int t = 0; t < kFuzzyTermCount; ++t) {
+      if (term_strength[t] <= 0.0) continue;
+      active[active_count++] = t;
+      const double centre = fuzzy_term_centre(static_cast<FuzzyTerm>(t));
+      lo = std::min(lo, centre - kHalfWidth);
+      hi = std::max(hi, centre + kHalfWidth);
+    }
+    if (active_count == 0) return 0.0;
+    const double scale = static_cast<double>(samples) / (2.0 * kDomain);
+    const long k_lo = std::max(0L, static_cast<long>(std::floor((lo + kDomain) * scale)));
+    const long k_hi = std::min(samples, static_cast<long>(std::ceil((hi + kDomain) * scale)));
+    for (long k = k_lo; k <= k_hi; ++k) {
       const double z = -kDomain + 2.0 * kDomain * static_cast<double>(k) / samples;
       double mu = 0.0;
-      for (int t = 0; t < kFuzzyTermCount; ++t) {
-        if (term_strength[t] <= 0.0) continue;
+      for (int a = 0; a < active_count; ++a) {
+        const int t = active[a];
         mu = std::max(mu,
                       std::min(term_strength[t], output_membership(static_cast<FuzzyTerm>(t), z)));
       }

@@ -64,8 +64,8 @@ class Pid {
   void disable() noexcept { enabled_ = false; }
   bool enabled() const noexcept { return enabled_; }
 
-  // Zero the integrator, forget the previous measurement and output (output -> output_min
-  // clamped 0). Keeps the enabled state.
+  // Zero the integrator and forget the previous measurement; the output becomes 0 clamped
+  // into [output_min, output_max]. Keeps the enabled state.
   void reset() noexcept;
 
   double output() const noexcept { return terms_.output; }

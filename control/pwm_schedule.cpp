@@ -126,6 +126,28 @@ PwmValveState PwmSchedule::valve_state(std::size_t valve) const noexcept {
   return PwmValveState{(mask_ >> valve & 1u) != 0, v.latched_duty_pct, v.period_start, v.on_time};
 }
 
+PwmValveState PwmSchedule::valve_state_at(std::size_t valve, nanoseconds t) const noexcept {
+  if (valve >= valve_count_) return PwmValveState{};
+  const Valve& v = valves_[valve];
+  if (t < v.next_period_start) {
+    const nanoseconds from = std::max(t, v.period_start);
+    const bool open = v.started && v.on_time > nanoseconds(0) && from < v.period_start + v.on_time;
+    return PwmValveState{open, v.latched_duty_pct, v.period_start, v.on_time};
+  }
+  const nanoseconds periods_ahead = (t - v.next_period_start) / period_ * period_;
+  const nanoseconds start = v.next_period_start + periods_ahead;
+  const nanoseconds on = on_time_for(v.requested_duty_pct);
+  return PwmValveState{t < start + on, v.requested_duty_pct, start, on};
+}
+
+std::uint32_t PwmSchedule::mask_at(nanoseconds t) const noexcept {
+  std::uint32_t mask = 0;
+  for (std::size_t v = 0; v < valve_count_; ++v) {
+    if (valve_state_at(v, t).open) mask |= 1u << v;
+  }
+  return mask;
+}
+
 PwmEdge PwmSchedule::next_edge() noexcept {
   // Every pending event lies strictly after the last applied one: period starts advance by
   // T > 0 and an off event lies inside its period, so the earliest pending event is next.

@@ -86,6 +86,12 @@ class PwmSchedule {
   // next one) — i.e. the interval the io layer is in. Exact for that interval.
   std::uint32_t current_mask() const noexcept { return mask_; }
   PwmValveState valve_state(std::size_t valve) const noexcept;
+  // State at any time t from the valve's current period start on: exact inside the current
+  // period; in later periods a prediction that assumes the duty requested now is latched
+  // (exact as long as set_duty is not called again). Before the current period: the current
+  // period's state is not history, so t is treated as the current period start.
+  PwmValveState valve_state_at(std::size_t valve, std::chrono::nanoseconds t) const noexcept;
+  std::uint32_t mask_at(std::chrono::nanoseconds t) const noexcept;
 
   // Pulse on-time for a duty after the min-on/min-off rounding (pure helper).
   std::chrono::nanoseconds on_time_for(double duty_pct) const noexcept;

@@ -86,9 +86,8 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
       false);
   const bool moving = in.spraying && in.speed_m_per_s > 0.1;
   set(AlarmId::kVisionTooSlow,
-      moving && (in.ground_coverage_m_per_s < 0.95 * in.speed_m_per_s ||
-                 in.vision_latency_s * in.speed_m_per_s > in.lead_distance_m),
-      true);
+      moving && (in.coverage_gap || in.vision_latency_s * in.speed_m_per_s > in.lead_distance_m),
+      false);
   set(AlarmId::kControlOverruns,
       in.overruns_last_second >= static_cast<std::uint64_t>(t.control_overrun_limit), false);
 

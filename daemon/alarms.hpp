@@ -54,9 +54,9 @@ struct AlarmInputs {
   std::chrono::nanoseconds last_frame_time{};  // newest frame of the stalest camera (or start)
   double expected_frame_interval_s = 0;        // frames are due this often (ground pacing)
   double speed_m_per_s = 0;
-  double ground_coverage_m_per_s = 0;  // frame rate x footprint length (slowest camera)
-  double vision_latency_s = 0;         // frame capture to scheduled
-  double lead_distance_m = 0;          // from the near edge of the footprint to the nozzles
+  bool coverage_gap = false;    // consecutive frames left unseen ground since the last evaluation
+  double vision_latency_s = 0;  // frame capture to scheduled
+  double lead_distance_m = 0;   // from the near edge of the footprint to the nozzles
   std::uint64_t overruns_last_second = 0;
 };
 

@@ -32,8 +32,8 @@ io::DigitalOutputBank* single_line(Backends& b, const GpioSection& gpio, int off
   if (offset < 0) return nullptr;
   io::hw::GpioOutputBankConfig config;
   config.chip = gpio.chip;
-  config.lines.push_back(io::hw::GpioLineConfig{.name = {}, .offset = offset,
-                                                .active_low = active_low, .safe_value = false});
+  config.lines.push_back(io::hw::GpioLineConfig{
+      .name = {}, .offset = offset, .active_low = active_low, .safe_value = false});
   return keep(b, std::make_shared<io::hw::GpioOutputBank>(config));
 }
 
@@ -53,8 +53,9 @@ Backends make_hw_backends(const Config& config) {
   b.clock = keep(b, std::make_shared<io::hw::MonotonicClock>());
   const auto& gpio = config.gpio;
   if (gpio.valve_offsets.empty()) {
-    throw std::runtime_error("gpio.valve_offsets is empty: no valve lines to drive (use --sim "
-                             "to run without hardware)");
+    throw std::runtime_error(
+        "gpio.valve_offsets is empty: no valve lines to drive (use --sim "
+        "to run without hardware)");
   }
   io::hw::GpioOutputBankConfig valves;
   valves.chip = gpio.chip;

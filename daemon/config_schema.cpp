@@ -89,7 +89,7 @@ const std::vector<KeySpec<Config>>& config_keys() {
      {"exg_norm", "exg_raw", "exg_exr", "cive", "max_value", "weighted", "mono", "exg_chroma"}},
     {WS_KEY(vision, threshold), std::string("fit"), 0, 0, "",
      "automatic threshold method, or fixed",
-     {"fit", "otsu", "kmeans", "hbt", "pso", "ipso", "fixed", "adaptive"}},
+     {"fit", "otsu", "kmeans", "hbt", "pso", "ipso", "fixed"}},
     {WS_KEY(vision, fixed_threshold), 100, 0, 255, "level",
      "threshold on the 8-bit index scale when threshold = \"fixed\""},
     {WS_KEY(vision, grid_rows), 1, 1, 4, "",

@@ -32,7 +32,9 @@ using namespace std::chrono_literals;
 constexpr std::uint64_t kTickUsec = 50'000;  // 20 Hz main-loop tick
 constexpr std::size_t kLatencyWindow = 1000;
 
-double seconds(Nanos t) { return std::chrono::duration<double>(t).count(); }
+double seconds(Nanos t) {
+  return std::chrono::duration<double>(t).count();
+}
 
 Config load_with_overrides(const Options& options) {
   Config config = load_config(options.config_path);
@@ -74,9 +76,9 @@ class Daemon final : public CommandHandler {
     std::string totals_error;
     base_totals_ = load_totals(totals_file_, &totals_error);
     if (!totals_error.empty()) spdlog::warn("totals not restored: {}", totals_error);
-    log_ = std::make_unique<AsAppliedLog>(
-        config_.as_applied_dir(), static_cast<std::uintmax_t>(config_.log.rotate_bytes),
-        config_.log.keep_files);
+    log_ = std::make_unique<AsAppliedLog>(config_.as_applied_dir(),
+                                          static_cast<std::uintmax_t>(config_.log.rotate_bytes),
+                                          config_.log.keep_files);
 
     check(sd_event_default(&event_), "sd_event_default");
     for (int signal : {SIGTERM, SIGINT, SIGHUP}) {
@@ -104,7 +106,8 @@ class Daemon final : public CommandHandler {
     log_thread_ = std::jthread([this](std::stop_token stop) { log_writer(stop); });
 
     uint64_t watchdog_usec = 0;
-    if (sd_watchdog_enabled(0, &watchdog_usec) > 0) watchdog_interval_ = Nanos(watchdog_usec * 1000 / 2);
+    if (sd_watchdog_enabled(0, &watchdog_usec) > 0)
+      watchdog_interval_ = Nanos(watchdog_usec * 1000 / 2);
     check(sd_event_add_time_relative(event_, &tick_source_, CLOCK_MONOTONIC, kTickUsec, 0,
                                      &Daemon::on_tick, this),
           "sd_event_add_time_relative");
@@ -160,8 +163,9 @@ class Daemon final : public CommandHandler {
     }
     const Config comparable = with_live_sections_of(fresh, config_);
     if (dump_config(comparable) != dump_config(config_)) {
-      spdlog::warn("reload: changes outside [spray], [alarms], pressure.setpoint_mpa and "
-                   "[daemon] levels take effect after a restart");
+      spdlog::warn(
+          "reload: changes outside [spray], [alarms], pressure.setpoint_mpa and "
+          "[daemon] levels take effect after a restart");
     }
     config_ = with_live_sections_of(config_, fresh);
     setpoint_mpa_ = config_.pressure.setpoint_mpa;
@@ -182,7 +186,8 @@ class Daemon final : public CommandHandler {
         if (dbus_) dbus_->alarm_cleared(std::string(alarm_name(id)).c_str());
       }
     }
-    if (state_.state() == SprayerState::kFault) transition(StateEvent::kAlarmsCleared, "ClearAlarms");
+    if (state_.state() == SprayerState::kFault)
+      transition(StateEvent::kAlarmsCleared, "ClearAlarms");
     publish_params();
     return {};
   }
@@ -234,6 +239,11 @@ class Daemon final : public CommandHandler {
     return t;
   }
 
+  // Commands show their effect on the bus at once, not at the next status period.
+  void refresh_status() {
+    if (dbus_ && sprayer_) dbus_->update(make_status(sprayer_->pressure(), sprayer_->control()));
+  }
+
   void publish_params() {
     LiveParams params = live_params_from(config_);
     params.setpoint_mpa = setpoint_mpa_;
@@ -241,6 +251,7 @@ class Daemon final : public CommandHandler {
     params.valves_enabled = state_.valves_enabled();
     params.trip_reset = trip_reset_;
     sprayer_->set_params(params);
+    refresh_status();
   }
 
   void tick() {
@@ -320,14 +331,12 @@ class Daemon final : public CommandHandler {
     in.tank_last_ok = std::max(tank_last_ok_, start_time_);
     in.camera_expected = state_.state() == SprayerState::kSpraying;
     in.last_frame_time = now;
-    in.ground_coverage_m_per_s = 1e9;
     double lead_m = 1e9;
     for (std::size_t i = 0; i < sprayer_->camera_count(); ++i) {
       const CameraStatus camera = sprayer_->camera(i);
       const auto footprint = sprayer_->footprint(i);
-      const double length = footprint.far_m - footprint.near_m;
-      in.last_frame_time = std::min(in.last_frame_time, std::max(camera.last_frame_time, spraying_since_));
-      in.ground_coverage_m_per_s = std::min(in.ground_coverage_m_per_s, camera.frame_rate_hz * length);
+      in.last_frame_time =
+          std::min(in.last_frame_time, std::max(camera.last_frame_time, spraying_since_));
       lead_m = std::min(lead_m, footprint.near_m + config_.cameras[i].distance_to_nozzles_m);
     }
     in.speed_m_per_s = control.speed_m_per_s;
@@ -336,6 +345,8 @@ class Daemon final : public CommandHandler {
       const auto footprint = sprayer_->footprint(0);
       in.expected_frame_interval_s = (footprint.far_m - footprint.near_m) / control.speed_m_per_s;
     }
+    in.coverage_gap = control.coverage_gaps != coverage_gaps_seen_;
+    coverage_gaps_seen_ = control.coverage_gaps;
     in.vision_latency_s = control.last_latency_ms / 1e3;
     in.lead_distance_m = lead_m;
     const std::uint64_t overruns = total_overruns(pressure, control);
@@ -493,6 +504,7 @@ class Daemon final : public CommandHandler {
   double setpoint_mpa_;
   std::uint64_t trip_reset_ = 0;
   std::uint64_t key_changes_ = 0;
+  std::uint64_t coverage_gaps_seen_ = 0;
   Nanos start_time_{};
   Nanos tank_last_ok_{};
   Nanos spraying_since_{};

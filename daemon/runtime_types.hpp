@@ -74,6 +74,7 @@ struct ControlStatus {
   double uniform_volume_l = 0;  // nominal dose x area: what uniform spraying would use
   double last_latency_ms = 0;   // frame capture -> scheduled, latest frame
   std::uint64_t frames_scheduled = 0;
+  std::uint64_t coverage_gaps = 0;  // frames whose ground did not reach the previous frame's
   std::uint64_t cycles = 0;
   std::uint64_t overruns = 0;
   double open_fraction = 0;

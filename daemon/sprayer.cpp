@@ -139,6 +139,8 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
     scheduler.closing_delay_s = config.boom.valve_close_delay_s;
     scheduler.gap_policy = control::GapPolicy::kClose;
     worker.scheduler = std::make_unique<control::NozzleScheduler>(scheduler);
+    const auto footprint = control::ground_footprint(scheduler.geometry);
+    worker.footprint_length_m = footprint.far_m - footprint.near_m;
     for (int n = c.first_nozzle; n < c.first_nozzle + c.nozzle_count; ++n) {
       nozzle_owner_[static_cast<std::size_t>(n)] = static_cast<int>(i);
     }
@@ -306,6 +308,12 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
                 ? odometry_->distance_at(frame->capture_time)
                 : status.distance_m - status.speed_m_per_s * seconds(now - frame->capture_time);
         const auto zones = static_cast<std::size_t>(frame->rows * frame->cols);
+        // More than 5 % of a footprint of ground between two frames was never seen.
+        if (frame_distance - worker.last_frame_distance_m > 1.05 * worker.footprint_length_m &&
+            worker.last_frame_distance_m > -1e8) {
+          ++status.coverage_gaps;
+        }
+        worker.last_frame_distance_m = frame_distance;
         worker.scheduler->add_frame(frame_distance,
                                     std::span<const double>(frame->density.data(), zones));
         const Nanos scheduled = io_.clock->now();
@@ -357,8 +365,12 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       const double correction =
           flow_trim_.update(requested_l_per_min, status.flow_l_per_min, status.open_fraction, dt);
       for (std::size_t n = 0; n < nozzles; ++n) {
+        // The trim moves duties only inside the calibrated band, never into the closed one.
         const double d = command.duty_pct[n];
-        if (d > 0 && d < 100) command.duty_pct[n] = std::clamp(d * correction, 0.0, 100.0);
+        if (d > 0 && d < 100) {
+          command.duty_pct[n] =
+              std::clamp(d * correction, params.law.min_duty_pct, params.law.max_duty_pct);
+        }
       }
     }
     command.issued_at = now;

@@ -78,6 +78,8 @@ class Sprayer {
     io::LatestValue<CameraStatus> status;
     int first_nozzle = 0;
     int nozzle_count = 0;
+    double footprint_length_m = 0;
+    double last_frame_distance_m = -1e9;
   };
 
   void pressure_loop(std::stop_token stop) noexcept;

@@ -27,7 +27,7 @@ double tick_step(double range) {
 std::string format_tick(double v, double step) {
   char buf[32];
   const int decimals = std::max(0, -static_cast<int>(std::floor(std::log10(step))));
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, std::abs(v) < 1e-6 * step ? 0.0 : v);
   return buf;
 }
 
@@ -63,7 +63,7 @@ void write_plot_png(const PlotSpec& spec, const std::string& path) {
   for (double t = std::ceil(y0 / ys) * ys; t <= y1 + 1e-12; t += ys) {
     cv::line(img, {left, py(t)}, {left + pw, py(t)}, grid, 1);
     cv::line(img, {left - 6, py(t)}, {left, py(t)}, black, 1);
-    cv::putText(img, format_tick(t, ys), {8, py(t) + 5}, font, 0.45, black, 1, cv::LINE_AA);
+    cv::putText(img, format_tick(t, ys), {32, py(t) + 5}, font, 0.45, black, 1, cv::LINE_AA);
   }
   cv::rectangle(img, {left, top}, {left + pw, top + ph}, black, 1);
   cv::putText(img, spec.title, {left, 32}, font, 0.7, black, 2, cv::LINE_AA);
@@ -93,8 +93,8 @@ void write_plot_png(const PlotSpec& spec, const std::string& path) {
         cv::line(img, {px(s.x[i - 1]), py(s.y[i - 1])}, p, c, 2, cv::LINE_AA);
     }
   }
-  // Legend, top right.
-  int ly = top + 20;
+  // Legend, bottom right (start-up curves and set-points live at the top).
+  int ly = top + ph - 22 * static_cast<int>(spec.series.size()) + 8;
   for (const auto& s : spec.series) {
     const int lx = left + pw - 260;
     if (s.markers)

@@ -96,8 +96,10 @@ int run_bench_pwm(const BenchPwmOptions& options) {
   command.issued_at = clock.now();
   driver.command(command);
 
-  io::RealtimeThread pwm_thread(io::ThreadRole::kValvePwm,
-                                [&driver](std::stop_token stop) { driver.run(stop); });
+  // The role that asks for normal priority stands in for the PWM role in the comparison run.
+  io::RealtimeThread pwm_thread(
+      options.normal_priority ? io::ThreadRole::kCamera : io::ThreadRole::kValvePwm,
+      [&driver](std::stop_token stop) { driver.run(stop); });
 
   // Refresh the command (the dead-man) every 100 ms, as the control loop would.
   const nanoseconds end = clock.now() + std::chrono::duration_cast<nanoseconds>(

@@ -11,6 +11,7 @@ struct BenchPwmOptions {
   std::vector<double> duty_pct{25.0, 50.0, 75.0, 40.0};
   int load_threads = 2;
   bool json = false;
+  bool normal_priority = false;  // for comparison: the PWM thread without SCHED_FIFO
 };
 
 // Prints the figures; returns 0, or non-zero with a message on stderr.

@@ -22,6 +22,8 @@ void add_io_commands(CLI::App& app) {
       ->add_option("--load-threads", options->load_threads,
                    "Busy threads loading the CPUs during the run (0 = none)")
       ->check(CLI::Range(0, 64));
+  bench->add_flag("--normal-priority", options->normal_priority,
+                  "Run the PWM thread at normal priority (for comparison with SCHED_FIFO)");
   bench->add_flag("--json", options->json, "Print one JSON object instead of text");
   bench->callback([options] {
     const int rc = run_bench_pwm(*options);

@@ -14,12 +14,17 @@ namespace {
 // values (plant and soil pixels come in runs), which otherwise serialises the increments.
 struct SplitHistogram {
   std::uint32_t bins[4][256] = {};
-  void add16(const std::uint8_t* values) {
-    for (int i = 0; i < 16; i += 4) {
-      ++bins[0][values[i]];
-      ++bins[1][values[i + 1]];
-      ++bins[2][values[i + 2]];
-      ++bins[3][values[i + 3]];
+  // Bytes taken from two 64-bit halves of the register: GCC otherwise spills the vector once
+  // per byte.
+  void add16(const cv::v_uint8x16& values) {
+    const cv::v_uint64x2 halves = cv::v_reinterpret_as_u64(values);
+    const std::uint64_t low = halves.get0();
+    const std::uint64_t high = cv::v_extract_n<1>(halves);
+    for (int shift = 0; shift < 64; shift += 16) {
+      ++bins[0][(low >> shift) & 0xFF];
+      ++bins[1][(low >> (shift + 8)) & 0xFF];
+      ++bins[2][(high >> shift) & 0xFF];
+      ++bins[3][(high >> (shift + 8)) & 0xFF];
     }
   }
   void merge_into(Histogram& histogram) const {
@@ -29,29 +34,39 @@ struct SplitHistogram {
   }
 };
 
+// GCC turns a multiply by a constant vector into longer shift-and-add chains; read through
+// a volatile once per call, the weights are opaque and stay one multiply instruction each.
+volatile std::uint16_t g_cive_weights[3] = {52, 28, 25};  // green, red, blue
+
 struct CiveFormula {
+  cv::v_uint16x8 green_weight = cv::v_setall_u16(g_cive_weights[0]);
+  cv::v_uint16x8 red_weight = cv::v_setall_u16(g_cive_weights[1]);
+  cv::v_uint16x8 blue_weight = cv::v_setall_u16(g_cive_weights[2]);
+  cv::v_uint16x8 offset = cv::v_setall_u16(kCiveOffset);
+
   static std::uint8_t scalar(int r, int g, int b) {
     return static_cast<std::uint8_t>((kCiveOffset + 52 * g - 28 * r - 25 * b) >> 7);
   }
-  static cv::v_uint16x8 vector(const cv::v_uint16x8& r, const cv::v_uint16x8& g,
-                               const cv::v_uint16x8& b) {
-    // The _wrap forms: OpenCV's 16-bit operators saturate, and its operator* does so through
-    // a widening multiply and a pack, several times slower.
-    const cv::v_uint16x8 plus =
-        cv::v_add_wrap(cv::v_setall_u16(kCiveOffset), cv::v_mul_wrap(g, cv::v_setall_u16(52)));
-    const cv::v_uint16x8 minus = cv::v_add_wrap(cv::v_mul_wrap(r, cv::v_setall_u16(28)),
-                                                cv::v_mul_wrap(b, cv::v_setall_u16(25)));
+  // The _wrap forms: OpenCV's 16-bit operators saturate, and its operator* does so through a
+  // widening multiply and a pack, several times slower.
+  cv::v_uint16x8 vector(const cv::v_uint16x8& r, const cv::v_uint16x8& g,
+                        const cv::v_uint16x8& b) const {
+    const cv::v_uint16x8 plus = cv::v_add_wrap(offset, cv::v_mul_wrap(g, green_weight));
+    const cv::v_uint16x8 minus =
+        cv::v_add_wrap(cv::v_mul_wrap(r, red_weight), cv::v_mul_wrap(b, blue_weight));
     return cv::v_sub_wrap(plus, minus) >> 7;
   }
 };
 
 struct ExgRawFormula {
+  cv::v_uint16x8 offset = cv::v_setall_u16(512);
+
   static std::uint8_t scalar(int r, int g, int b) {
     return static_cast<std::uint8_t>((2 * g - r - b + 512) >> 2);
   }
-  static cv::v_uint16x8 vector(const cv::v_uint16x8& r, const cv::v_uint16x8& g,
-                               const cv::v_uint16x8& b) {
-    return cv::v_sub_wrap(cv::v_add_wrap(cv::v_setall_u16(512), g << 1), cv::v_add_wrap(r, b)) >> 2;
+  cv::v_uint16x8 vector(const cv::v_uint16x8& r, const cv::v_uint16x8& g,
+                        const cv::v_uint16x8& b) const {
+    return cv::v_sub_wrap(cv::v_add_wrap(offset, g << 1), cv::v_add_wrap(r, b)) >> 2;
   }
 };
 
@@ -59,6 +74,7 @@ template <typename Formula>
 void linear_rows(const ImageView& frame, PixelRect rect, std::uint8_t* out, std::size_t out_stride,
                  Histogram& histogram) {
   const bool bgr = frame.format == PixelFormat::kBgr24;
+  const Formula formula;
   SplitHistogram split;
   for (int y = 0; y < rect.height; ++y) {
     const std::uint8_t* in = frame.data + (rect.y + y) * frame.stride + rect.x * 3;
@@ -73,10 +89,12 @@ void linear_rows(const ImageView& frame, PixelRect rect, std::uint8_t* out, std:
       cv::v_expand(red, red_low, red_high);
       cv::v_expand(green, green_low, green_high);
       cv::v_expand(blue, blue_low, blue_high);
-      const cv::v_uint8x16 value = cv::v_pack(Formula::vector(red_low, green_low, blue_low),
-                                              Formula::vector(red_high, green_high, blue_high));
+      // The formulas end in [0, 255]: a plain signed pack (one instruction) needs no clamp.
+      const cv::v_uint8x16 value =
+          cv::v_pack_u(cv::v_reinterpret_as_s16(formula.vector(red_low, green_low, blue_low)),
+                       cv::v_reinterpret_as_s16(formula.vector(red_high, green_high, blue_high)));
       cv::v_store(row_out + x, value);
-      split.add16(row_out + x);
+      split.add16(value);
     }
     for (; x < rect.width; ++x) {
       const std::uint8_t* pixel = in + 3 * x;

@@ -264,6 +264,7 @@ bool looks_bimodal(const Histogram& histogram, int t, const ThresholdParams& par
       above.count < params.min_class_share * total) {
     return false;
   }
+  if (above.mean() - below.mean() < params.min_mean_gap) return false;
   double total_variance = 0.0;
   const double mean = all.mean();
   for (int level = 0; level < 256; ++level) {

@@ -41,10 +41,13 @@ enum class UnimodalPolicy : std::uint8_t {
 struct ThresholdParams {
   UnimodalPolicy unimodal = UnimodalPolicy::kFixedScale;
   // Bimodality test at the chosen threshold t: each class holds at least min_class_share of
-  // the pixels and Otsu's separability sigma_between^2 / sigma_total^2 >= min_separability
+  // the pixels, and Otsu's separability sigma_between^2 / sigma_total^2 >= min_separability
   // (a single Gaussian split at its mean gives 2/pi = 0.637; two clean modes approach 1).
+  // The class means must also lie min_mean_gap levels apart: a split of soil texture or
+  // sensor noise (a few levels) is never two classes, however clean.
   double min_class_share = 0.001;
   double min_separability = 0.65;
+  double min_mean_gap = 10.0;
   // Level on the index scale used by kFixed and as the answer for unimodal/degenerate frames.
   // kIndexDefault: the Pipeline puts the index's own level (default_fixed_threshold);
   // compute_threshold itself needs a level in [0, 255].

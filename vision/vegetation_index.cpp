@@ -83,7 +83,7 @@ std::uint8_t vegetation_index_of(VegetationIndex index, std::uint8_t red, std::u
       // (2G - R - B + 510) / 4, rounded half up.
       return static_cast<std::uint8_t>((2 * g - r - b + 510 + 2) / 4);
     case VegetationIndex::kExgMinusExr: {
-      if (sum == 0) return kExgExrZeroLevel;
+      if (sum == 0) return kExgExrGreyLevel;
       const double x = (3.0 * g - 2.4 * r - b) / sum;
       return clamp_to_byte(std::lround((x + 2.4) * 255.0 / 5.4));
     }

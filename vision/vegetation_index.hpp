@@ -7,7 +7,8 @@
 //              Black pixels (R+G+B = 0) map to 85 (no colour, not a plant).
 //   exg_raw    2G - R - B on bytes, in [-510, 510]; v = round((ExG + 510) / 4), 128 is ExG = 0.
 //   exg_exr    ExG - ExR on chromatic coordinates, ExR = 1.4 r - g, so ExG - ExR = 3g - 2.4r - b,
-//              in [-2.4, 3]; v = round((x + 2.4) * 255 / 5.4), 113 is 0 (Meyer's zero threshold).
+//              in [-2.4, 3]; v = round((x + 2.4) * 255 / 5.4), 113 is 0 (Meyer's zero threshold),
+//              grey and black (no colour) are 107.
 //   cive       CIVE = 0.441 R - 0.811 G + 0.385 B + 18.78745 (Kataoka), plants low, so
 //              v = 128 - (CIVE - 18.78745) / 2 in 7-bit fixed point:
 //              v = (16448 + 52 G - 28 R - 25 B) >> 7 (range 22..232, 128 is CIVE = 18.79;
@@ -34,7 +35,7 @@ namespace weedspray::vision {
 
 // Fixed levels of the 8-bit scales.
 inline constexpr std::uint8_t kExgZeroLevel = 85;      // exg_norm / exg_chroma: ExG = 0
-inline constexpr std::uint8_t kExgExrZeroLevel = 113;  // exg_exr: ExG - ExR = 0
+inline constexpr std::uint8_t kExgExrGreyLevel = 107;  // exg_exr of any grey (and black)
 inline constexpr int kCiveOffset = 16448;              // 128.5 * 2^7: level 128 plus rounding
 inline constexpr int kDarkLevel = 16;  // exg_chroma: mean channel below this is "no colour"
 

@@ -34,8 +34,9 @@ FuzzyPidConfig default_fuzzy_pid_config() {
   return c;
 }
 
+// Found by tune_step_controllers() (same search, ITAE-optimal on the same plant).
 PidGains default_conventional_pid_gains() {
-  return {2.0, 8.0, 0.02};
+  return {35.2, 225.3, 0.1408};
 }
 
 ClosedLoopRig::ClosedLoopRig(const RigConfig& config)

@@ -2,9 +2,12 @@
 // reads events in bulk from the line's event fd (gpiod_line_event_read_fd_multiple into a fixed
 // array: no allocation) and publishes {count, last edge kernel timestamp, errors} wait-free.
 //
-// Both edges are requested so lost events are detectable: the uAPI v1 kernel queue (16 events)
-// drops silently when full, and two consecutive edges of the same direction prove a loss;
-// those are counted in overflow_count.
+// Only the counted edge is requested, so every event is exactly one pulse (with both edges the
+// uAPI v1 kernel derives the direction by re-reading the level, which is wrong at high rates).
+// Loss detection is limited by uAPI v1 (the only one libgpiod 1.6 speaks): its event queue holds
+// 16 events and drops silently when full, so a bulk read that returns >= 16 events is counted in
+// overflow_count as "events may have been lost"; interrupts coalesced before the kernel's
+// threaded handler runs are not detectable at all (uAPI v2 sequence numbers would be).
 #pragma once
 
 #include <atomic>

@@ -8,9 +8,8 @@
 #include <string>
 
 #include "io/clock.hpp"
+#include "io/linux/modbus_rtu.hpp"
 #include "io/tank_level.hpp"
-
-struct _modbus;  // libmodbus's modbus_t
 
 namespace weedspray::io::hw {
 
@@ -31,10 +30,6 @@ struct ModbusTankLevelConfig {
   std::chrono::milliseconds response_timeout{500};
 };
 
-struct ModbusDeleter {
-  void operator()(_modbus* ctx) const noexcept;
-};
-
 class ModbusTankLevel final : public TankLevelSensor {
  public:
   // Creates the context and opens the serial port. Throws std::runtime_error naming the device
@@ -49,7 +44,7 @@ class ModbusTankLevel final : public TankLevelSensor {
  private:
   ModbusTankLevelConfig config_;
   const Clock& clock_;
-  std::unique_ptr<_modbus, ModbusDeleter> ctx_;
+  ModbusContext ctx_;
   TankLevelSample counters_;
   std::string last_error_;
 };

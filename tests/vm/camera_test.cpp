@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,10 @@ struct FormatCase {
   vision::PixelFormat delivered;
   const char* name;
 };
+
+void PrintTo(const FormatCase& format, std::ostream* out) {
+  *out << format.name;
+}
 
 class CameraStreamTest : public ::testing::TestWithParam<FormatCase> {};
 

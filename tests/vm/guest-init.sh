@@ -11,7 +11,7 @@
 # Guest fixtures (the tests find them through configfs, never by assuming gpiochip numbers):
 #   gpio-sim chip labelled "weedspray-out", 8 lines: valve0 valve1 valve2 valve3 pump buzzer lamp aux
 #   gpio-sim chip labelled "weedspray-in",  3 lines: flow wheel key
-#   vivid with one video capture node (/dev/video*)
+#   vivid with one video capture node (/dev/video*), timestamps at the start of exposure
 /bin/busybox --install -s /bin
 export PATH=/bin:/usr/bin
 export HOME=/tmp
@@ -68,6 +68,9 @@ for _ in 1 2 3 4 5 6 7 8 9 10; do
 done
 [ -n "$video_node" ] || setup_failed "vivid created no /dev/video* node"
 echo "vivid: $video_node ($(cat /sys/class/video4linux/"$(basename "$video_node")"/name))"
+# vivid stamps "End of Frame" by default: 0.9 frame periods AFTER it hands the buffer over, i.e.
+# in the future. Real cameras (UVC) stamp the start of the frame; so does vivid with this.
+v4l2-ctl -d "$video_node" -c timestamp_source=1 || setup_failed "cannot set vivid's timestamp_source"
 echo "WEEDSPRAY-VM-SETUP OK"
 
 cd /tmp || setup_failed "no /tmp"

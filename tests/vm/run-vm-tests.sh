@@ -246,7 +246,7 @@ exec 9>"$cache_dir/.lock"
 flock 9 # two builds sharing a cache must not prepare the kernel at once
 prepare_kernel
 work_dir="$(mktemp -d "$cache_dir/run.XXXXXX")"
-trap 'rm -rf "$work_dir"' EXIT
+[ -n "${WEEDSPRAY_VM_KEEP_WORK:-}" ] || trap 'rm -rf "$work_dir"' EXIT # keep: for debugging
 guest_log="${log_file:-$work_dir/guest.log}"
 build_initramfs
 note "booting $kernel_release with $(du -h "$work_dir/initrd.cpio.gz" | cut -f1) initramfs"

@@ -20,7 +20,9 @@ struct BgrFrame {
   std::vector<std::uint8_t> bytes;
 
   BgrFrame(int w, int h, Bgr fill, std::size_t padding = 0)
-      : width(w), height(h), stride(static_cast<std::size_t>(w) * 3 + padding),
+      : width(w),
+        height(h),
+        stride(static_cast<std::size_t>(w) * 3 + padding),
         bytes(stride * h, 0) {
     for (int y = 0; y < h; ++y) {
       for (int x = 0; x < w; ++x) set(x, y, fill);
@@ -35,8 +37,8 @@ struct BgrFrame {
   ImageView view() const { return {bytes.data(), width, height, stride, PixelFormat::kBgr24}; }
 };
 
-inline constexpr Bgr kSoil{70, 100, 130};   // brown: CIVE level 127
-inline constexpr Bgr kPlant{40, 150, 60};   // green: CIVE level 168
+inline constexpr Bgr kSoil{70, 100, 130};  // brown: CIVE level 127
+inline constexpr Bgr kPlant{40, 150, 60};  // green: CIVE level 168
 inline constexpr Bgr kBlack{0, 0, 0};
 inline constexpr Bgr kWhite{255, 255, 255};
 

@@ -70,15 +70,18 @@ TEST(Thresholds, TwoClustersHandComputed) {
 
 TEST(Thresholds, GaussianBimodalAgreesWithOtsu) {
   Histogram histogram{};
-  add_bump(histogram, 80, 6, 60000);   // soil
+  add_bump(histogram, 80, 6, 60000);    // soil
   add_bump(histogram, 160, 10, 20000);  // plants
   const ThresholdParams params = params_with_fixed(120);
   const ThresholdResult otsu = compute_threshold(histogram, ThresholdMethod::kOtsu, params);
   ASSERT_TRUE(otsu.bimodal);
   EXPECT_GT(otsu.threshold, 100);
   EXPECT_LT(otsu.threshold, 140);
-  // IPSO's local search reaches Otsu's optimum (the 2018 paper's 0.1 % error).
-  EXPECT_EQ(compute_threshold(histogram, ThresholdMethod::kIpso, params).threshold, otsu.threshold);
+  // IPSO reaches Otsu's optimum fitness (the 2018 paper: 0.1 % error). The variance is nearly
+  // flat across the empty gap between the modes, so the level itself may differ.
+  const int ipso = compute_threshold(histogram, ThresholdMethod::kIpso, params).threshold;
+  const double best = between_class_variance(histogram, otsu.threshold);
+  EXPECT_GE(between_class_variance(histogram, ipso), best * 0.999);
   for (ThresholdMethod method : {ThresholdMethod::kFit, ThresholdMethod::kKmeans,
                                  ThresholdMethod::kHbt, ThresholdMethod::kPso}) {
     const ThresholdResult result = compute_threshold(histogram, method, params);

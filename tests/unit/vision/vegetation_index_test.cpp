@@ -65,8 +65,9 @@ TEST(ComputeVegetationIndex, FrameKernelsMatchPixelReference) {
   BgrFrame frame(53, 9, Bgr{0, 0, 0}, 5);
   for (int y = 0; y < frame.height; ++y) {
     for (int x = 0; x < frame.width; ++x) {
-      frame.set(x, y, Bgr{static_cast<std::uint8_t>(random()), static_cast<std::uint8_t>(random()),
-                          static_cast<std::uint8_t>(random())});
+      frame.set(x, y,
+                Bgr{static_cast<std::uint8_t>(random()), static_cast<std::uint8_t>(random()),
+                    static_cast<std::uint8_t>(random())});
     }
   }
   // Extremes too: they exercise the fixed-point ranges.
@@ -83,8 +84,7 @@ TEST(ComputeVegetationIndex, FrameKernelsMatchPixelReference) {
       for (int x = 0; x < rect.width; ++x) {
         const std::uint8_t* p = &frame.bytes[(rect.y + y) * frame.stride + (rect.x + x) * 3];
         const std::uint8_t expected = vegetation_index_of(index, p[2], p[1], p[0]);
-        ASSERT_EQ(out[y * rect.width + x], expected)
-            << to_string(index) << " at " << x << "," << y;
+        ASSERT_EQ(out[y * rect.width + x], expected) << to_string(index) << " at " << x << "," << y;
         ++expected_histogram[expected];
       }
     }
@@ -96,7 +96,8 @@ TEST(ComputeVegetationIndex, RgbOrderGivesTheSameIndexAsBgr) {
   BgrFrame bgr(20, 2, Bgr{40, 150, 60});
   bgr.set(7, 1, Bgr{10, 20, 200});
   std::vector<std::uint8_t> rgb_bytes(bgr.bytes);
-  for (std::size_t i = 0; i + 2 < rgb_bytes.size(); i += 3) std::swap(rgb_bytes[i], rgb_bytes[i + 2]);
+  for (std::size_t i = 0; i + 2 < rgb_bytes.size(); i += 3)
+    std::swap(rgb_bytes[i], rgb_bytes[i + 2]);
   const ImageView rgb{rgb_bytes.data(), 20, 2, bgr.stride, PixelFormat::kRgb24};
   for (VegetationIndex index : all_vegetation_indices()) {
     std::vector<std::uint8_t> a(40), b(40);
@@ -143,9 +144,9 @@ TEST(ComputeVegetationIndex, YuyvUsesLumaForGreysAndConvertsForColourIndices) {
 }
 
 TEST(DefaultFixedThreshold, SitsBetweenSoilAndPlantOnEachColourScale) {
-  for (VegetationIndex index : {VegetationIndex::kExgNormalized, VegetationIndex::kExgRaw,
-                                VegetationIndex::kExgMinusExr, VegetationIndex::kCive,
-                                VegetationIndex::kExgChroma}) {
+  for (VegetationIndex index :
+       {VegetationIndex::kExgNormalized, VegetationIndex::kExgRaw, VegetationIndex::kExgMinusExr,
+        VegetationIndex::kCive, VegetationIndex::kExgChroma}) {
     const int level = default_fixed_threshold(index);
     EXPECT_LT(vegetation_index_of(index, test::kSoil.r, test::kSoil.g, test::kSoil.b), level)
         << to_string(index);

@@ -1,0 +1,89 @@
+#include "io/linux/modbus_analog.hpp"
+
+#include <modbus/modbus.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <stdexcept>
+
+namespace weedspray::io::hw {
+
+namespace {
+
+void check_register(int address, const std::string& what, const std::string& device) {
+  if (address < 0 || address > 0xFFFF)
+    throw std::runtime_error(what + " (" + device + "): register_address must be 0..65535");
+}
+
+}  // namespace
+
+ModbusAnalogInput::ModbusAnalogInput(const ModbusAnalogInputConfig& config, const Clock& clock)
+    : config_(config), clock_(clock) {
+  check_register(config.register_address, "modbus analog input", config.port.device);
+  if (!(config.volts_per_count > 0.0))
+    throw std::runtime_error("modbus analog input (" + config.port.device +
+                             "): volts_per_count must be > 0");
+  ctx_ = detail::open_modbus_rtu(config.port, "modbus analog input");
+}
+
+AnalogSample ModbusAnalogInput::read() noexcept {
+  AnalogSample s;
+  std::uint16_t raw = 0;
+  const int rc = config_.input_register
+                     ? modbus_read_input_registers(ctx_.get(), config_.register_address, 1, &raw)
+                     : modbus_read_registers(ctx_.get(), config_.register_address, 1, &raw);
+  const int err = errno;
+  s.time = clock_.now();
+  if (rc == 1) {
+    s.volts = raw * config_.volts_per_count;
+    s.ok = true;
+  } else {
+    ++errors_;
+    last_error_ = modbus_strerror(err);
+    if (detail::classify_modbus_error(err) == detail::ModbusErrorKind::kPort) {
+      modbus_close(ctx_.get());
+      modbus_connect(ctx_.get());
+    }
+  }
+  s.error_count = errors_;
+  return s;
+}
+
+ModbusAnalogOutput::ModbusAnalogOutput(const ModbusAnalogOutputConfig& config) : config_(config) {
+  check_register(config.register_address, "modbus analog output", config.port.device);
+  if (!(config.volts_per_count > 0.0))
+    throw std::runtime_error("modbus analog output (" + config.port.device +
+                             "): volts_per_count must be > 0");
+  ctx_ = detail::open_modbus_rtu(config.port, "modbus analog output");
+  if (write(config.safe_volts) != 0)
+    throw std::runtime_error("modbus analog output (" + config.port.device +
+                             "): writing the safe value failed: " + modbus_strerror(errno));
+}
+
+ModbusAnalogOutput::~ModbusAnalogOutput() {
+  force_safe();
+}
+
+int ModbusAnalogOutput::write(double volts) noexcept {
+  const double clamped =
+      std::clamp(std::isfinite(volts) ? volts : config_.safe_volts, 0.0, config_.full_scale_volts);
+  const long raw = std::clamp(std::lround(clamped / config_.volts_per_count), 0L, 0xFFFFL);
+  if (modbus_write_register(ctx_.get(), config_.register_address,
+                            static_cast<std::uint16_t>(raw)) != 1) {
+    const int err = errno;
+    ++errors_;
+    if (detail::classify_modbus_error(err) == detail::ModbusErrorKind::kPort) {
+      modbus_close(ctx_.get());
+      modbus_connect(ctx_.get());
+    }
+    return err > 0 ? -err : -EIO;
+  }
+  return 0;
+}
+
+void ModbusAnalogOutput::force_safe() noexcept {
+  write(config_.safe_volts);
+}
+
+}  // namespace weedspray::io::hw

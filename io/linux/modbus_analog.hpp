@@ -1,0 +1,63 @@
+// Analog I/O through Modbus RTU analog modules (the alternative to IIO ADC/DAC chips): one
+// register per channel, volts = raw * volts_per_count. Each read/write is one blocking Modbus
+// transaction bounded by the response timeout (about 10 ms at 9600 baud, 1-2 ms at 115200):
+// use a fast baud rate and give the module its own serial port — the pressure loop is its only
+// user, so no lock is shared with the tank level worker.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "io/analog.hpp"
+#include "io/clock.hpp"
+#include "io/linux/modbus_rtu.hpp"
+
+namespace weedspray::io::hw {
+
+struct ModbusAnalogInputConfig {
+  ModbusRtuSettings port;
+  int register_address = 0;
+  bool input_register = true;  // function 04 (input registers), else 03 (holding)
+  double volts_per_count = 0.001;
+};
+
+struct ModbusAnalogOutputConfig {
+  ModbusRtuSettings port;
+  int register_address = 0;  // holding register, written with function 06
+  double volts_per_count = 0.001;
+  double full_scale_volts = 10.0;
+  double safe_volts = 0.0;
+};
+
+class ModbusAnalogInput final : public AnalogInput {
+ public:
+  // Throws std::runtime_error naming the device/setting.
+  ModbusAnalogInput(const ModbusAnalogInputConfig& config, const Clock& clock);
+  AnalogSample read() noexcept override;
+  std::string last_error() const { return last_error_; }
+
+ private:
+  ModbusAnalogInputConfig config_;
+  const Clock& clock_;
+  ModbusContext ctx_;
+  std::uint64_t errors_ = 0;
+  std::string last_error_;
+};
+
+class ModbusAnalogOutput final : public AnalogOutput {
+ public:
+  // Opens the port and writes safe_volts. Throws std::runtime_error naming the device.
+  explicit ModbusAnalogOutput(const ModbusAnalogOutputConfig& config);
+  ~ModbusAnalogOutput() override;  // force_safe()
+  int write(double volts) noexcept override;
+  void force_safe() noexcept override;
+  double full_scale_volts() const noexcept override { return config_.full_scale_volts; }
+  std::uint64_t error_count() const noexcept override { return errors_; }
+
+ private:
+  ModbusAnalogOutputConfig config_;
+  ModbusContext ctx_;
+  std::uint64_t errors_ = 0;
+};
+
+}  // namespace weedspray::io::hw

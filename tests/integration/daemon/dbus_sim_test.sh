@@ -1,0 +1,165 @@
+#!/usr/bin/env bash
+# weedsprayd --sim on a PRIVATE session bus, driven with busctl and sprayctl:
+# properties, Start -> pressure at set-point and duties following densities, a refused bad
+# set-point, a refused broken reload (old config keeps running), SIGTERM -> valves closed, exit 0.
+# usage: dbus_sim_test.sh BUILD_DIR SOURCE_DIR
+set -euo pipefail
+BUILD=$1
+SOURCE=$2
+WEEDSPRAYD=$BUILD/daemon/weedsprayd
+SPRAYCTL=$BUILD/daemon/sprayctl
+PY=/usr/bin/python3
+T=$(mktemp -d /tmp/weedspray-dbus-test.XXXXXX)
+DAEMON_PID=
+BUS_PID=
+
+cleanup() {
+  [ -n "$DAEMON_PID" ] && kill -KILL "$DAEMON_PID" 2>/dev/null || true
+  [ -n "$BUS_PID" ] && kill "$BUS_PID" 2>/dev/null || true
+  rm -rf "$T"
+}
+trap cleanup EXIT
+
+fail() {
+  echo "FAIL: $*" >&2
+  echo "--- daemon log (tail) ---" >&2
+  tail -n 40 "$T/daemon.log" >&2 || true
+  exit 1
+}
+
+# A private bus: never the host's.
+dbus-daemon --session --fork --nopidfile --print-address=3 --print-pid=4 3>"$T/bus.addr" 4>"$T/bus.pid"
+export DBUS_SESSION_BUS_ADDRESS=$(cat "$T/bus.addr")
+BUS_PID=$(cat "$T/bus.pid")
+
+prop() {  # prop NAME -> value as busctl prints it, without the type letter
+  busctl --user get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
+    org.weedspray.Sprayer1 "$1" | cut -d' ' -f2-
+}
+status_json() { "$SPRAYCTL" --user status --json; }
+json_get() {  # json_get EXPR (python, j = the status object)
+  status_json | $PY -c "import json,sys; j=json.load(sys.stdin); print($1)"
+}
+
+mkdir -p "$T/etc/conf.d" "$T/state"
+cp "$SOURCE/etc/weedspray.toml" "$T/etc/weedspray.toml"
+cat >"$T/etc/conf.d/10-test.toml" <<'TOML'
+[spray]
+max_density = 0.05          # the field images are sparse: make their weeds worth spraying
+decision_threshold = 0.005
+[sim]
+speed_profile = "constant"
+speed_max_m_per_s = 1.0
+TOML
+
+"$WEEDSPRAYD" --sim --user --config "$T/etc/weedspray.toml" --state-dir "$T/state" \
+  --valve-state-file "$T/valves.txt" >"$T/daemon.log" 2>&1 &
+DAEMON_PID=$!
+
+# Up and Idle within 20 s.
+for _ in $(seq 1 100); do
+  state=$(prop State 2>/dev/null || true)
+  [ "$state" = '"Idle"' ] && break
+  kill -0 "$DAEMON_PID" 2>/dev/null || fail "weedsprayd exited during start-up"
+  sleep 0.2
+done
+[ "$state" = '"Idle"' ] || fail "State is '$state', expected Idle"
+echo "ok: Idle on the bus"
+
+# Every property is there and sane.
+busctl --user introspect org.weedspray.Sprayer1 /org/weedspray/Sprayer1 org.weedspray.Sprayer1 \
+  >"$T/introspect.txt"
+for p in State Pressure PressureSetpoint Flow TankLevel Speed Distance NozzleDuty ZoneDensity \
+  Alarms VolumeSprayed AreaCovered SavingsPercent FrameRate VisionLatencyMs ControlOverruns; do
+  grep -q "^\.$p " "$T/introspect.txt" || fail "property $p missing"
+done
+for m in Start Stop SetPressureSetpoint ReloadConfig ClearAlarms AlarmRaised AlarmCleared; do
+  grep -q "^\.$m " "$T/introspect.txt" || fail "member $m missing"
+done
+[ "$(prop PressureSetpoint)" = "0.4" ] || fail "PressureSetpoint $(prop PressureSetpoint)"
+[ "$(prop NozzleDuty)" = "4 0 0 0 0" ] || fail "NozzleDuty in Idle: $(prop NozzleDuty)"
+$PY - "$(prop TankLevel)" "$(prop Speed)" <<'PYEOF' || fail "TankLevel/Speed out of range"
+import sys
+tank, speed = float(sys.argv[1]), float(sys.argv[2])
+assert 0 < tank <= 100, tank
+assert 0.9 < speed < 1.1, speed
+PYEOF
+echo "ok: properties present"
+
+"$SPRAYCTL" --user start || fail "Start refused"
+[ "$(prop State)" = '"Spraying"' ] || fail "not Spraying after Start"
+if "$SPRAYCTL" --user start 2>"$T/err.txt"; then fail "second Start accepted"; fi
+grep -q "NotPermitted" "$T/err.txt" || fail "second Start: $(cat "$T/err.txt")"
+
+# Duties follow the pinned densities: sample for 8 s.
+: >"$T/samples.jsonl"
+for _ in $(seq 1 32); do status_json >>"$T/samples.jsonl"; sleep 0.25; done
+$PY - "$T/samples.jsonl" <<'PYEOF' || fail "duties do not follow densities"
+import json, sys
+samples = [json.loads(line) for line in open(sys.argv[1])]
+sprayed = 0
+for s in samples:
+    assert s["State"] == "Spraying", s["State"]
+    for duty, density in zip(s["NozzleDuty"], s["ZoneDensity"]):
+        if density < 0.005:
+            assert duty == 0, f"density {density} below the decision threshold but duty {duty}"
+        if duty > 0:
+            sprayed += 1
+            assert duty >= 20, f"duty {duty} inside the closed band"
+assert sprayed > 0, "no nozzle ever opened"
+pressures = [s["Pressure"] for s in samples[8:]]
+assert all(abs(p - 0.4) < 0.05 for p in pressures), f"pressure off set-point: {pressures}"
+print(f"ok: {sprayed} open nozzle samples; pressure {min(pressures):.3f}..{max(pressures):.3f} MPa")
+PYEOF
+
+# A bad set-point is refused with a reason; a good one is followed.
+if "$SPRAYCTL" --user set-pressure 5.0 2>"$T/err.txt"; then fail "set-pressure 5.0 accepted"; fi
+grep -q "org.weedspray.Sprayer1.Error.InvalidArgument" "$T/err.txt" || fail "$(cat "$T/err.txt")"
+grep -q "pressure 5 MPa outside 0.05" "$T/err.txt" || fail "$(cat "$T/err.txt")"
+busctl --user call org.weedspray.Sprayer1 /org/weedspray/Sprayer1 org.weedspray.Sprayer1 \
+  SetPressureSetpoint d 0.3
+sleep 3
+$PY -c "import sys; p=float(sys.argv[1]); assert abs(p-0.3) < 0.03, p" "$(prop Pressure)" ||
+  fail "pressure $(prop Pressure) not at the new set-point 0.3"
+echo "ok: set-point validation and tracking"
+
+# A broken drop-in: reload refused (over D-Bus and on SIGHUP), the running config stays.
+printf '[pressure]\nsetpoint_mpa = 7\n' >"$T/etc/conf.d/99-broken.toml"
+if "$SPRAYCTL" --user reload 2>"$T/err.txt"; then fail "broken reload accepted"; fi
+grep -q "99-broken.toml:2: pressure.setpoint_mpa: 7 is outside" "$T/err.txt" ||
+  fail "reload error: $(cat "$T/err.txt")"
+kill -HUP "$DAEMON_PID"
+sleep 0.5
+kill -0 "$DAEMON_PID" || fail "SIGHUP with a broken file killed the daemon"
+[ "$(prop State)" = '"Spraying"' ] || fail "state changed by a refused reload"
+[ "$(prop PressureSetpoint)" = "0.3" ] || fail "set-point changed by a refused reload"
+grep -q "reload refused" "$T/daemon.log" || fail "refused reload not logged"
+printf '[pressure]\nsetpoint_mpa = 0.25\n' >"$T/etc/conf.d/99-broken.toml"
+"$SPRAYCTL" --user reload || fail "valid reload refused"
+[ "$(prop PressureSetpoint)" = "0.25" ] || fail "valid reload not applied"
+echo "ok: reload"
+
+# monitor prints changes.
+timeout 2 "$SPRAYCTL" --user monitor >"$T/monitor.txt" || true
+grep -q "^Pressure = \|^Distance = " "$T/monitor.txt" || fail "monitor printed: $(head -3 "$T/monitor.txt")"
+"$SPRAYCTL" --user clear-alarms || fail "ClearAlarms"
+"$SPRAYCTL" --user stop || fail "Stop"
+[ "$(prop State)" = '"Idle"' ] || fail "not Idle after Stop"
+"$SPRAYCTL" --user start || fail "restart"
+sleep 1
+
+# SIGTERM while spraying: every valve closed, pump off, exit status 0.
+kill -TERM "$DAEMON_PID"
+rc=0
+wait "$DAEMON_PID" || rc=$?
+DAEMON_PID=
+[ "$rc" -eq 0 ] || fail "exit status $rc after SIGTERM"
+[ "$(cat "$T/valves.txt")" = "valves=0x0 pump=0" ] || fail "outputs at exit: $(cat "$T/valves.txt")"
+grep -q "outputs safe" "$T/daemon.log" || fail "no 'outputs safe' line"
+echo "ok: SIGTERM -> valves closed, pump off, exit 0"
+
+# As-applied log and totals were written.
+csv=$(ls "$T"/state/as-applied/as-applied-*.csv | head -1)
+[ "$(wc -l <"$csv")" -gt 20 ] || fail "as-applied log too short: $csv"
+grep -q "^area_m2 = " "$T/state/totals.toml" || fail "totals not saved"
+echo "PASS"

@@ -1,0 +1,165 @@
+#include <gtest/gtest.h>
+
+#include "daemon/alarms.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+using namespace std::chrono_literals;
+
+AlarmsSection thresholds() {
+  const Config c = default_config();
+  return c.alarms;  // over 0.9 MPa, blocked 0.7 MPa / 0.05 L/min, debounce 1 s ...
+}
+
+// Spraying normally: nothing wrong.
+AlarmInputs healthy(std::chrono::nanoseconds now) {
+  AlarmInputs in;
+  in.now = now;
+  in.spraying = true;
+  in.open_fraction = 0.5;
+  in.pressure_valid = true;
+  in.pressure_mpa = 0.4;
+  in.sensor_current_ma = 10.4;
+  in.flow_l_per_min = 2.0;
+  in.tank_enabled = true;
+  in.tank_valid = true;
+  in.tank_level_pct = 80;
+  in.tank_last_ok = now;
+  in.camera_expected = true;
+  in.last_frame_time = now;
+  in.speed_m_per_s = 1.0;
+  in.vision_latency_s = 0.002;
+  in.lead_distance_m = 1.4;
+  return in;
+}
+
+// Moves the clock of `in` to t with the camera and tank sensor still fresh.
+AlarmInputs at(AlarmInputs in, std::chrono::nanoseconds t) {
+  in.now = in.last_frame_time = in.tank_last_ok = t;
+  return in;
+}
+
+TEST(Alarms, HealthyRaisesNothing) {
+  AlarmEvaluator alarms(thresholds());
+  for (int i = 0; i < 100; ++i) EXPECT_EQ(alarms.evaluate(healthy(i * 50ms)), 0U);
+  EXPECT_EQ(alarms.active(), 0U);
+}
+
+TEST(Alarms, OverPressureIsImmediateAndAFault) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(1s);
+  in.pressure_mpa = 0.95;
+  EXPECT_EQ(alarms.evaluate(in), alarm_bit(AlarmId::kOverPressure));
+  EXPECT_TRUE(alarms.fault_latched());
+  // Latched: the pressure falling back does not clear it, and it is not raised twice.
+  EXPECT_EQ(alarms.evaluate(healthy(2s)), 0U);
+  EXPECT_EQ(alarms.active(), alarm_bit(AlarmId::kOverPressure));
+  EXPECT_EQ(alarms.clear(), alarm_bit(AlarmId::kOverPressure));
+  EXPECT_FALSE(alarms.fault_latched());
+}
+
+TEST(Alarms, TripFromThePressureLoopCounts) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(1s);
+  in.over_pressure_trip = true;
+  EXPECT_EQ(alarms.evaluate(in), alarm_bit(AlarmId::kOverPressure));
+}
+
+TEST(Alarms, SensorFault) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(1s);
+  in.pressure_valid = false;
+  in.sensor_current_ma = 0.0;
+  EXPECT_EQ(alarms.evaluate(in), alarm_bit(AlarmId::kPressureSensorFault));
+  EXPECT_TRUE(is_fault(AlarmId::kPressureSensorFault));
+}
+
+TEST(Alarms, LineBlockedNeedsTheDebounce) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(0s);
+  in.pressure_mpa = 0.8;
+  in.flow_l_per_min = 0.0;
+  EXPECT_EQ(alarms.evaluate(in), 0U);
+  EXPECT_EQ(alarms.evaluate(at(in, 900ms)), 0U);
+  EXPECT_EQ(alarms.evaluate(at(in, 1100ms)), alarm_bit(AlarmId::kLineBlocked));
+}
+
+TEST(Alarms, AShortGlitchDoesNotRaise) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(0s);
+  in.flow_l_per_min = 0.0;
+  EXPECT_EQ(alarms.evaluate(in), 0U);
+  EXPECT_EQ(alarms.evaluate(healthy(500ms)), 0U);  // flow back: timer reset
+  EXPECT_EQ(alarms.evaluate(at(in, 1200ms)), 0U);
+  EXPECT_EQ(alarms.evaluate(at(in, 2300ms)), alarm_bit(AlarmId::kNoFlow));
+}
+
+TEST(Alarms, NoFlowOnlyWhileValvesOpen) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(0s);
+  in.spraying = false;
+  in.flow_l_per_min = 0.0;
+  for (int i = 0; i < 60; ++i) EXPECT_EQ(alarms.evaluate(at(in, i * 100ms)), 0U);
+}
+
+TEST(Alarms, TankLowThenEmpty) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(0s);
+  in.tank_level_pct = 10;
+  alarms.evaluate(in);
+  EXPECT_EQ(alarms.evaluate(at(in, 1500ms)), alarm_bit(AlarmId::kTankLow));
+  EXPECT_FALSE(alarms.fault_latched());
+  in.tank_level_pct = 1;
+  alarms.evaluate(at(in, 2s));
+  EXPECT_EQ(alarms.evaluate(at(in, 3100ms)), alarm_bit(AlarmId::kTankEmpty));
+  EXPECT_TRUE(alarms.fault_latched());
+}
+
+TEST(Alarms, ModbusSilent) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(10s);
+  in.tank_last_ok = 4s;
+  EXPECT_EQ(alarms.evaluate(in), alarm_bit(AlarmId::kModbusSilent));
+}
+
+TEST(Alarms, CameraLostAllowsForGroundPacing) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(10s);
+  in.last_frame_time = 8500ms;  // 1.5 s: lost at 30 fps ...
+  EXPECT_EQ(alarms.evaluate(in), alarm_bit(AlarmId::kCameraLost));
+  AlarmEvaluator paced(thresholds());
+  in.expected_frame_interval_s = 1.0;  // ... but not when a frame is due every metre at 1 m/s
+  EXPECT_EQ(paced.evaluate(in), 0U);
+}
+
+TEST(Alarms, VisionTooSlow) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(1s);
+  in.vision_latency_s = 1.0;  // at 2 m/s the patch passes the nozzles before it is planned
+  in.speed_m_per_s = 2.0;
+  EXPECT_EQ(alarms.evaluate(in), alarm_bit(AlarmId::kVisionTooSlow));
+  AlarmEvaluator gaps(thresholds());
+  auto g = healthy(1s);
+  g.coverage_gap = true;
+  EXPECT_EQ(gaps.evaluate(g), alarm_bit(AlarmId::kVisionTooSlow));
+  EXPECT_FALSE(is_fault(AlarmId::kVisionTooSlow));
+}
+
+TEST(Alarms, ControlOverruns) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(1s);
+  in.overruns_last_second = 10;
+  EXPECT_EQ(alarms.evaluate(in), alarm_bit(AlarmId::kControlOverruns));
+}
+
+TEST(Alarms, NamesRoundTrip) {
+  for (std::size_t i = 0; i < kAlarmCount; ++i) {
+    const auto id = static_cast<AlarmId>(i);
+    EXPECT_EQ(parse_alarm(alarm_name(id)), id);
+  }
+  EXPECT_FALSE(parse_alarm("nope"));
+}
+
+}  // namespace
+}  // namespace weedspray::daemon

@@ -1,0 +1,301 @@
+// The configuration key table, parser and default file.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "daemon/config.hpp"
+#include "daemon/config_schema.hpp"
+#include "vision/threshold.hpp"
+#include "vision/vegetation_index.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+
+Config parse(const std::string& text, const std::string& name = "test.toml") {
+  return load_config_from_strings({{name, text}});
+}
+
+// Expects a ConfigError and returns it.
+ConfigError parse_error(const std::vector<std::pair<std::string, std::string>>& documents) {
+  try {
+    (void)load_config_from_strings(documents);
+  } catch (const ConfigError& error) {
+    return error;
+  }
+  ADD_FAILURE() << "no ConfigError";
+  return ConfigError("", 0, "", "");
+}
+
+// A valid value different from the default, as TOML text, and the value it must read back as.
+template <class Root>
+std::pair<std::string, DefaultValue> other_value(const KeySpec<Root>& spec) {
+  std::ostringstream text;
+  text.precision(17);
+  switch (spec.type()) {
+    case KeyType::kBool: {
+      const bool v = !std::get<bool>(spec.default_value);
+      return {v ? "true" : "false", v};
+    }
+    case KeyType::kInt: {
+      const int d = std::get<int>(spec.default_value);
+      const int v = d + 1 <= spec.max ? d + 1 : d - 1;
+      return {std::to_string(v), v};
+    }
+    case KeyType::kDouble: {
+      const double d = std::get<double>(spec.default_value);
+      const double v = d < spec.max ? d + (spec.max - d) * 0.01 : d - (d - spec.min) * 0.01;
+      text << v;
+      std::string s = text.str();
+      if (s.find_first_of(".e") == std::string::npos) s += ".0";
+      return {s, v};
+    }
+    case KeyType::kString:
+      return {"\"round-trip-value\"", std::string("round-trip-value")};
+    case KeyType::kEnum: {
+      const std::string d = std::get<std::string>(spec.default_value);
+      for (auto choice : spec.choices) {
+        if (choice != d) return {"\"" + std::string(choice) + "\"", std::string(choice)};
+      }
+      return {"\"" + d + "\"", d};
+    }
+    case KeyType::kIntList: {
+      // One line per nozzle of the default boom.
+      std::vector<int> v{5, 6, 7, 8};
+      return {"[5, 6, 7, 8]", v};
+    }
+  }
+  return {};
+}
+
+template <class Root>
+DefaultValue read_back(const KeySpec<Root>& spec, Root& root) {
+  return std::visit([&](auto access) -> DefaultValue { return access(root); }, spec.field);
+}
+
+TEST(ConfigSchema, EveryDefaultHasTheKeysTypeAndIsInRange) {
+  const auto check = [](const auto& spec) {
+    SCOPED_TRACE(spec.full_name());
+    EXPECT_FALSE(spec.doc.empty());
+    const auto field = spec.field.index();
+    const auto value = spec.default_value.index();
+    EXPECT_EQ(field, value) << "default's type differs from the member's";
+    if (spec.type() == KeyType::kInt) {
+      EXPECT_GE(std::get<int>(spec.default_value), spec.min);
+      EXPECT_LE(std::get<int>(spec.default_value), spec.max);
+    }
+    if (spec.type() == KeyType::kDouble) {
+      EXPECT_GE(std::get<double>(spec.default_value), spec.min);
+      EXPECT_LE(std::get<double>(spec.default_value), spec.max);
+    }
+    if (spec.type() == KeyType::kEnum) {
+      const auto& d = std::get<std::string>(spec.default_value);
+      EXPECT_NE(std::find(spec.choices.begin(), spec.choices.end(), d), spec.choices.end());
+    }
+  };
+  for (const auto& spec : config_keys()) check(spec);
+  for (const auto& spec : camera_keys()) check(spec);
+}
+
+TEST(ConfigSchema, KeysAreDeclaredOnce) {
+  std::set<std::string> names;
+  for (const auto& spec : config_keys()) EXPECT_TRUE(names.insert(spec.full_name()).second);
+  for (const auto& spec : camera_keys()) EXPECT_TRUE(names.insert(spec.full_name()).second);
+}
+
+TEST(ConfigSchema, EveryKeyRoundTrips) {
+  for (const auto& spec : config_keys()) {
+    SCOPED_TRACE(spec.full_name());
+    const auto [text, expected] = other_value(spec);
+    Config config = parse("[" + std::string(spec.section) + "]\n" + std::string(spec.name) + " = " +
+                          text + "\n");
+    EXPECT_EQ(read_back(spec, config), expected);
+    EXPECT_EQ(config.sources.at(spec.full_name()).line, 2);
+  }
+  for (const auto& spec : camera_keys()) {
+    SCOPED_TRACE(spec.full_name());
+    const auto [text, expected] = other_value(spec);
+    Config config =
+        parse("[boom]\nnozzles = 8\n[[camera]]\n" + std::string(spec.name) + " = " + text + "\n");
+    ASSERT_EQ(config.cameras.size(), 1U);
+    EXPECT_EQ(read_back(spec, config.cameras[0]), expected);
+  }
+}
+
+TEST(ConfigSchema, DumpParsesBackToTheSameConfiguration) {
+  Config original = parse(
+      "[pressure]\nsetpoint_mpa = 0.25\n[boom]\nnozzles = 6\n"
+      "[[camera]]\nnozzle_count = 3\n[[camera]]\nfirst_nozzle = 3\n"
+      "nozzle_count = 3\n");
+  Config again = parse(dump_config(original), "dump.toml");
+  for (const auto& spec : config_keys()) {
+    EXPECT_EQ(read_back(spec, again), read_back(spec, original)) << spec.full_name();
+  }
+  ASSERT_EQ(again.cameras.size(), 2U);
+  EXPECT_EQ(again.cameras[1].first_nozzle, 3);
+}
+
+TEST(ConfigSchema, VisionChoicesAreTheVisionLibrarysNames) {
+  for (const auto& spec : config_keys()) {
+    if (spec.full_name() == "vision.index") {
+      for (auto choice : spec.choices)
+        EXPECT_TRUE(vision::parse_vegetation_index(choice)) << choice;
+    }
+    if (spec.full_name() == "vision.threshold") {
+      for (auto choice : spec.choices)
+        EXPECT_TRUE(vision::parse_threshold_method(choice)) << choice;
+    }
+  }
+}
+
+TEST(ConfigErrors, UnknownKeyNamesFileLineAndKey) {
+  const auto e = parse_error({{"main.toml", "[pressure]\nsetpoint_mpa = 0.3\nsetpiont = 1\n"}});
+  EXPECT_EQ(e.file(), "main.toml");
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_EQ(e.key(), "pressure.setpiont");
+  EXPECT_NE(std::string(e.what()).find("main.toml:3: pressure.setpiont: unknown key"),
+            std::string::npos)
+      << e.what();
+}
+
+TEST(ConfigErrors, UnknownSection) {
+  const auto e = parse_error({{"main.toml", "\n[presure]\nsetpoint_mpa = 0.3\n"}});
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_EQ(e.key(), "presure");
+}
+
+TEST(ConfigErrors, WrongType) {
+  const auto e = parse_error({{"main.toml", "[boom]\nnozzles = \"four\"\n"}});
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_EQ(e.key(), "boom.nozzles");
+  EXPECT_NE(std::string(e.what()).find("expected integer, got string"), std::string::npos);
+  const auto f = parse_error({{"main.toml", "[boom]\nnozzles = 4.5\n"}});
+  EXPECT_EQ(f.key(), "boom.nozzles");
+  const auto g = parse_error({{"main.toml", "[daemon]\nautostart = 1\n"}});
+  EXPECT_EQ(g.key(), "daemon.autostart");
+}
+
+TEST(ConfigErrors, OutOfRangeSaysRangeAndUnit) {
+  const auto e = parse_error({{"main.toml", "[pressure]\n\nsetpoint_mpa = 5.0\n"}});
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_EQ(e.key(), "pressure.setpoint_mpa");
+  EXPECT_NE(std::string(e.what()).find("5 is outside 0.05..1 MPa"), std::string::npos) << e.what();
+}
+
+TEST(ConfigErrors, BadChoiceListsTheChoices) {
+  const auto e = parse_error({{"main.toml", "[pressure]\ncontroller = \"fuzzy\"\n"}});
+  EXPECT_EQ(e.key(), "pressure.controller");
+  EXPECT_NE(std::string(e.what()).find("\"fuzzy_pid\", \"pid\""), std::string::npos) << e.what();
+}
+
+TEST(ConfigErrors, TomlSyntaxErrorHasTheLine) {
+  const auto e = parse_error({{"main.toml", "[pressure]\nsetpoint_mpa = 0.3\n[boom\n"}});
+  EXPECT_EQ(e.file(), "main.toml");
+  EXPECT_EQ(e.line(), 3);
+}
+
+TEST(ConfigErrors, CrossKeyRulesNameTheKeyAndWhereItWasSet) {
+  const auto e = parse_error({{"main.toml", "[boom]\nnozzles = 4\n"},
+                              {"conf.d/10-cam.toml", "[[camera]]\nfirst_nozzle = 2\n"}});
+  EXPECT_EQ(e.file(), "conf.d/10-cam.toml");
+  EXPECT_EQ(e.key(), "camera[0].nozzle_count");
+  const auto f = parse_error({{"main.toml", "[spray]\nduty_min_pct = 50\nduty_max_pct = 40\n"}});
+  EXPECT_EQ(f.key(), "spray.duty_max_pct");
+  EXPECT_EQ(f.line(), 3);
+  const auto g =
+      parse_error({{"main.toml", "[boom]\nnozzles = 4\n[gpio]\nvalve_offsets = [1, 2]\n"}});
+  EXPECT_EQ(g.key(), "gpio.valve_offsets");
+  const auto h = parse_error({{"main.toml",
+                               "[boom]\nnozzles = 4\n[[camera]]\nnozzle_count = 3\n[[camera]]\n"
+                               "first_nozzle = 2\nnozzle_count = 2\n"}});
+  EXPECT_EQ(h.key(), "camera[1].first_nozzle");
+}
+
+class ConfigFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("weedspray-config-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "conf.d");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  void write(const fs::path& relative, const std::string& text) {
+    std::ofstream(dir_ / relative) << text;
+  }
+  fs::path dir_;
+};
+
+TEST_F(ConfigFiles, DropInsAreReadInNameOrderAndLaterWins) {
+  write("weedspray.toml", "[pressure]\nsetpoint_mpa = 0.2\n");
+  write("conf.d/20-late.toml", "[pressure]\nsetpoint_mpa = 0.35\n");
+  write("conf.d/10-early.toml", "[pressure]\nsetpoint_mpa = 0.3\n[boom]\nnozzles = 6\n");
+  write("conf.d/README", "not toml, ignored");
+  const Config config = load_config(dir_ / "weedspray.toml");
+  EXPECT_DOUBLE_EQ(config.pressure.setpoint_mpa, 0.35);
+  EXPECT_EQ(config.boom.nozzles, 6);
+  ASSERT_EQ(config.files.size(), 3U);
+  EXPECT_NE(config.files[1].find("10-early.toml"), std::string::npos);
+  EXPECT_NE(config.sources.at("pressure.setpoint_mpa").file.find("20-late.toml"),
+            std::string::npos);
+}
+
+TEST_F(ConfigFiles, BadDropInIsNamed) {
+  write("weedspray.toml", "[pressure]\nsetpoint_mpa = 0.2\n");
+  write("conf.d/50-bad.toml", "[pressure]\n# comment\nsetpoint_mpa = -1\n");
+  try {
+    (void)load_config(dir_ / "weedspray.toml");
+    FAIL() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(e.file().find("conf.d/50-bad.toml"), std::string::npos);
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_EQ(e.key(), "pressure.setpoint_mpa");
+  }
+}
+
+TEST_F(ConfigFiles, MissingMainFileIsAnError) {
+  EXPECT_THROW((void)load_config(dir_ / "nope.toml"), ConfigError);
+}
+
+// etc/weedspray.toml: the installed default. It must parse, equal the built-in defaults, and
+// document every key (each key written out under its section with a comment above it).
+TEST(DefaultConfigFile, ParsesAndDocumentsEveryKey) {
+  const fs::path file = fs::path(WEEDSPRAY_SOURCE_DIR) / "etc" / "weedspray.toml";
+  const Config config = load_config(file);
+  const Config defaults = default_config();
+  for (const auto& spec : config_keys()) {
+    EXPECT_EQ(read_back(spec, const_cast<Config&>(config)),
+              read_back(spec, const_cast<Config&>(defaults)))
+        << spec.full_name() << " differs from its declared default";
+  }
+  std::ifstream in(file);
+  std::string line;
+  std::string section;
+  std::string previous;
+  std::set<std::string> documented;
+  while (std::getline(in, line)) {
+    if (line.starts_with("[[")) {
+      section = line.substr(2, line.find("]]") - 2);
+    } else if (line.starts_with("[")) {
+      section = line.substr(1, line.find(']') - 1);
+    } else if (const auto eq = line.find(" = ");
+               eq != std::string::npos && !line.starts_with("#")) {
+      if (previous.starts_with("#")) documented.insert(section + "." + line.substr(0, eq));
+    }
+    previous = line;
+  }
+  for (const auto& spec : config_keys()) {
+    EXPECT_TRUE(documented.count(spec.full_name())) << spec.full_name() << " not documented";
+  }
+  for (const auto& spec : camera_keys()) {
+    EXPECT_TRUE(documented.count(spec.full_name())) << spec.full_name() << " not documented";
+  }
+}
+
+}  // namespace
+}  // namespace weedspray::daemon

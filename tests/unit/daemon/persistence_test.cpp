@@ -1,0 +1,82 @@
+// Totals across restarts and the as-applied CSV log.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "daemon/as_applied_log.hpp"
+#include "daemon/totals.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("weedspray-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+TEST(Totals, SaveAndRestore) {
+  const fs::path dir = temp_dir("totals");
+  const fs::path file = dir / "totals.toml";
+  EXPECT_EQ(load_totals(file).area_m2, 0.0);  // missing: zeros
+  save_totals(file, Totals{.area_m2 = 1234.5, .volume_l = 10.25, .uniform_volume_l = 20.5});
+  const Totals back = load_totals(file);
+  EXPECT_DOUBLE_EQ(back.area_m2, 1234.5);
+  EXPECT_DOUBLE_EQ(back.volume_l, 10.25);
+  EXPECT_DOUBLE_EQ(back.savings_pct(), 50.0);
+  EXPECT_FALSE(fs::exists(dir / "totals.toml.tmp"));
+  fs::remove_all(dir);
+}
+
+TEST(Totals, CorruptFileGivesZerosAndAnError) {
+  const fs::path dir = temp_dir("totals-bad");
+  std::ofstream(dir / "totals.toml") << "area_m2 = = 3\n";
+  std::string error;
+  const Totals t = load_totals(dir / "totals.toml", &error);
+  EXPECT_EQ(t.area_m2, 0.0);
+  EXPECT_NE(error.find("totals.toml:1"), std::string::npos) << error;
+  fs::remove_all(dir);
+}
+
+TEST(AsAppliedLog, WritesOneLinePerRecordAndRotates) {
+  const fs::path dir = temp_dir("as-applied");
+  AppliedRecord r;
+  r.nozzles = 4;
+  r.distance_m = 1.5;
+  r.duty_pct = {25, 50, 75, 100};
+  r.density = {0.1f, 0.2f, 0.3f, 0.4f};
+  {
+    AsAppliedLog log(dir, 4096, 3);
+    for (int i = 0; i < 400; ++i) {
+      r.time = std::chrono::milliseconds(200 * i);
+      ASSERT_TRUE(log.write(r));
+    }
+    log.flush();
+  }
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(dir)) files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  EXPECT_EQ(files.size(), 3U) << "older files pruned down to keep_files";
+  std::ifstream in(files.back());
+  std::string header;
+  std::getline(in, header);
+  EXPECT_EQ(header,
+            "time_s,distance_m,speed_m_per_s,pressure_mpa,flow_l_per_min,duty_pct_0,duty_pct_1,"
+            "duty_pct_2,duty_pct_3,density_0,density_1,density_2,density_3");
+  std::string line;
+  std::getline(in, line);
+  EXPECT_NE(line.find(",1.5000,"), std::string::npos) << line;
+  EXPECT_NE(line.find(",25.0,50.0,75.0,100.0,0.1000,0.2000,0.3000,0.4000"), std::string::npos)
+      << line;
+  for (const auto& f : files) EXPECT_LE(fs::file_size(f), 4096U + 200U);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace weedspray::daemon

@@ -1,0 +1,72 @@
+// Agreement with the 142 hand-labelled EWS field images (data/ews-train), through the same
+// evaluation code as `weedspray-lab vision-eval`. The expected figures are that command's
+// measured output; the margins are small so a regression in any stage shows.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdlib>
+#include <filesystem>
+
+#include "lab/vision_eval.hpp"
+
+namespace weedspray::lab {
+namespace {
+
+// Measured by: weedspray-lab vision-eval --images DATA/ews-train/images --masks
+// DATA/ews-train/masks
+constexpr double kDefaultIou = 0.5995;
+constexpr double kExgFitIou = 0.5249;
+constexpr double kExgFitThresholdError = 0.070;
+
+std::filesystem::path ews_folder() {
+  const char* data_dir = std::getenv("WEEDSPRAY_DATA_DIR");
+  return std::filesystem::path(data_dir ? data_dir : "") / "ews-train";
+}
+
+class EwsTrain : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const std::filesystem::path folder = ews_folder();
+    if (std::filesystem::is_directory(folder / "images")) {
+      images_ =
+          new std::vector<LabelledImage>(load_labelled_images(folder / "images", folder / "masks"));
+    }
+  }
+  static void TearDownTestSuite() {
+    delete images_;
+    images_ = nullptr;
+  }
+  void SetUp() override {
+    if (images_ == nullptr) GTEST_SKIP() << ews_folder() << " not found (WEEDSPRAY_DATA_DIR)";
+  }
+  static EvalRow evaluate(vision::VegetationIndex index, vision::ThresholdMethod method) {
+    const std::array indices{index};
+    const std::array methods{method};
+    return evaluate_combinations(*images_, indices, methods, vision::default_pipeline_config())
+        .front();
+  }
+  static std::vector<LabelledImage>* images_;
+};
+std::vector<LabelledImage>* EwsTrain::images_ = nullptr;
+
+TEST_F(EwsTrain, AllImagesLoad) {
+  EXPECT_EQ(images_->size(), 142u);
+}
+
+TEST_F(EwsTrain, DefaultPipelineReachesItsMeasuredIou) {
+  const vision::PipelineConfig config = vision::default_pipeline_config();
+  const EvalRow row = evaluate(config.index, config.threshold);
+  EXPECT_GE(row.mean_iou, 0.58);
+  EXPECT_NEAR(row.mean_iou, kDefaultIou, 0.005);
+}
+
+// The UGV paper's choice, normalised ExG + FIT, as measured here.
+TEST_F(EwsTrain, NormalisedExgWithFitAsMeasured) {
+  const EvalRow row =
+      evaluate(vision::VegetationIndex::kExgNormalized, vision::ThresholdMethod::kFit);
+  EXPECT_NEAR(row.mean_iou, kExgFitIou, 0.01);
+  EXPECT_NEAR(row.threshold_error, kExgFitThresholdError, 0.05);
+}
+
+}  // namespace
+}  // namespace weedspray::lab
