@@ -19,6 +19,10 @@
 #include "io/signal_conversion.hpp"
 #include "io/tank_level.hpp"
 
+namespace weedspray::control::plant {
+class HydraulicPlant;
+}
+
 namespace weedspray::daemon {
 
 struct Backends {
@@ -42,6 +46,8 @@ struct Backends {
   std::function<void(double t_s)> drive_world;
   // Sim only: "valves=0x0 pump=0" as the plant sees them (written at exit for the tests).
   std::function<std::string()> describe_outputs;
+  // Sim only: runs fn on the plant, advanced to now and locked (ground truth, fault injection).
+  std::function<void(const std::function<void(control::plant::HydraulicPlant&)>&)> with_plant;
 
   std::vector<std::shared_ptr<void>> owned;  // keeps the devices alive
 

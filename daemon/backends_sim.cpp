@@ -97,6 +97,9 @@ Backends make_sim_backends(const Config& config, const Options& options) {
     speed->store(v);
     rig->with_plant([v](control::plant::HydraulicPlant& p) { p.set_ground_speed(v); });
   };
+  b.with_plant = [rig](const std::function<void(control::plant::HydraulicPlant&)>& fn) {
+    rig->with_plant(fn);
+  };
   b.describe_outputs = [rig]() {
     std::ostringstream out;
     out << "valves=0x" << std::hex << rig->valve_mask() << std::dec

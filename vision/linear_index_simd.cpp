@@ -10,26 +10,27 @@
 namespace weedspray::vision {
 namespace {
 
-// Four partial histograms break the store-to-load dependency between equal neighbouring
-// values (plant and soil pixels come in runs), which otherwise serialises the increments.
+// Eight partial histograms break the store-to-load dependency between equal values: CIVE
+// packs bare soil into a handful of levels, so with one histogram nearly every increment
+// would wait for the previous one to the same bin.
+constexpr int kPartialHistograms = 8;
+
 struct SplitHistogram {
-  std::uint32_t bins[4][256] = {};
+  std::uint32_t bins[kPartialHistograms][256] = {};
   // Bytes taken from two 64-bit halves of the register: GCC otherwise spills the vector once
   // per byte.
   void add16(const cv::v_uint8x16& values) {
     const cv::v_uint64x2 halves = cv::v_reinterpret_as_u64(values);
-    const std::uint64_t low = halves.get0();
-    const std::uint64_t high = cv::v_extract_n<1>(halves);
-    for (int shift = 0; shift < 64; shift += 16) {
-      ++bins[0][(low >> shift) & 0xFF];
-      ++bins[1][(low >> (shift + 8)) & 0xFF];
-      ++bins[2][(high >> shift) & 0xFF];
-      ++bins[3][(high >> (shift + 8)) & 0xFF];
-    }
+    add8(halves.get0(), &bins[0]);
+    add8(cv::v_extract_n<1>(halves), &bins[4]);
+  }
+  static void add8(std::uint64_t values, std::uint32_t (*partial)[256]) {
+    // Bytes 0-3 and 4-7 go to the same four histograms (eight in all with the other half).
+    for (int i = 0; i < 8; ++i) ++partial[i % 4][(values >> (8 * i)) & 0xFF];
   }
   void merge_into(Histogram& histogram) const {
     for (int level = 0; level < 256; ++level) {
-      histogram[level] += bins[0][level] + bins[1][level] + bins[2][level] + bins[3][level];
+      for (int i = 0; i < kPartialHistograms; ++i) histogram[level] += bins[i][level];
     }
   }
 };

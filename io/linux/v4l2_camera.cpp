@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
@@ -145,6 +146,14 @@ struct V4l2Camera::Impl {
                   "; list formats with v4l2-ctl --list-formats-ext)");
     width = static_cast<int>(fmt.fmt.pix.width);
     height = static_cast<int>(fmt.fmt.pix.height);
+    // The vision geometry (ground footprint per pixel) assumes the configured size: a rounded
+    // size is a configuration error, not something to adapt to silently.
+    if (width != config.width || height != config.height)
+      return fail("cannot deliver " + std::to_string(config.width) + "x" +
+                  std::to_string(config.height) + " " +
+                  fourcc_text(fourcc_of(config.pixel_format)) +
+                  " (nearest offered: " + std::to_string(width) + "x" + std::to_string(height) +
+                  "; list sizes with v4l2-ctl --list-formats-ext)");
     stride = fmt.fmt.pix.bytesperline;
     if (stride == 0) {
       const std::size_t bpp = config.pixel_format == CameraPixelFormat::kRgb24  ? 3
@@ -157,8 +166,17 @@ struct V4l2Camera::Impl {
     parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     parm.parm.capture.timeperframe.numerator = 1;
     parm.parm.capture.timeperframe.denominator = static_cast<std::uint32_t>(config.fps);
-    if (xioctl(fd, VIDIOC_S_PARM, &parm) != 0 && errno != ENOTTY && errno != EINVAL)
+    if (xioctl(fd, VIDIOC_S_PARM, &parm) == 0) {
+      const auto& tpf = parm.parm.capture.timeperframe;
+      if (tpf.numerator != 0 && tpf.denominator != 0) {
+        const double actual = static_cast<double>(tpf.denominator) / tpf.numerator;
+        if (std::abs(actual - config.fps) > 0.01 * config.fps)
+          return fail("cannot run at " + std::to_string(config.fps) + " fps at this size (the " +
+                      "driver chose " + std::to_string(actual) + " fps)");
+      }
+    } else if (errno != ENOTTY && errno != EINVAL) {
       return fail_errno("setting " + std::to_string(config.fps) + " fps (S_PARM)");
+    }
 
     if (config.exposure_absolute) {
       if (!set_control(V4L2_CID_EXPOSURE_AUTO, V4L2_EXPOSURE_MANUAL, "exposure_auto")) return false;

@@ -43,14 +43,15 @@ class V4l2Camera final : public Camera {
   V4l2Camera& operator=(const V4l2Camera&) = delete;
 
   // Opens, negotiates the format (fails with a clear message when the device cannot deliver the
-  // configured format/size), applies controls, maps buffers, starts streaming.
+  // configured format, size or frame rate exactly), applies controls, maps buffers, starts
+  // streaming.
   bool start() override;
   FrameStatus next_frame(Frame& frame, std::chrono::milliseconds timeout) override;
   void stop() noexcept override;
   std::string last_error() const override;
   CameraCounters counters() const noexcept override;
 
-  // The negotiated size (the driver may round).
+  // The negotiated size (equal to the configured one once start() succeeded).
   int width() const noexcept;
   int height() const noexcept;
 

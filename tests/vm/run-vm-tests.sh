@@ -52,7 +52,6 @@ require_tool apt-get apt
 require_tool apt-cache apt
 require_tool dpkg-deb dpkg
 require_tool cpio cpio
-require_tool gzip gzip
 require_tool xz xz-utils
 require_tool modprobe kmod
 require_tool depmod kmod
@@ -192,40 +191,67 @@ prepare_kernel() {
 }
 
 # --- initramfs ----------------------------------------------------------------------------
-copy_with_libraries() { # FILE DEST_ROOT DEST_PATH: the file plus every shared library it loads
-  local file="$1" dest_root="$2" dest_path="$3" lib
-  mkdir -p "$dest_root$(dirname "$dest_path")"
-  cp -L "$file" "$dest_root$dest_path"
-  ldd "$file" >/dev/null 2>&1 || return 0 # static executable or script
-  while read -r lib; do
-    [ -e "$dest_root$lib" ] && continue
-    mkdir -p "$dest_root$(dirname "$lib")"
-    cp -L "$lib" "$dest_root$lib"
-  done < <(ldd "$file" | awk '/=> \// { print $3 } /^\t\// { print $1 }')
-  if ldd "$file" | grep -q 'not found'; then
-    ldd "$file" >&2
-    die "'$file' needs a shared library that is not installed"
-  fi
+# Two archives the kernel unpacks one after the other: a large base (busybox, modules, tools,
+# every shared library; reused while none of them changes) and a small one per run (/init and
+# the programs under test).
+shared_libraries() { # FILE...: the absolute paths of every library they load, once each
+  local file
+  for file in "$@"; do
+    ldd "$file" >/dev/null 2>&1 || continue # static executable or script
+    if ldd "$file" | grep -q 'not found'; then
+      ldd "$file" >&2
+      die "'$file' needs a shared library that is not installed"
+    fi
+    ldd "$file" | awk '/=> \// { print $3 } /^\t\// { print $1 }'
+  done | sort -u
 }
 
-build_initramfs() { # -> $work_dir/initrd.cpio.gz
-  local root="$work_dir/initramfs" i=0 tool
-  rm -rf "$root"
-  mkdir -p "$root"/{bin,dev,proc,sys,tmp,run,tests,lib/modules}
+write_cpio() { # DIR ARCHIVE
+  # Uncompressed: with OpenCV's libraries (~190 MB) gzip costs ~7 s here and the emulated
+  # guest unpacks a plain archive faster than it inflates a compressed one.
+  (cd "$1" && find . -print0 | cpio --null -o -H newc --quiet) >"$2.tmp"
+  mv "$2.tmp" "$2"
+}
+
+build_base_archive() { # -> $base_archive
+  local tool_paths=() tool libraries lib key
+  for tool in "${guest_tools[@]}"; do tool_paths+=("$(command -v "$tool")"); done
+  mapfile -t libraries < <(shared_libraries "${tool_paths[@]}" "${guest_programs[@]}")
+  key="$( (
+    echo "$kernel_release $kernel_version"
+    # shellcheck disable=SC2016 # the format is stat's
+    stat -L -c '%n %s %Y' /bin/busybox "${tool_paths[@]}" "${libraries[@]}"
+  ) | sha256sum | cut -c1-16)"
+  base_archive="$cache_dir/base-$key.cpio"
+  [ -f "$base_archive" ] && return 0
+  find "$cache_dir" -maxdepth 1 -name 'base-*.cpio' -delete
+  local root="$work_dir/base"
+  mkdir -p "$root"/{bin,usr/bin,dev,proc,sys,tmp,run}
   cp /bin/busybox "$root/bin/busybox"
+  cp -a "$module_root/." "$root/"
+  # Debian's gpiod tools and v4l2-ctl: for the smoke test and diagnosis inside the guest.
+  for tool in "${tool_paths[@]}"; do cp -L "$tool" "$root/usr/bin/"; done
+  for lib in "${libraries[@]}"; do
+    mkdir -p "$root$(dirname "$lib")"
+    cp -L "$lib" "$root$lib"
+  done
+  write_cpio "$root" "$base_archive"
+  rm -rf "$root"
+}
+
+build_initramfs() { # -> $work_dir/initrd.cpio
+  build_base_archive
+  local root="$work_dir/run" i=0
+  mkdir -p "$root/tests"
   cp "$script_dir/guest-init.sh" "$root/init"
   chmod 755 "$root/init"
-  cp -a "$module_root/." "$root/"
   cp "$module_load_list" "$root/modules.load"
-  # Debian's gpiod tools and v4l2-ctl: for diagnosis inside the guest and the smoke test.
-  for tool in "${guest_tools[@]}"; do
-    copy_with_libraries "$(command -v "$tool")" "$root" "/usr/bin/$tool"
-  done
   for program in "${guest_programs[@]}"; do
     i=$((i + 1))
-    copy_with_libraries "$program" "$root" "/tests/$(printf '%02d' "$i")-$(basename "$program")"
+    cp -L "$program" "$root/tests/$(printf '%02d' "$i")-$(basename "$program")"
   done
-  (cd "$root" && find . -print0 | cpio --null -o -H newc --quiet | gzip -1) >"$work_dir/initrd.cpio.gz"
+  write_cpio "$root" "$work_dir/run.cpio"
+  cat "$base_archive" "$work_dir/run.cpio" >"$work_dir/initrd.cpio"
 }
 
 # --- boot and judge -----------------------------------------------------------------------
@@ -235,7 +261,7 @@ run_guest() { # -> $guest_log; returns QEMU's status
   timeout --foreground "$boot_timeout_s" qemu-system-x86_64 -accel tcg -cpu qemu64 -smp 2 -m 1024 \
     -nographic -no-reboot -nodefaults -serial stdio \
     -device isa-debug-exit,iobase=0xf4,iosize=0x04 \
-    -kernel "$vmlinux" -initrd "$work_dir/initrd.cpio.gz" \
+    -kernel "$vmlinux" -initrd "$work_dir/initrd.cpio" \
     -append "console=ttyS0 quiet loglevel=3 panic=-1 oops=panic" \
     </dev/null >"$guest_log" 2>&1 || status=$?
   return "$status"
@@ -249,7 +275,7 @@ work_dir="$(mktemp -d "$cache_dir/run.XXXXXX")"
 [ -n "${WEEDSPRAY_VM_KEEP_WORK:-}" ] || trap 'rm -rf "$work_dir"' EXIT # keep: for debugging
 guest_log="${log_file:-$work_dir/guest.log}"
 build_initramfs
-note "booting $kernel_release with $(du -h "$work_dir/initrd.cpio.gz" | cut -f1) initramfs"
+note "booting $kernel_release with $(du -h "$work_dir/initrd.cpio" | cut -f1) initramfs"
 boot_started=$SECONDS
 qemu_status=0
 run_guest || qemu_status=$?

@@ -20,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "io/linux/modbus_analog.hpp"
 #include "io/linux/monotonic_clock.hpp"
 
 extern char** environ;
@@ -252,6 +253,39 @@ TEST_F(ModbusPeer, RecoversWhenTheSlaveComesBack) {
   ASSERT_TRUE(s.ok) << sensor.last_error();
   EXPECT_NEAR(s.level_pct, 64.0, 1e-9);
   EXPECT_GE(s.timeouts, 1U);
+}
+
+TEST_F(ModbusPeer, AnalogModuleInputAndOutputRoundTrip) {
+  start_slave({"normal", "7", "0=523", "2=1234"});
+  ModbusTankLevel probe(config(0), clock_);  // waits until the peer serves
+  ASSERT_TRUE(first_ok(probe, 20).ok) << probe.last_error();
+
+  const ModbusRtuSettings port{master_.string(), 9600, 'N', 8, 1, 7, 300ms};
+  ModbusAnalogInput adc({port, 2, true, 0.001}, clock_);
+  const AnalogSample in = adc.read();
+  ASSERT_TRUE(in.ok) << adc.last_error();
+  EXPECT_NEAR(in.volts, 1.234, 1e-9);
+
+  {
+    ModbusAnalogOutput dac({port, 5, 0.001, 10.0, 0.5});  // writes the safe 0.5 V at start
+    ModbusAnalogInput readback({port, 5, false, 0.001}, clock_);
+    EXPECT_NEAR(readback.read().volts, 0.5, 1e-9);
+    EXPECT_EQ(dac.write(2.5), 0);
+    EXPECT_NEAR(readback.read().volts, 2.5, 1e-9);
+    EXPECT_EQ(dac.write(99.0), 0);
+    EXPECT_NEAR(readback.read().volts, 10.0, 1e-9) << "clamped to full scale";
+  }
+  ModbusAnalogInput readback({port, 5, false, 0.001}, clock_);
+  EXPECT_NEAR(readback.read().volts, 0.5, 1e-9) << "destructor forces safe";
+}
+
+TEST_F(ModbusPeer, AnalogInputCountsErrorsOnASilentModule) {
+  start_slave({"silent"});
+  ModbusAnalogInput adc({{master_.string(), 9600, 'N', 8, 1, 7, 200ms}, 0, true, 0.001}, clock_);
+  AnalogSample s = adc.read();
+  s = adc.read();
+  EXPECT_FALSE(s.ok);
+  EXPECT_EQ(s.error_count, 2U);
 }
 
 TEST(ModbusTankLevelConfig, ClearErrorsForBadDeviceAndSettings) {
