@@ -26,20 +26,44 @@ FlowTrim::FlowTrim(const FlowTrimConfig& config) : config_(config) {
       config.min_open_fraction > 1.0) {
     throw std::invalid_argument("FlowTrimConfig.min_open_fraction must be in [0, 1]");
   }
+  if (!finite(config.min_trimmable_fraction) || config.min_trimmable_fraction < 0.0 ||
+      config.min_trimmable_fraction > 1.0) {
+    throw std::invalid_argument("FlowTrimConfig.min_trimmable_fraction must be in [0, 1]");
+  }
+  if (!finite(config.max_pressure_error_fraction) || config.max_pressure_error_fraction <= 0.0) {
+    throw std::invalid_argument("FlowTrimConfig.max_pressure_error_fraction must be > 0");
+  }
 }
 
 double FlowTrim::update(double requested_total_l_per_min, double measured_total_l_per_min,
                         double open_fraction, double dt_s) noexcept {
-  const bool usable = std::isfinite(requested_total_l_per_min) &&
-                      std::isfinite(measured_total_l_per_min) && std::isfinite(open_fraction) &&
-                      std::isfinite(dt_s) && dt_s > 0.0;
-  frozen_ = !usable || requested_total_l_per_min < config_.min_requested_flow_l_per_min ||
-            open_fraction < config_.min_open_fraction;
+  FlowTrimInput input;
+  input.requested_total_l_per_min = requested_total_l_per_min;
+  input.trimmable_l_per_min = requested_total_l_per_min;
+  input.measured_total_l_per_min = measured_total_l_per_min;
+  input.open_fraction = open_fraction;
+  input.dt_s = dt_s;
+  return update(input);
+}
+
+double FlowTrim::update(const FlowTrimInput& in) noexcept {
+  const bool usable =
+      std::isfinite(in.requested_total_l_per_min) && std::isfinite(in.trimmable_l_per_min) &&
+      std::isfinite(in.measured_total_l_per_min) && std::isfinite(in.open_fraction) &&
+      std::isfinite(in.pressure_error_fraction) && std::isfinite(in.dt_s) && in.dt_s > 0.0;
+  frozen_ =
+      !usable || in.requested_total_l_per_min < config_.min_requested_flow_l_per_min ||
+      in.trimmable_l_per_min < config_.min_requested_flow_l_per_min ||
+      in.trimmable_l_per_min < config_.min_trimmable_fraction * in.requested_total_l_per_min ||
+      in.open_fraction < config_.min_open_fraction ||
+      std::abs(in.pressure_error_fraction) > config_.max_pressure_error_fraction;
   if (frozen_) return correction_;
+  const double trimmable = std::min(in.trimmable_l_per_min, in.requested_total_l_per_min);
   const double relative_error =
-      (requested_total_l_per_min - measured_total_l_per_min) / requested_total_l_per_min;
-  const double max_step = config_.max_rate_per_s * dt_s;
-  const double step = std::clamp(config_.gain_per_s * relative_error * dt_s, -max_step, max_step);
+      (in.requested_total_l_per_min - in.measured_total_l_per_min) / trimmable;
+  const double max_step = config_.max_rate_per_s * in.dt_s;
+  const double step =
+      std::clamp(config_.gain_per_s * relative_error * in.dt_s, -max_step, max_step);
   correction_ = std::clamp(correction_ + step, config_.min_correction, config_.max_correction);
   return correction_;
 }

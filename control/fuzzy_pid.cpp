@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <mutex>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 
 namespace weedspray::control {
 namespace {
@@ -29,6 +32,44 @@ StrengthTable rule_strengths(double qe, double qec) noexcept {
     for (int j = 0; j < kFuzzyTermCount; ++j) strength[i][j] = std::min(mu_e[i], mu_ec[j]);
   }
   return strength;
+}
+
+// Exact integrals of the merged output set mu(z) = max_t min(s_t, tri_t(z)) over [-6, 6]:
+// returns {integral of mu, integral of mu z}. Between two adjacent term centres only those two
+// triangles are non-zero, and there mu is the max/min of four linear pieces (two clip levels,
+// a falling and a rising edge), so it is linear between their pairwise crossings.
+std::pair<double, double> exact_moments(
+    const std::array<double, kFuzzyTermCount>& term_strength) noexcept {
+  double area = 0.0;
+  double moment = 0.0;
+  for (int t = 0; t + 1 < kFuzzyTermCount; ++t) {
+    const double s0 = term_strength[t];
+    const double s1 = term_strength[t + 1];
+    if (s0 <= 0.0 && s1 <= 0.0) continue;
+    const double c = fuzzy_term_centre(static_cast<FuzzyTerm>(t));
+    // Local coordinate x in [0, 2]: falling edge 1 - x/2 (term t), rising edge x/2 (term t+1).
+    auto mu = [&](double x) {
+      return std::max(std::min(s0, 1.0 - 0.5 * x), std::min(s1, 0.5 * x));
+    };
+    std::array<double, 8> cuts{
+        0.0, 2.0, 1.0, 2.0 * (1.0 - s0), 2.0 * s0, 2.0 * s1, 2.0 * (1.0 - s1), 0.0};
+    std::size_t count = 7;
+    for (std::size_t k = 0; k < count; ++k) cuts[k] = std::clamp(cuts[k], 0.0, 2.0);
+    std::sort(cuts.begin(), cuts.begin() + static_cast<std::ptrdiff_t>(count));
+    for (std::size_t k = 0; k + 1 < count; ++k) {
+      const double a = cuts[k];
+      const double b = cuts[k + 1];
+      if (b <= a) continue;
+      const double fa = mu(a);
+      const double fb = mu(b);
+      const double za = c + a;
+      const double zb = c + b;
+      area += 0.5 * (b - a) * (fa + fb);
+      // Integral of a linear f times z over [za, zb].
+      moment += (b - a) / 6.0 * (fa * (2.0 * za + zb) + fb * (za + 2.0 * zb));
+    }
+  }
+  return {area, moment};
 }
 
 }  // namespace
@@ -58,7 +99,9 @@ double fuzzy_defuzzify(const FuzzyRuleTable& rules, const StrengthTable& strengt
   }
   double weighted = 0.0;
   double total = 0.0;
-  if (config.defuzzification == FuzzyDefuzzification::kTermCentres) {
+  if (config.defuzzification == FuzzyDefuzzification::kExactCentroid) {
+    std::tie(total, weighted) = exact_moments(term_strength);
+  } else if (config.defuzzification == FuzzyDefuzzification::kTermCentres) {
     for (int t = 0; t < kFuzzyTermCount; ++t) {
       weighted += term_strength[t] * fuzzy_term_centre(static_cast<FuzzyTerm>(t));
       total += term_strength[t];
@@ -109,7 +152,7 @@ FuzzyGainCorrection fuzzy_infer(double qe, double qec,
 }
 
 FuzzyGainTable::FuzzyGainTable(const FuzzyInferenceConfig& config, int steps_per_unit)
-    : steps_per_unit_(steps_per_unit) {
+    : inference_(config), steps_per_unit_(steps_per_unit) {
   if (steps_per_unit < 1 || steps_per_unit > 100) {
     throw std::invalid_argument("fuzzy table_steps_per_unit must be in 1..100, got " +
                                 std::to_string(steps_per_unit));
@@ -126,6 +169,21 @@ FuzzyGainTable::FuzzyGainTable(const FuzzyInferenceConfig& config, int steps_per
       grid_[i * side_ + j] = fuzzy_infer(qe, qec, config);
     }
   }
+}
+
+std::shared_ptr<const FuzzyGainTable> shared_fuzzy_gain_table(const FuzzyInferenceConfig& config,
+                                                              int steps_per_unit) {
+  using Key = std::tuple<int, double, int>;
+  static std::mutex mutex;
+  static std::map<Key, std::shared_ptr<const FuzzyGainTable>> tables;
+  // Only the sampled centroid depends on output_step.
+  const double step =
+      config.defuzzification == FuzzyDefuzzification::kSampledCentroid ? config.output_step : 0.0;
+  const Key key{static_cast<int>(config.defuzzification), step, steps_per_unit};
+  const std::lock_guard lock(mutex);
+  auto& table = tables[key];
+  if (!table) table = std::make_shared<const FuzzyGainTable>(config, steps_per_unit);
+  return table;
 }
 
 FuzzyGainCorrection FuzzyGainTable::lookup(double qe, double qec) const noexcept {
@@ -171,7 +229,7 @@ const FuzzyPidConfig& checked(const FuzzyPidConfig& config) {
 
 FuzzyPid::FuzzyPid(const FuzzyPidConfig& config)
     : config_(checked(config)),
-      table_(config.inference, config.table_steps_per_unit),
+      table_(shared_fuzzy_gain_table(config.inference, config.table_steps_per_unit)),
       pid_(config.base) {}
 
 double FuzzyPid::update(double setpoint, double measurement, double dt_s) noexcept {
@@ -187,14 +245,24 @@ double FuzzyPid::update(double setpoint, double measurement, double dt_s) noexce
 
   const double rate_range =
       config_.error_rate_range > 0.0 ? config_.error_rate_range : 2.0 * config_.error_range;
-  correction_ = table_.lookup(fuzzy_quantise(error, config_.error_range),
-                              fuzzy_quantise(error_rate, rate_range));
+  correction_ = table_->lookup(fuzzy_quantise(error, config_.error_range),
+                               fuzzy_quantise(error_rate, rate_range));
   const PidGains& base = config_.base.gains;
   const PidGains& w = config_.correction_weights;
   pid_.set_gains(PidGains{std::max(0.0, base.kp + correction_.d_kp * w.kp),
                           std::max(0.0, base.ki + correction_.d_ki * w.ki),
                           std::max(0.0, base.kd + correction_.d_kd * w.kd)});
   return pid_.update(setpoint, measurement, dt_s);
+}
+
+void FuzzyPid::set_base_gains(const PidGains& gains) noexcept {
+  if (std::isfinite(gains.kp) && std::isfinite(gains.ki) && std::isfinite(gains.kd))
+    config_.base.gains = gains;
+}
+
+void FuzzyPid::set_correction_weights(const PidGains& weights) noexcept {
+  if (std::isfinite(weights.kp) && std::isfinite(weights.ki) && std::isfinite(weights.kd))
+    config_.correction_weights = weights;
 }
 
 void FuzzyPid::enable(double current_output, double setpoint, double measurement) noexcept {

@@ -8,8 +8,11 @@
 // Membership: seven triangles NB..PB centred at -6 -4 -2 0 2 4 6, half-width 2; NB and PB are
 // shoulders (membership 1 beyond -6 / 6). Inference: Mamdani, rule strength = min(mu_e, mu_ec)
 // over the 49 rules of fuzzy_rules.hpp.
-// Defuzzification (dK = sum mu(z) z / sum mu(z) over the output domain), two documented ways:
-//  - kSampledCentroid (default): the output terms are clipped at their rule strength, merged
+// Defuzzification (dK = sum mu(z) z / sum mu(z) over the output domain), three documented ways:
+//  - kExactCentroid (default): the same clipped-and-merged output set as kSampledCentroid, its
+//    centroid integrated exactly (the set is piecewise linear, so each piece integrates in
+//    closed form). The limit of kSampledCentroid as output_step -> 0, and ~100x cheaper.
+//  - kSampledCentroid: the output terms are clipped at their rule strength, merged
 //    by max, and the centroid is taken over the output domain [-6, 6] sampled every
 //    output_step (0.01 by default; the output triangles NB/PB are the halves inside [-6, 6]).
 //    Full-membership PB alone therefore gives 16/3 = 5.33, not 6.
@@ -18,10 +21,14 @@
 // Gains: Kp = Kp' + dKp Cp, Ki = Ki' + dKi Ci, Kd = Kd' + dKd Cd, floored at 0.
 // The inference is precomputed at configure time into a query table on a grid of quantised
 // (e, ec) with table_steps_per_unit points per unit; update() interpolates bilinearly, so the
-// per-cycle cost is a few multiplies and no allocation.
+// per-cycle cost is a few multiplies and no allocation. The table depends only on the rules
+// and the inference settings, never on the base gains or the correction weights, so one table
+// per (inference, resolution) is built per process and shared by every FuzzyPid
+// (shared_fuzzy_gain_table); gains and weights can change between cycles without a rebuild.
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "control/fuzzy_rules.hpp"
@@ -29,7 +36,7 @@
 
 namespace weedspray::control {
 
-enum class FuzzyDefuzzification { kSampledCentroid, kTermCentres };
+enum class FuzzyDefuzzification { kExactCentroid, kSampledCentroid, kTermCentres };
 
 // dKp, dKi, dKd on the quantised domain [-6, 6].
 struct FuzzyGainCorrection {
@@ -45,7 +52,7 @@ double fuzzy_input_membership(FuzzyTerm term, double x) noexcept;
 double fuzzy_quantise(double value, double range) noexcept;
 
 struct FuzzyInferenceConfig {
-  FuzzyDefuzzification defuzzification = FuzzyDefuzzification::kSampledCentroid;
+  FuzzyDefuzzification defuzzification = FuzzyDefuzzification::kExactCentroid;
   double output_step = 0.01;  // sampling step of the output domain (kSampledCentroid)
 };
 
@@ -67,12 +74,19 @@ class FuzzyGainTable {
   // Bilinear interpolation; inputs clamped to [-6, 6]. Allocation-free.
   FuzzyGainCorrection lookup(double qe, double qec) const noexcept;
   int steps_per_unit() const noexcept { return steps_per_unit_; }
+  const FuzzyInferenceConfig& inference() const noexcept { return inference_; }
 
  private:
+  FuzzyInferenceConfig inference_;
   int steps_per_unit_;
   std::size_t side_;                       // grid points per axis
   std::vector<FuzzyGainCorrection> grid_;  // row-major [e][ec]
 };
+
+// The process-wide table for these settings, built on first use (thread-safe; start-up only,
+// it may allocate) and shared afterwards. Throws like the FuzzyGainTable constructor.
+std::shared_ptr<const FuzzyGainTable> shared_fuzzy_gain_table(const FuzzyInferenceConfig& config,
+                                                              int steps_per_unit);
 
 struct FuzzyPidConfig {
   PidConfig base{};               // base gains Kp', Ki', Kd', output range, anti-windup
@@ -96,8 +110,10 @@ class FuzzyPid {
   bool enabled() const noexcept { return pid_.enabled(); }
   void reset() noexcept;
 
-  // Base gains may change between cycles.
-  void set_base_gains(const PidGains& gains) noexcept { config_.base.gains = gains; }
+  // Base gains and correction weights may change between cycles (the table does not depend
+  // on them). Non-finite values are ignored.
+  void set_base_gains(const PidGains& gains) noexcept;
+  void set_correction_weights(const PidGains& weights) noexcept;
   const FuzzyPidConfig& config() const noexcept { return config_; }
 
   double output() const noexcept { return pid_.output(); }
@@ -107,7 +123,7 @@ class FuzzyPid {
 
  private:
   FuzzyPidConfig config_;
-  FuzzyGainTable table_;
+  std::shared_ptr<const FuzzyGainTable> table_;
   Pid pid_;
   bool has_previous_ = false;
   double previous_measurement_ = 0.0;

@@ -44,6 +44,8 @@ void validate(const NozzleLine& line) {
   require(std::isfinite(line.intercept_l_per_min), "nozzle line: intercept must be finite");
   require(positive(line.calibration_pressure_mpa),
           "nozzle line: calibration_pressure_mpa must be > 0");
+  require(std::isfinite(line.full_open_flow_l_per_min) && line.full_open_flow_l_per_min >= 0.0,
+          "nozzle line: full_open_flow_l_per_min must be >= 0 (0 = unknown)");
 }
 
 double nominal_dose_l_per_m2(const SprayLawConfig& c) noexcept {
@@ -62,8 +64,15 @@ double target_flow_l_per_min(const SprayLawConfig& c, double density,
 
 double raw_duty_for_flow_pct(const NozzleLine& line, double flow_l_per_min,
                              double pressure_mpa) noexcept {
-  const double flow_at_calibration =
-      flow_l_per_min / pressure_scale(pressure_mpa, line.calibration_pressure_mpa);
+  const double scale = pressure_scale(pressure_mpa, line.calibration_pressure_mpa);
+  const double flow_at_calibration = flow_l_per_min / scale;
+  // Full-open rule against the lower of the calibrated and the pressure-scaled full-open flow:
+  // below the calibration pressure the valve cannot give more anyway, and above it pressure
+  // noise around the set-point must not flip a valve asked for its full flow into switching.
+  if (line.full_open_flow_l_per_min > 0.0 &&
+      flow_l_per_min >= line.full_open_flow_l_per_min * std::min(1.0, scale) * (1.0 - 1e-9)) {
+    return 100.0;
+  }
   return (flow_at_calibration - line.intercept_l_per_min) / line.slope_l_per_min_per_pct;
 }
 
@@ -71,6 +80,16 @@ double clamp_duty_pct(const SprayLawConfig& c, double raw_duty_pct) noexcept {
   if (!std::isfinite(raw_duty_pct) || raw_duty_pct < c.min_duty_pct) return 0.0;
   if (raw_duty_pct > c.max_duty_pct) return 100.0;
   return raw_duty_pct;
+}
+
+double clamp_duty_for_flow_pct(const SprayLawConfig& c, double raw_duty_pct,
+                               double target_flow_l_per_min) noexcept {
+  if (!(target_flow_l_per_min > 0.0) || !std::isfinite(target_flow_l_per_min)) return 0.0;
+  if (c.low_duty_policy == LowDutyPolicy::kRaiseToMin &&
+      !(std::isfinite(raw_duty_pct) && raw_duty_pct >= c.min_duty_pct)) {
+    return c.min_duty_pct;
+  }
+  return clamp_duty_pct(c, raw_duty_pct);
 }
 
 double flow_for_duty_l_per_min(const NozzleLine& line, double duty_pct,
@@ -86,7 +105,8 @@ SprayDecision spray_decision(const SprayLawConfig& c, const NozzleLine& line, do
   decision.target_flow_l_per_min = target_flow_l_per_min(c, density, speed_m_per_s);
   if (decision.target_flow_l_per_min <= 0.0) return decision;
   decision.raw_duty_pct = raw_duty_for_flow_pct(line, decision.target_flow_l_per_min, pressure_mpa);
-  decision.duty_pct = clamp_duty_pct(c, decision.raw_duty_pct);
+  decision.duty_pct =
+      clamp_duty_for_flow_pct(c, decision.raw_duty_pct, decision.target_flow_l_per_min);
   return decision;
 }
 

@@ -84,14 +84,17 @@ const std::vector<KeySpec<Config>>& config_keys() {
     {WS_KEY(boom, valve_close_delay_s), 0.02, 0, 0.5, "s",
      "valve closing delay"},
     // [vision]
-    {WS_KEY(vision, index), std::string("exg_norm"), 0, 0, "",
-     "vegetation index: normalised excess green (exg_norm) and alternatives; mono for GREY",
-     {"exg_norm", "exg_raw", "exg_exr", "cive", "max_value", "weighted", "mono", "exg_chroma"}},
-    {WS_KEY(vision, threshold), std::string("fit"), 0, 0, "",
-     "automatic threshold method, or fixed",
-     {"fit", "otsu", "kmeans", "hbt", "pso", "ipso", "fixed"}},
-    {WS_KEY(vision, fixed_threshold), 100, 0, 255, "level",
-     "threshold on the 8-bit index scale when threshold = \"fixed\""},
+    {WS_KEY(vision, index), std::string("default"), 0, 0, "",
+     "vegetation index; \"default\" = the vision library's measured best (weedspray-lab "
+     "vision-eval); mono for GREY cameras",
+     {"default", "exg_norm", "exg_raw", "exg_exr", "cive", "max_value", "weighted", "mono",
+      "exg_chroma"}},
+    {WS_KEY(vision, threshold), std::string("default"), 0, 0, "",
+     "automatic threshold method, or fixed; \"default\" = the vision library's choice",
+     {"default", "fit", "otsu", "kmeans", "hbt", "pso", "ipso", "fixed"}},
+    {WS_KEY(vision, fixed_threshold), -1, -1, 255, "level",
+     "level on the 8-bit index scale for threshold = \"fixed\" and for frames whose histogram "
+     "is not bimodal; -1 = the library's level for the index"},
     {WS_KEY(vision, grid_rows), 1, 1, 4, "",
      "zone rows along travel per frame (columns = the camera's nozzles)"},
     // [spray]

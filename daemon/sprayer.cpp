@@ -57,9 +57,12 @@ control::FuzzyPidConfig controller_config(const Config& config) {
 
 vision::PipelineConfig pipeline_config(const Config& config, int cols) {
   vision::PipelineConfig c = vision::default_pipeline_config();
+  // "default" keeps the library's measured choice; other names are validated by the config.
   if (auto index = vision::parse_vegetation_index(config.vision.index)) c.index = *index;
   if (auto method = vision::parse_threshold_method(config.vision.threshold)) c.threshold = *method;
-  c.threshold_params.fixed_threshold = config.vision.fixed_threshold;
+  if (config.vision.fixed_threshold >= 0) {
+    c.threshold_params.fixed_threshold = config.vision.fixed_threshold;
+  }
   c.rows = config.vision.grid_rows;
   c.cols = cols;
   return c;

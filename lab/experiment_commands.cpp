@@ -353,25 +353,38 @@ int run_savings_command(const ExperimentOptions& o) {
   ex::SavingsOptions options;
   options.seed = o.seed;
   const ex::SavingsResult r = ex::run_savings(zones, options);
+  const ex::SavingsRun& clamp = r.spec_clamp;
   if (o.json) {
+    // Headline = equal coverage (every zone above the decision threshold sprayed at least at
+    // the minimum duty); spec_clamp_* = the SPEC clamp (< 20 % duty -> closed).
     std::printf(
         "{\"savings_pct\": %.3f, \"under_dosed_zones\": %d, \"unsprayed_weedy_zones\": "
         "%d, \"zones\": %d, \"variable_l\": %.4f, \"uniform_l\": %.4f, "
-        "\"nozzle_savings_pct\": [%.2f, %.2f, %.2f, %.2f]}\n",
+        "\"nozzle_savings_pct\": [%.2f, %.2f, %.2f, %.2f], \"policy\": \"equal_coverage\", "
+        "\"spec_clamp_savings_pct\": %.3f, \"spec_clamp_under_dosed_zones\": %d, "
+        "\"spec_clamp_unsprayed_weedy_zones\": %d, \"spec_clamp_variable_l\": %.4f, "
+        "\"scheduler\": \"NozzleScheduler\"}\n",
         r.savings_pct, r.under_dosed_zones, r.unsprayed_weedy_zones, r.zones, r.variable_l,
         r.uniform_l, r.nozzle_savings_pct[0], r.nozzle_savings_pct[1], r.nozzle_savings_pct[2],
-        r.nozzle_savings_pct[3]);
+        r.nozzle_savings_pct[3], clamp.savings_pct, clamp.under_dosed_zones,
+        clamp.unsprayed_weedy_zones, clamp.variable_l);
   } else {
     std::printf("field: %zu zones of %.1f m x 4 nozzles from %s (vision pipeline, 2x4 grid)\n",
                 zones.size(), options.zone_length_m, dir.c_str());
-    std::printf("uniform %.3f L  variable %.3f L  savings %.1f %% (paper: 46.3 %%)\n", r.uniform_l,
-                r.variable_l, r.savings_pct);
-    std::printf("per nozzle savings %.1f %.1f %.1f %.1f %%\n", r.nozzle_savings_pct[0],
-                r.nozzle_savings_pct[1], r.nozzle_savings_pct[2], r.nozzle_savings_pct[3]);
+    std::printf("decisions pinned to ground intervals by the NozzleScheduler (1.2 m boom)\n");
+    std::printf("uniform %.3f L\n", r.uniform_l);
     std::printf(
-        "under-dosed nozzle-zones (< %.0f %% of the law's volume): %d of %d; weedy zones "
-        "left dry by the 20 %% minimum duty: %d\n",
-        options.under_dose_fraction * 100.0, r.under_dosed_zones, r.zones, r.unsprayed_weedy_zones);
+        "equal coverage (weedy zones >= min duty): variable %.3f L  savings %.1f %%  "
+        "under-dosed %d of %d  weedy zones left dry %d\n",
+        r.variable_l, r.savings_pct, r.under_dosed_zones, r.zones, r.unsprayed_weedy_zones);
+    std::printf(
+        "SPEC clamp (< 20 %% duty closed):         variable %.3f L  savings %.1f %%  "
+        "under-dosed %d of %d  weedy zones left dry %d\n",
+        clamp.variable_l, clamp.savings_pct, clamp.under_dosed_zones, r.zones,
+        clamp.unsprayed_weedy_zones);
+    std::printf("per nozzle savings (equal coverage) %.1f %.1f %.1f %.1f %% (paper: 46.3 %%)\n",
+                r.nozzle_savings_pct[0], r.nozzle_savings_pct[1], r.nozzle_savings_pct[2],
+                r.nozzle_savings_pct[3]);
   }
   if (!o.plot.empty()) {
     PlotSpec spec{"Liquid per zone along the track", "distance [m]", "volume per zone [L]", {}};

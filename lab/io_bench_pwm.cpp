@@ -101,15 +101,23 @@ int run_bench_pwm(const BenchPwmOptions& options) {
       options.normal_priority ? io::ThreadRole::kCamera : io::ThreadRole::kValvePwm,
       [&driver](std::stop_token stop) { driver.run(stop); });
 
-  // Refresh the command (the dead-man) every 100 ms, as the control loop would.
+  // Refresh the command (the dead-man) every 100 ms from a thread with the control loop's
+  // priority, as the daemon does: a starved refresher would expire the commands.
   const nanoseconds end = clock.now() + std::chrono::duration_cast<nanoseconds>(
                                             std::chrono::duration<double>(options.seconds));
-  for (nanoseconds t = clock.now(); t < end; t += std::chrono::milliseconds(100)) {
-    clock.sleep_until(t);
-    command.issued_at = clock.now();
-    driver.command(command);
-  }
+  io::RealtimeThread refresher(
+      options.normal_priority ? io::ThreadRole::kCamera : io::ThreadRole::kControl,
+      [&](std::stop_token stop) {
+        io::PeriodicLoop loop(clock, std::chrono::milliseconds(100), clock.now());
+        while (!stop.stop_requested() && clock.now() < end) {
+          loop.wait_next();
+          io::ValveCommand refreshed = command;
+          refreshed.issued_at = clock.now();
+          driver.command(refreshed);
+        }
+      });
   clock.sleep_until(end);
+  refresher.stop_and_join();
   pwm_thread.stop_and_join();
   loading = false;
   load.clear();

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -82,21 +83,33 @@ cv::Mat bench_frame(const std::string& image_path, std::string& source) {
 struct Timing {
   double median_ms = 0;
   double p99_ms = 0;
+  double cpu_median_ms = 0;  // thread CPU time: what the frame costs without preemption
 };
+
+double thread_cpu_ms() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return now.tv_sec * 1e3 + now.tv_nsec / 1e6;
+}
 
 template <typename Function>
 Timing time_frames(int warmup, int frames, Function&& function) {
   for (int i = 0; i < warmup; ++i) function();
   std::vector<double> milliseconds(frames);
+  std::vector<double> cpu_milliseconds(frames);
   for (int i = 0; i < frames; ++i) {
+    const double cpu_start = thread_cpu_ms();
     const auto start = std::chrono::steady_clock::now();
     function();
     const auto stop = std::chrono::steady_clock::now();
+    cpu_milliseconds[i] = thread_cpu_ms() - cpu_start;
     milliseconds[i] = std::chrono::duration<double, std::milli>(stop - start).count();
   }
   std::sort(milliseconds.begin(), milliseconds.end());
+  std::sort(cpu_milliseconds.begin(), cpu_milliseconds.end());
   return {milliseconds[milliseconds.size() / 2],
-          milliseconds[std::min(milliseconds.size() - 1, milliseconds.size() * 99 / 100)]};
+          milliseconds[std::min(milliseconds.size() - 1, milliseconds.size() * 99 / 100)],
+          cpu_milliseconds[cpu_milliseconds.size() / 2]};
 }
 
 // The same pipeline from OpenCV primitives: CIVE by cv::transform (same fixed-point

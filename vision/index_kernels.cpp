@@ -12,6 +12,24 @@
 namespace weedspray::vision {
 namespace {
 
+// floor(n / (2 s)) for n < 2^17 and 1 <= s <= 765 by one multiply with a reciprocal table
+// (notes/toolchain.md: normalised ExG is 255 G / (R + G + B)). Exact: with m = 2^32 / d
+// rounded up, the error n (m - 2^32 / d) / 2^32 < 2^-15 stays below the 1 / d >= 2^-11 gap
+// to the next integer (also checked exhaustively in the unit tests).
+struct ReciprocalTable {
+  std::array<std::uint64_t, 766> multiplier{};
+  constexpr ReciprocalTable() {
+    for (std::uint64_t s = 1; s < multiplier.size(); ++s) {
+      multiplier[s] = (std::uint64_t{1} << 32) / (2 * s) + 1;
+    }
+  }
+};
+constexpr ReciprocalTable kReciprocals;
+
+inline std::uint32_t divide_by_twice(std::uint32_t n, int s) {
+  return static_cast<std::uint32_t>((n * kReciprocals.multiplier[s]) >> 32);
+}
+
 // One pixel's index given R, G, B; the reference semantics of vegetation_index_of, with the
 // expensive ones on integer arithmetic.
 template <VegetationIndex kIndex>
@@ -22,7 +40,7 @@ inline std::uint8_t pixel_index(int r, int g, int b) {
     if (kIndex == VegetationIndex::kExgChroma ? sum < 3 * kDarkLevel : sum == 0) {
       return kExgZeroLevel;
     }
-    return static_cast<std::uint8_t>((510 * g + sum) / (2 * sum));
+    return static_cast<std::uint8_t>(divide_by_twice(510 * g + sum, sum));
   } else if constexpr (kIndex == VegetationIndex::kExgRaw) {
     return static_cast<std::uint8_t>((2 * g - r - b + 512) >> 2);
   } else if constexpr (kIndex == VegetationIndex::kExgMinusExr) {

@@ -47,7 +47,7 @@ struct ThresholdParams {
   // sensor noise (a few levels) is never two classes, however clean.
   double min_class_share = 0.001;
   double min_separability = 0.65;
-  double min_mean_gap = 10.0;
+  double min_mean_gap = 5.0;
   // Level on the index scale used by kFixed and as the answer for unimodal/degenerate frames.
   // kIndexDefault: the Pipeline puts the index's own level (default_fixed_threshold);
   // compute_threshold itself needs a level in [0, 255].

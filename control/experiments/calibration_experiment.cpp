@@ -2,6 +2,9 @@
 // test, and each nozzle's line q = A s + b from runs of that nozzle alone measured with the
 // ONE line flow meter (the way a user does it on the real boom).
 #include <cmath>
+#include <deque>
+#include <mutex>
+#include <utility>
 #include <vector>
 
 #include "control/experiments/experiments.hpp"
@@ -88,6 +91,22 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
     result.nozzles.push_back(cal);
   }
   return result;
+}
+
+const CalibrationResult& cached_calibration(const CalibrationOptions& options) {
+  auto same = [](const CalibrationOptions& a, const CalibrationOptions& b) {
+    return a.seed == b.seed && a.pressure_mpa == b.pressure_mpa &&
+           a.frequency_hz == b.frequency_hz && a.catch_test_s == b.catch_test_s &&
+           a.duties_pct == b.duties_pct && a.settle_s == b.settle_s && a.measure_s == b.measure_s;
+  };
+  static std::mutex mutex;
+  // deque: references handed out stay valid as entries are added.
+  static std::deque<std::pair<CalibrationOptions, CalibrationResult>> cache;
+  const std::lock_guard lock(mutex);
+  for (const auto& [key, result] : cache)
+    if (same(key, options)) return result;
+  cache.emplace_back(options, run_calibration(options));
+  return cache.back().second;
 }
 
 std::vector<double> calibrated_full_flows(const CalibrationResult& calibration) {

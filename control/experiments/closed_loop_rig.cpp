@@ -75,6 +75,7 @@ void ClosedLoopRig::set_full_open_flows(std::span<const double> flow_l_per_min) 
 
 void ClosedLoopRig::request_flows(std::span<const double> flow_l_per_min) {
   requested_flows_.fill(0.0);
+  promised_flows_.fill(0.0);
   const std::size_t n = std::min(flow_l_per_min.size(), requested_flows_.size());
   std::copy_n(flow_l_per_min.begin(), n, requested_flows_.begin());
   flows_requested_ = true;
@@ -91,15 +92,29 @@ void ClosedLoopRig::command_duties(std::span<const double> duty_pct) {
 
 void ClosedLoopRig::apply_flow_requests() {
   const int n = plant_.nozzle_count();
+  const double pressure = config_.fixes.pressure_compensation ? filtered_pressure_mpa_ : 0.0;
   for (int i = 0; i < n; ++i) {
     const auto k = static_cast<std::size_t>(i);
-    const double pressure = config_.fixes.pressure_compensation ? filtered_pressure_mpa_ : 0.0;
-    double duty = raw_duty_for_flow_pct(lines_[k], requested_flows_[k], pressure);
-    if (requested_flows_[k] <= 0.0) duty = 0.0;
-    const bool full_open =
-        full_open_flows_[k] > 0.0 && requested_flows_[k] >= full_open_flows_[k] * (1.0 - 1e-9);
-    if (full_open) duty = 100.0;
-    if (config_.duty_clamp) duty = clamp_duty_pct(*config_.duty_clamp, duty);
+    // The spray-rate law owns the full-open rule (spray_rate_law.hpp); the rig only hands it
+    // the calibrated full-open flow.
+    NozzleLine line = lines_[k];
+    if (full_open_flows_[k] > 0.0) line.full_open_flow_l_per_min = full_open_flows_[k];
+    const double flow = requested_flows_[k];
+    double duty = flow > 0.0 ? raw_duty_for_flow_pct(line, flow, pressure) : 0.0;
+    if (config_.duty_clamp) duty = clamp_duty_for_flow_pct(*config_.duty_clamp, duty, flow);
+    // What the law promises for the duty it chose (the trim's reference): a clamp that raised
+    // or lowered the duty changed the promise too.
+    if (duty <= 0.0) {
+      promised_flows_[k] = 0.0;
+    } else if (duty >= 100.0) {
+      promised_flows_[k] =
+          line.full_open_flow_l_per_min > 0.0 && pressure > 0.0
+              ? line.full_open_flow_l_per_min * std::sqrt(pressure / line.calibration_pressure_mpa)
+          : line.full_open_flow_l_per_min > 0.0 ? line.full_open_flow_l_per_min
+                                                : flow;
+    } else {
+      promised_flows_[k] = flow_for_duty_l_per_min(line, duty, pressure);
+    }
     if (config_.fixes.flow_feedback && duty > 0.0 && duty < 100.0) duty *= trim_.correction();
     duties_[k] = std::clamp(duty, 0.0, 100.0);
   }
@@ -121,6 +136,7 @@ void ClosedLoopRig::start() {
   next_record_s_ = now;
   next_trim_s_ = now + config_.flow_trim_window_s;
   trim_pulses_ = plant_.flow_meter_pulses();
+  trim_pressure_error_ = 0.0;
 }
 
 double ClosedLoopRig::read_pressure_mpa() const {
@@ -145,26 +161,28 @@ void ClosedLoopRig::control_tick() {
   const double u = controller_.update(config_.setpoint_mpa, measured_pressure_mpa_, dt);
   plant_.set_return_valve_volts(10.0 * (1.0 - u));
 
-  // The meter reading only means something while the pressure is at its set-point: a window
-  // that saw the start-up (or any excursion beyond 5 %) is discarded, else the trim winds up
-  // during start-up and, diluted by the nozzles held fully open, takes minutes to unwind.
-  if (std::abs(filtered_pressure_mpa_ - config_.setpoint_mpa) > 0.05 * config_.setpoint_mpa)
-    trim_window_valid_ = false;
+  // FlowTrim decides itself whether a window is usable (pressure off set-point, too little
+  // trimmable flow); the rig only measures.
+  trim_pressure_error_ =
+      std::max(trim_pressure_error_,
+               std::abs(filtered_pressure_mpa_ - config_.setpoint_mpa) / config_.setpoint_mpa);
   if (config_.fixes.flow_feedback && flows_requested_ && plant_.time_s() >= next_trim_s_ - 1e-9) {
     const std::uint64_t pulses = plant_.flow_meter_pulses();
     const double window = config_.flow_trim_window_s;
-    const double measured =
+    FlowTrimInput input;
+    input.measured_total_l_per_min =
         static_cast<double>(pulses - trim_pulses_) / config_.meter_pulses_per_l / window * 60.0;
-    double requested = 0.0;
-    double open_fraction = 0.0;
     for (int i = 0; i < plant_.nozzle_count(); ++i) {
       const auto k = static_cast<std::size_t>(i);
       // The trim compares against what the lines promise for the duties actually latched.
-      if (duties_[k] > 0.0) requested += requested_flows_[k];
-      open_fraction += duties_[k] / 100.0 / plant_.nozzle_count();
+      if (duties_[k] > 0.0) input.requested_total_l_per_min += promised_flows_[k];
+      if (duties_[k] > 0.0 && duties_[k] < 100.0) input.trimmable_l_per_min += promised_flows_[k];
+      input.open_fraction += duties_[k] / 100.0 / plant_.nozzle_count();
     }
-    if (trim_window_valid_) trim_.update(requested, measured, open_fraction, window);
-    trim_window_valid_ = true;
+    input.pressure_error_fraction = trim_pressure_error_;
+    input.dt_s = window;
+    trim_.update(input);
+    trim_pressure_error_ = 0.0;
     trim_pulses_ = pulses;
     next_trim_s_ += window;
   }

@@ -80,8 +80,9 @@ class ClosedLoopRig {
 
   // Nozzle lines used when the fixes are on (calibrate first; see calibration_experiment).
   void set_nozzle_lines(std::span<const NozzleLine> lines);
-  // Calibrated flow with the valve held open [L/min]; a request at or above it opens the valve
-  // fully (the line q = A s + b does not hold up there). Unset: no such rule.
+  // Calibrated flow with the valve held open [L/min], passed to the spray-rate law as the
+  // lines' full_open_flow_l_per_min (a request at or above it opens the valve fully; see
+  // spray_rate_law.hpp). Overrides the lines' own value where > 0.
   void set_full_open_flows(std::span<const double> flow_l_per_min);
   // Ask for a flow per nozzle [L/min]; converted to duties via the calibrated lines.
   void request_flows(std::span<const double> flow_l_per_min);
@@ -117,6 +118,7 @@ class ClosedLoopRig {
   std::array<NozzleLine, plant::kMaxNozzles> lines_{};
   std::array<double, plant::kMaxNozzles> requested_flows_{};
   std::array<double, plant::kMaxNozzles> full_open_flows_{};
+  std::array<double, plant::kMaxNozzles> promised_flows_{};  // law's flow for the chosen duty
   std::array<double, plant::kMaxNozzles> duties_{};
   bool flows_requested_ = false;
   bool started_ = false;
@@ -129,7 +131,7 @@ class ClosedLoopRig {
   double measured_pressure_mpa_ = 0.0;
   double filtered_pressure_mpa_ = 0.0;
   std::uint64_t trim_pulses_ = 0;
-  bool trim_window_valid_ = false;
+  double trim_pressure_error_ = 0.0;  // worst |P - P_set| / P_set of the current trim window
   std::vector<TraceSample> trace_;
 };
 

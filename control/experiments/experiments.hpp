@@ -11,6 +11,7 @@
 
 #include "control/experiments/closed_loop_rig.hpp"
 #include "control/experiments/metrics.hpp"
+#include "control/spray_rate_law.hpp"
 
 namespace weedspray::control::experiments {
 
@@ -185,7 +186,17 @@ struct DoseOptions {
 DoseResult run_dose(const DoseOptions& options);
 
 // ---------- savings: variable vs uniform spraying over a field of zone densities ----------
-// zone_densities[z][n]: weed density of zone z (along travel) under nozzle n.
+// zone_densities[z][n]: weed density of zone z (along travel) under nozzle n. The field is laid
+// out as the bundled images are: each frame images two zone rows (near, then far) of
+// zone_length_m each, 1-3 m ahead of the camera (UGV paper geometry: camera 1 m high, nozzles
+// 1.2 m behind its nadir). The variable run goes through the real NozzleScheduler: every
+// frame's densities are pinned to the ground interval it imaged when the odometer reaches the
+// frame, and each nozzle is driven by the law from the density the scheduler gives for the
+// ground under it (with the valve-delay lead), as the daemon does.
+// Run twice: with the SPEC clamp (LowDutyPolicy::kClose: weedy zones whose duty falls below
+// min_duty stay dry) and at equal coverage (kRaiseToMin: every zone above the decision
+// threshold gets at least the minimum effective dose). Only the latter sprays every weed the
+// uniform run sprays, so it is the honest savings figure.
 struct SavingsOptions {
   std::uint64_t seed = 1;
   double pressure_mpa = 0.4;
@@ -197,20 +208,42 @@ struct SavingsOptions {
   // A zone is under-dosed when it received less than this fraction of its target volume.
   double under_dose_fraction = 0.9;
 };
-struct SavingsResult {
-  double variable_l = 0.0;  // TRUE volumes
-  double uniform_l = 0.0;
+struct SavingsRun {
+  LowDutyPolicy policy = LowDutyPolicy::kClose;
+  double variable_l = 0.0;  // TRUE volume
   double savings_pct = 0.0;
-  int zones = 0;  // nozzle-zones (zones along travel x nozzles)
   // Nozzle-zones that got less than under_dose_fraction of what the law decided for them.
   int under_dosed_zones = 0;
-  // Nozzle-zones with weeds that the law's minimum-duty clamp left unsprayed (by design).
+  // Nozzle-zones above the decision threshold that the law decided not to spray.
   int unsprayed_weedy_zones = 0;
   std::vector<double> zone_target_l;     // per zone (all nozzles)
-  std::vector<double> zone_delivered_l;  // per zone (all nozzles), variable run
+  std::vector<double> zone_delivered_l;  // per zone (all nozzles)
+  std::array<double, 4> nozzle_delivered_l{};
+  std::array<double, 4> nozzle_savings_pct{};  // set by run_savings (needs the uniform run)
+};
+struct SavingsResult {
+  // Headline figures: the equal-coverage run (copied from equal_coverage).
+  double variable_l = 0.0;
+  double uniform_l = 0.0;  // TRUE volume of uniform spraying at q_nom over the same track
+  double savings_pct = 0.0;
+  int zones = 0;  // nozzle-zones (zones along travel x nozzles)
+  int under_dosed_zones = 0;
+  int unsprayed_weedy_zones = 0;
+  std::vector<double> zone_target_l;
+  std::vector<double> zone_delivered_l;
   std::array<double, 4> nozzle_savings_pct{};
+  SavingsRun equal_coverage;  // LowDutyPolicy::kRaiseToMin
+  SavingsRun spec_clamp;      // LowDutyPolicy::kClose
 };
 SavingsResult run_savings(const std::vector<std::array<double, 4>>& zone_densities,
                           const SavingsOptions& options);
+// One variable-rate run with the given low-duty policy (uniform_l for the savings figure).
+SavingsRun run_savings_variable(const std::vector<std::array<double, 4>>& zone_densities,
+                                const SavingsOptions& options, LowDutyPolicy policy,
+                                double uniform_l);
+
+// Calibration runs are deterministic for given options, so the spray experiments share one
+// per process (several tests of one binary, or both savings runs, calibrate once).
+const CalibrationResult& cached_calibration(const CalibrationOptions& options);
 
 }  // namespace weedspray::control::experiments

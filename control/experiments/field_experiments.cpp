@@ -4,9 +4,11 @@
 // wheat paper's operating point (0.4 MPa, 5 Hz).
 #include <algorithm>
 #include <cmath>
+#include <span>
 #include <vector>
 
 #include "control/experiments/experiments.hpp"
+#include "control/nozzle_scheduler.hpp"
 
 namespace weedspray::control::experiments {
 namespace {
@@ -23,7 +25,7 @@ CalibratedMachine calibrate(std::uint64_t seed, double pressure_mpa, double freq
   cal_options.seed = seed;
   cal_options.pressure_mpa = pressure_mpa;
   cal_options.frequency_hz = frequency_hz;
-  const CalibrationResult cal = run_calibration(cal_options);
+  const CalibrationResult& cal = cached_calibration(cal_options);
   CalibratedMachine m;
   m.config.seed = seed;
   m.config.setpoint_mpa = pressure_mpa;
@@ -75,11 +77,144 @@ DoseResult run_dose(const DoseOptions& options) {
   return result;
 }
 
+namespace {
+
+// UGV paper geometry: camera 1 m above the ground imaging 1-3 m ahead of its nadir, nozzles
+// 1.2 m behind the nadir, two zone rows per frame.
+NozzleSchedulerConfig savings_scheduler_config(const SavingsOptions& options,
+                                               const plant::PlantParams& plant) {
+  NozzleSchedulerConfig c;
+  const double near = 1.0, far = 1.0 + 2.0 * options.zone_length_m;
+  const double height = 1.0;
+  const double lo = std::atan(near / height), hi = std::atan(far / height);
+  c.geometry.mount_height_m = height;
+  c.geometry.tilt_from_vertical_rad = 0.5 * (lo + hi);
+  c.geometry.vertical_fov_rad = hi - lo;
+  c.geometry.camera_to_nozzle_m = 1.2;
+  c.nozzles = 4;
+  c.rows = 2;
+  // Lead by the nominal dead time plus half the travel (the valve is half open then).
+  c.opening_delay_s = plant.nozzle.open_delay_s + 0.5 * plant.nozzle.open_travel_s;
+  c.closing_delay_s = plant.nozzle.close_delay_s + 0.5 * plant.nozzle.close_travel_s;
+  c.plan_capacity = 16;
+  return c;
+}
+
+constexpr double kStartUpS = 3.0;  // pressure start-up before the track begins
+
+// Where the track's first zone starts on the ground [m of odometer]: far enough ahead that the
+// first frame is taken after the start-up.
+double track_start_m(const SavingsOptions& o) {
+  return o.speed_m_per_s * kStartUpS + 1.0;
+}
+
+}  // namespace
+
+SavingsRun run_savings_variable(const std::vector<std::array<double, 4>>& zone_densities,
+                                const SavingsOptions& options, LowDutyPolicy policy,
+                                double uniform_l) {
+  SprayLawConfig law;
+  law.max_density = options.max_density;
+  law.decision_threshold = options.decision_threshold;
+  law.low_duty_policy = policy;
+  const CalibratedMachine m =
+      calibrate(options.seed, options.pressure_mpa, options.frequency_hz, law);
+  const std::size_t nozzles = std::min<std::size_t>(4, m.full_flows.size());
+  const std::size_t zones = zone_densities.size();
+  const double length = options.zone_length_m;
+  const double v = options.speed_m_per_s;
+  SavingsRun run;
+  run.policy = policy;
+
+  // What the law decides for each nozzle-zone, as volume while the zone passes the nozzle.
+  std::vector<std::array<double, 4>> target_l(zones);
+  for (std::size_t z = 0; z < zones; ++z) {
+    double zone_total = 0.0;
+    for (std::size_t i = 0; i < nozzles; ++i) {
+      NozzleLine line = m.lines[i];
+      line.full_open_flow_l_per_min = m.full_flows[i];
+      const double density = zone_densities[z][i];
+      const SprayDecision d = spray_decision(law, line, density, v, options.pressure_mpa);
+      const double flow = d.duty_pct <= 0.0 ? 0.0
+                          : d.duty_pct >= 100.0
+                              ? m.full_flows[i]
+                              : flow_for_duty_l_per_min(line, d.duty_pct, options.pressure_mpa);
+      if (d.target_flow_l_per_min > 0.0 && flow <= 0.0) ++run.unsprayed_weedy_zones;
+      target_l[z][i] = flow * length / v / 60.0;
+      zone_total += target_l[z][i];
+    }
+    run.zone_target_l.push_back(zone_total);
+  }
+
+  // Drive: frames pinned by the scheduler as the odometer reaches them; every control period
+  // the law runs on the density the scheduler gives for the ground under each nozzle.
+  NozzleScheduler scheduler(savings_scheduler_config(options, m.config.plant));
+  const double c2n = scheduler.config().geometry.camera_to_nozzle_m;
+  const double start = track_start_m(options);
+  const GroundInterval footprint = ground_footprint(scheduler.config().geometry);
+  const std::size_t frames = (zones + 1) / 2;
+  // Frame f images zones 2f (near row) and 2f+1 (far row).
+  auto frame_odometer = [&](std::size_t f) {
+    return start + 2.0 * length * static_cast<double>(f) - footprint.near_m;
+  };
+  ClosedLoopRig rig = make_rig(m);
+  rig.request_flows(std::vector<double>(nozzles, 0.0));
+  rig.start();
+  std::size_t next_frame = 0;
+  std::size_t next_boundary = 0;  // zone boundary the nozzles pass next (0 = track start)
+  std::array<double, 4> at_boundary{};
+  std::vector<double> flows(nozzles);
+  const double dt = m.config.control_period_s;
+  const double end_m = start + length * static_cast<double>(zones);
+  while (true) {
+    const double odometer = rig.plant().distance_m();
+    while (next_frame < frames && odometer >= frame_odometer(next_frame) - 1e-9) {
+      const std::size_t near_zone = 2 * next_frame;
+      std::array<double, 8> rows{};  // row 0 = far (image top), row 1 = near
+      for (std::size_t i = 0; i < nozzles; ++i) {
+        rows[nozzles + i] = zone_densities[near_zone][i];
+        rows[i] = near_zone + 1 < zones ? zone_densities[near_zone + 1][i] : 0.0;
+      }
+      scheduler.add_frame(odometer, std::span<const double>(rows.data(), 2 * nozzles));
+      ++next_frame;
+    }
+    // Zone volumes: cumulative nozzle volume read as the ground under the nozzles crosses
+    // each zone boundary.
+    const double under_nozzles = odometer - c2n;
+    while (next_boundary <= zones &&
+           under_nozzles >= start + length * static_cast<double>(next_boundary) - 1e-9) {
+      std::array<double, 4> now{};
+      for (std::size_t i = 0; i < nozzles; ++i) now[i] = rig.plant().nozzle_delivered_l(int(i));
+      if (next_boundary > 0) {
+        const std::size_t z = next_boundary - 1;
+        double zone_total = 0.0;
+        for (std::size_t i = 0; i < nozzles; ++i) {
+          const double d = now[i] - at_boundary[i];
+          zone_total += d;
+          run.nozzle_delivered_l[i] += d;
+          if (target_l[z][i] > 0.0 && d < options.under_dose_fraction * target_l[z][i])
+            ++run.under_dosed_zones;
+        }
+        run.zone_delivered_l.push_back(zone_total);
+        run.variable_l += zone_total;
+      }
+      at_boundary = now;
+      ++next_boundary;
+    }
+    if (under_nozzles >= end_m) break;
+    for (std::size_t i = 0; i < nozzles; ++i)
+      flows[i] = target_flow_l_per_min(law, scheduler.duty_at(i, odometer, v), v);
+    rig.request_flows(flows);
+    rig.run_for(dt);
+  }
+  run.savings_pct = uniform_l > 0 ? (1.0 - run.variable_l / uniform_l) * 100.0 : 0.0;
+  return run;
+}
+
 SavingsResult run_savings(const std::vector<std::array<double, 4>>& zone_densities,
                           const SavingsOptions& options) {
   SprayLawConfig law;
   law.max_density = options.max_density;
-  law.decision_threshold = options.decision_threshold;
   const CalibratedMachine m =
       calibrate(options.seed, options.pressure_mpa, options.frequency_hz, law);
   const std::size_t nozzles = std::min<std::size_t>(4, m.full_flows.size());
@@ -95,7 +230,7 @@ SavingsResult run_savings(const std::vector<std::array<double, 4>>& zone_densiti
     ClosedLoopRig rig = make_rig(m);
     rig.request_flows(std::vector<double>(nozzles, uniform_q));
     rig.start();
-    rig.run_for(3.0);  // start-up before the first zone
+    rig.run_for(kStartUpS);
     std::array<double, 4> v0{};
     for (std::size_t i = 0; i < nozzles; ++i) v0[i] = rig.plant().nozzle_delivered_l(int(i));
     rig.run_for(zone_s * static_cast<double>(zone_densities.size()));
@@ -104,52 +239,24 @@ SavingsResult run_savings(const std::vector<std::array<double, 4>>& zone_densiti
       result.uniform_l += uniform_per_nozzle[i];
     }
   }
-
-  // Variable spraying: each zone's decision applied while that zone passes under the nozzles
-  // (ideal distance scheduling; the PWM still latches duties only at period boundaries).
-  ClosedLoopRig rig = make_rig(m);
-  rig.request_flows(std::vector<double>(nozzles, 0.0));
-  rig.start();
-  rig.run_for(3.0);
-  std::array<double, 4> variable_per_nozzle{};
-  for (const auto& zone : zone_densities) {
-    std::vector<double> flows(nozzles);
-    double target_l = 0.0;
-    std::vector<double> targets(nozzles);
-    for (std::size_t i = 0; i < nozzles; ++i) {
-      flows[i] = target_flow_l_per_min(law, zone[i], options.speed_m_per_s);
-      // What the law decided for this zone: nothing below the minimum duty, the full-open
-      // flow above the maximum. Weedy zones the clamp leaves dry are counted apart.
-      const SprayDecision decision =
-          spray_decision(law, m.lines[i], zone[i], options.speed_m_per_s, options.pressure_mpa);
-      targets[i] = decision.duty_pct <= 0.0     ? 0.0
-                   : decision.duty_pct >= 100.0 ? m.full_flows[i]
-                                                : flows[i];
-      if (flows[i] > 0.0 && targets[i] == 0.0) ++result.unsprayed_weedy_zones;
-      target_l += targets[i] * zone_s / 60.0;
-    }
-    std::array<double, 4> v0{};
-    for (std::size_t i = 0; i < nozzles; ++i) v0[i] = rig.plant().nozzle_delivered_l(int(i));
-    rig.request_flows(flows);
-    rig.run_for(zone_s);
-    double delivered_l = 0.0;
-    for (std::size_t i = 0; i < nozzles; ++i) {
-      const double d = rig.plant().nozzle_delivered_l(int(i)) - v0[i];
-      variable_per_nozzle[i] += d;
-      delivered_l += d;
-      const double target = targets[i] * zone_s / 60.0;
-      if (target > 0.0 && d < options.under_dose_fraction * target) ++result.under_dosed_zones;
-    }
-    result.zone_target_l.push_back(target_l);
-    result.zone_delivered_l.push_back(delivered_l);
-    result.variable_l += delivered_l;
+  for (auto* run : {&result.equal_coverage, &result.spec_clamp}) {
+    const LowDutyPolicy policy =
+        run == &result.equal_coverage ? LowDutyPolicy::kRaiseToMin : LowDutyPolicy::kClose;
+    *run = run_savings_variable(zone_densities, options, policy, result.uniform_l);
+    for (std::size_t i = 0; i < nozzles; ++i)
+      run->nozzle_savings_pct[i] =
+          uniform_per_nozzle[i] > 0
+              ? (1.0 - run->nozzle_delivered_l[i] / uniform_per_nozzle[i]) * 100.0
+              : 0.0;
   }
-  result.savings_pct =
-      result.uniform_l > 0 ? (1.0 - result.variable_l / result.uniform_l) * 100.0 : 0.0;
-  for (std::size_t i = 0; i < nozzles; ++i)
-    result.nozzle_savings_pct[i] =
-        uniform_per_nozzle[i] > 0 ? (1.0 - variable_per_nozzle[i] / uniform_per_nozzle[i]) * 100.0
-                                  : 0.0;
+  const SavingsRun& headline = result.equal_coverage;
+  result.variable_l = headline.variable_l;
+  result.savings_pct = headline.savings_pct;
+  result.under_dosed_zones = headline.under_dosed_zones;
+  result.unsprayed_weedy_zones = headline.unsprayed_weedy_zones;
+  result.zone_target_l = headline.zone_target_l;
+  result.zone_delivered_l = headline.zone_delivered_l;
+  result.nozzle_savings_pct = headline.nozzle_savings_pct;
   return result;
 }
 

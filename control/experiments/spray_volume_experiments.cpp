@@ -38,7 +38,7 @@ Machine prepare_machine(const SprayRunOptions& options) {
   cal_options.seed = options.seed;
   cal_options.pressure_mpa = options.pressure_mpa;
   cal_options.frequency_hz = options.frequency_hz;
-  const CalibrationResult cal = run_calibration(cal_options);
+  const CalibrationResult& cal = cached_calibration(cal_options);
   m.config.fixes = {true, true, true};
   m.config.meter_pulses_per_l = cal.meter.pulses_per_litre;
   for (const auto& n : cal.nozzles) m.lines.push_back(n.fitted);

@@ -96,11 +96,9 @@ TuningResult tune_step_controllers(const StepOptions& options) {
   // then the base gains re-searched with the best weights, then the weights once more.
   FuzzyPidConfig fuzzy = options.fuzzy;
   fuzzy.base.gains = pid;
-  // Building the fuzzy query table at full resolution costs ~0.1-0.5 s per controller, so
-  // the search uses a coarse table (0.5 quantised units); the winner is re-evaluated below
-  // with the configured resolution.
-  auto eval_fuzzy = [&](FuzzyPidConfig c) {
-    c.table_steps_per_unit = 2;
+  // Every candidate shares the one process-wide query table (it does not depend on gains or
+  // weights), so the search runs at the configured resolution.
+  auto eval_fuzzy = [&](const FuzzyPidConfig& c) {
     return run_step_once(PressureControlMode::kFuzzyPid, c, quick).metrics.itae;
   };
   auto search_weights = [&](FuzzyPidConfig c, double& best_itae) {

@@ -106,6 +106,10 @@ void HydraulicPlant::set_valves(std::uint32_t mask) {
     if (cmd == v.commanded) continue;
     v.commanded = cmd;
     const NozzleTruth& t = truth_[static_cast<std::size_t>(i)];
+    // Only a spool already travelling coasts on; a motion whose dead time had not ended is
+    // cancelled (the coil never pulled in / dropped out).
+    const bool travelling = v.motion_start_s <= time_s_ && v.position != v.motion_target;
+    v.coast_target = travelling ? v.motion_target : v.position;
     v.motion_target = cmd ? 1.0 : 0.0;
     v.motion_start_s = time_s_ + (cmd ? t.open_delay_s : t.close_delay_s);
   }
@@ -149,12 +153,28 @@ double HydraulicPlant::line_compliance_l_per_mpa(double pressure_mpa) const {
 }
 
 double HydraulicPlant::advance_valve(Valve& v, double t0, double dt) const {
-  const double rate = v.motion_target > v.position ? 1.0 / params_.nozzle.open_travel_s
-                                                   : 1.0 / params_.nozzle.close_travel_s;
+  auto rate_toward = [&](double target) {
+    return target > v.position ? 1.0 / params_.nozzle.open_travel_s
+                               : 1.0 / params_.nozzle.close_travel_s;
+  };
+  const bool coasting = v.motion_start_s > t0 && v.coast_target != v.position;
+  if (!coasting) {
+    const auto [mean, end] = ramp_mean_and_end(
+        v.position, v.motion_target, rate_toward(v.motion_target), v.motion_start_s - t0, dt);
+    v.position = std::clamp(end, 0.0, 1.0);
+    return mean;
+  }
+  // Coasting toward the old end until the new motion starts, then the new motion.
+  const double span = std::min(dt, v.motion_start_s - t0);
+  const auto [coast_mean, coast_end] =
+      ramp_mean_and_end(v.position, v.coast_target, rate_toward(v.coast_target), 0.0, span);
+  v.position = std::clamp(coast_end, 0.0, 1.0);
+  const double rest = dt - span;
+  if (!(rest > 0.0)) return coast_mean;
   const auto [mean, end] =
-      ramp_mean_and_end(v.position, v.motion_target, rate, v.motion_start_s - t0, dt);
+      ramp_mean_and_end(v.position, v.motion_target, rate_toward(v.motion_target), 0.0, rest);
   v.position = std::clamp(end, 0.0, 1.0);
-  return mean;
+  return (coast_mean * span + mean * rest) / dt;
 }
 
 void HydraulicPlant::substep(double dt) {

@@ -184,6 +184,10 @@ class HydraulicPlant {
     double position = 0.0;        // 0..1
     double motion_target = 0.0;   // where the spool is heading
     double motion_start_s = 0.0;  // when it starts moving (command time + dead time)
+    // A valve commanded back while its spool is travelling keeps travelling toward the old
+    // end until the new dead time is over (the coil's field takes that long to turn round),
+    // then reverses from wherever it got to. coast_target = position: no such motion.
+    double coast_target = 0.0;
     double delivered_l = 0.0;
     double blockage = 0.0;
     double flow_l_per_s = 0.0;

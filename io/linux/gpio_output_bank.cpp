@@ -22,19 +22,24 @@ GpioOutputBank::GpioOutputBank(const GpioOutputBankConfig& config)
     throw std::runtime_error("GPIO output bank: needs 1..32 lines, got " +
                              std::to_string(config.lines.size()));
   std::vector<int> defaults;
+  std::vector<unsigned int> offsets;
   for (std::size_t i = 0; i < config.lines.size(); ++i) {
     const GpioLineConfig& lc = config.lines[i];
-    gpiod::line line = detail::find_line(config.chip, lc);
-    if (!impl_->bulk.empty() && line.get_chip().name() != impl_->chip_name)
+    const gpiod::line line = detail::find_line(config.chip, lc);
+    const std::string chip = line.get_chip().name();
+    if (i > 0 && chip != impl_->chip_name)
       throw std::runtime_error("GPIO output bank: " + detail::describe(config.chip, lc) +
-                               " is on " + line.get_chip().name() + " but line 0 is on " +
-                               impl_->chip_name + "; one bank must be on one chip");
-    if (impl_->bulk.empty()) impl_->chip_name = line.get_chip().name();
-    impl_->bulk.append(line);
+                               " is on " + chip + " but line 0 is on " + impl_->chip_name +
+                               "; one bank must be on one chip");
+    impl_->chip_name = chip;
+    offsets.push_back(line.offset());
     if (lc.active_low) impl_->invert_mask |= 1U << i;
     if (lc.safe_value) impl_->safe_mask |= 1U << i;
     defaults.push_back((lc.safe_value != lc.active_low) ? 1 : 0);
   }
+  // libgpiod's line_bulk wants every line from ONE chip object (each lookup above opened its
+  // own), so the lines are fetched again from a single handle of that chip.
+  impl_->bulk = detail::open_chip(impl_->chip_name).get_lines(offsets);
   // Active-low is applied here, per line, because a bulk request shares one flag set.
   // The request's default values are the safe values: no glitch at start-up.
   try {

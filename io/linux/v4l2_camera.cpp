@@ -85,7 +85,9 @@ struct V4l2Camera::Impl {
   std::string error;
   CameraCounters counters;
   bool have_sequence = false;
-  std::uint32_t last_sequence = 0;
+  bool driver_sequence = true;  // the driver's buffer sequence numbers are usable
+  std::uint32_t last_driver_sequence = 0;
+  std::uint64_t last_sequence = 0;
   milliseconds backoff{0};
   nanoseconds next_reopen{0};
 
@@ -215,6 +217,7 @@ struct V4l2Camera::Impl {
     if (xioctl(fd, VIDIOC_STREAMON, &type) != 0) return fail_errno("STREAMON");
     streaming = true;
     have_sequence = false;
+    driver_sequence = true;
     return true;
   }
 
@@ -315,17 +318,27 @@ FrameStatus V4l2Camera::next_frame(Frame& frame, milliseconds timeout) {
     m.error = m.where() + "the driver flagged a corrupted frame";
     return FrameStatus::kError;
   }
-  if ((buf.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC) {
+  if ((buf.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC &&
+      (buf.timestamp.tv_sec != 0 || buf.timestamp.tv_usec != 0)) {
     frame.timestamp = std::chrono::seconds{buf.timestamp.tv_sec} +
                       std::chrono::microseconds{buf.timestamp.tv_usec};
   } else {
     frame.timestamp = m.clock.now();
   }
-  if (m.have_sequence && buf.sequence > m.last_sequence + 1)
-    m.counters.dropped += buf.sequence - m.last_sequence - 1;
+  // libv4l2's format emulation (e.g. GREY converted from a YUYV-only device) hands out
+  // sequence 0 for every frame: once the driver's numbers stop increasing, count ourselves.
+  if (m.have_sequence && m.driver_sequence && buf.sequence <= m.last_driver_sequence)
+    m.driver_sequence = false;
+  if (m.driver_sequence) {
+    if (m.have_sequence && buf.sequence > m.last_driver_sequence + 1)
+      m.counters.dropped += buf.sequence - m.last_driver_sequence - 1;
+    m.last_driver_sequence = buf.sequence;
+    frame.sequence = buf.sequence;
+  } else {
+    frame.sequence = m.last_sequence + 1;
+  }
   m.have_sequence = true;
-  m.last_sequence = buf.sequence;
-  frame.sequence = buf.sequence;
+  m.last_sequence = frame.sequence;
 
   const auto* data = static_cast<const std::uint8_t*>(m.buffers[buf.index].start);
   switch (m.config.pixel_format) {

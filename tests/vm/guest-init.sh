@@ -1,4 +1,5 @@
 #!/bin/busybox sh
+# shellcheck shell=dash
 # PID 1 of the test guest (run-vm-tests.sh packs it as /init with busybox, the kernel modules
 # listed in /modules.load and the programs under test in /tests).
 #
@@ -19,6 +20,7 @@ export GTEST_COLOR=no # the console log is read as text
 
 # QEMU exits with status (code << 1) | 1 when a byte is written to port 0xf4.
 leave() {
+  # shellcheck disable=SC2059 # the format is the octal escape of the byte to send
   printf "\\$(printf '%03o' "$1")" | dd of=/dev/port bs=1 seek=244 count=1 2>/dev/null
   poweroff -f
 }
@@ -48,7 +50,7 @@ make_gpio_sim_chip() { # NAME LINE_NAME...
   shift
   mkdir "$chip" "$chip/bank0" || setup_failed "cannot create gpio-sim chip $chip"
   echo $# >"$chip/bank0/num_lines"
-  echo "$(basename "$chip")" >"$chip/bank0/label" # the chip label tests may look it up by
+  basename "$chip" >"$chip/bank0/label" # the chip label tests may look it up by
   offset=0
   for line_name in "$@"; do
     mkdir "$chip/bank0/line$offset"

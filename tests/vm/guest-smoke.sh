@@ -37,7 +37,7 @@ check "pull-up on wheel reads 1 with gpioget" sh -c "[ \"\$(gpioget $in_chip 1)\
 echo pull-down >"$(sim_line weedspray-in 1)/pull"
 check "pull-down on wheel reads 0 with gpioget" sh -c "[ \"\$(gpioget $in_chip 1)\" = 0 ]"
 
-video="$(ls /dev/video* | head -n1)"
+for video in /dev/video*; do break; done
 check "vivid streams 5 frames of 640x360 YUYV" \
   v4l2-ctl -d "$video" --set-fmt-video=width=640,height=360,pixelformat=YUYV \
   --stream-mmap --stream-count=5 --stream-to=/dev/null

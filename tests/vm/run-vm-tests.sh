@@ -11,7 +11,8 @@
 #
 # The kernel, headers and sources come from the Debian archive (`apt-get download`), chosen at
 # run time from what linux-image-amd64 depends on, and are cached in DIR (default
-# $WEEDSPRAY_BUILD_DIR/vm-cache) so that later runs only build the initramfs and boot.
+# $WEEDSPRAY_BUILD_DIR/vm-cache, or $WEEDSPRAY_VM_CACHE) so later runs only pack and boot.
+# --log keeps the guest's console; WEEDSPRAY_VM_KEEP_WORK=1 keeps the initramfs work dir.
 set -Eeuo pipefail
 
 script_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -32,7 +33,7 @@ while (($#)); do
     --cache) cache_dir="${2:?--cache needs a directory}"; shift 2 ;;
     --log) log_file="${2:?--log needs a file}"; shift 2 ;;
     --timeout) boot_timeout_s="${2:?--timeout needs seconds}"; shift 2 ;;
-    -h | --help) sed -n '2,13p' "$0"; exit 0 ;;
+    -h | --help) sed -n '2,15p' "$0"; exit 0 ;;
     -*) die "unknown option '$1' (see --help)" ;;
     *) guest_programs+=("$1"); shift ;;
   esac
@@ -41,6 +42,8 @@ done
 for program in "${guest_programs[@]}"; do
   [ -x "$program" ] || die "guest program '$program' does not exist or is not executable"
 done
+mkdir -p "$cache_dir" || die "cannot create the cache directory '$cache_dir'"
+cache_dir="$(cd "$cache_dir" && pwd)" # absolute: make -C changes directory
 
 # --- prerequisites -----------------------------------------------------------------------
 require_tool() { # TOOL DEBIAN_PACKAGE
@@ -84,10 +87,12 @@ kernel_release="${image_package#linux-image-}"
 kernel_version="$(apt-cache show --no-all-versions "$image_package" 2>/dev/null |
   sed -n 's/^Version: //p' || true)"
 [ -n "$kernel_version" ] || die "no version of $image_package in the package index"
-abi="${kernel_release%-amd64}"
-gcc_for_kernel="gcc-$(apt-cache depends "linux-headers-$kernel_release" |
-  sed -n 's/^ *Depends: linux-compiler-gcc-\([0-9]*\)-x86$/\1/p' | head -n1)"
-require_tool "$gcc_for_kernel" "$gcc_for_kernel"
+abi="${kernel_release%-amd64}"                           # 6.1.0-56
+series="$(echo "$kernel_release" | cut -d. -f1,2)"        # 6.1: linux-source-6.1
+gcc_version="$(apt-cache depends "linux-headers-$kernel_release" 2>/dev/null |
+  sed -n 's/^ *Depends: linux-compiler-gcc-\([0-9]*\)-x86$/\1/p' | head -n1 || true)"
+[ -n "$gcc_version" ] || die "cannot tell which gcc linux-headers-$kernel_release is built with"
+require_tool "gcc-$gcc_version" "gcc-$gcc_version"
 
 kernel_dir="$cache_dir/$kernel_release-$kernel_version"
 vmlinux="$kernel_dir/vmlinux"
@@ -99,8 +104,8 @@ fetch_packages() { # -> $kernel_dir/debs
   local debs="$kernel_dir/debs"
   mkdir -p "$debs"
   local packages=("$image_package=$kernel_version" "linux-headers-$kernel_release=$kernel_version"
-    "linux-headers-$abi-common=$kernel_version" "linux-kbuild-6.1=$kernel_version"
-    "linux-source-6.1=$kernel_version")
+    "linux-headers-$abi-common=$kernel_version" "linux-kbuild-$series=$kernel_version"
+    "linux-source-$series=$kernel_version")
   note "downloading ${packages[*]} from the Debian archive"
   (cd "$debs" && apt-get download -q "${packages[@]}") >"$kernel_dir/download.log" 2>&1 || {
     cat "$kernel_dir/download.log" >&2
@@ -119,15 +124,19 @@ extract_vmlinux() { # vmlinuz -> vmlinux: booting the ELF via PVH skips emulated
   mv "$vmlinux.tmp" "$vmlinux"
 }
 
+gpio_sim_src="$kernel_dir/gpio-sim-src"
+extract_gpio_sim_sources() { # -> $gpio_sim_src (the whole 1.3 GB tarball is read: ~10 s)
+  rm -rf "$gpio_sim_src" && mkdir -p "$gpio_sim_src"
+  local top="linux-source-$series"
+  dpkg-deb --fsys-tarfile "$kernel_dir/debs/${top}_"*.deb |
+    tar -xO "./usr/src/$top.tar.xz" | xz -dc |
+    tar -x -C "$gpio_sim_src" --strip-components=1 "$top/drivers/gpio/gpio-sim.c" \
+      "$top/drivers/gpio/gpiolib.h" "$top/kernel/irq/irq_sim.c"
+}
+
 build_gpio_sim() { # ROOT -> ROOT/lib/modules/$kernel_release/extra/gpio-sim.ko
-  local root="$1" src="$kernel_dir/gpio-sim-src"
+  local root="$1" src="$gpio_sim_src"
   local headers="$root/usr/src/linux-headers-$kernel_release"
-  rm -rf "$src" && mkdir -p "$src"
-  note "extracting gpio-sim sources from linux-source-6.1"
-  dpkg-deb --fsys-tarfile "$kernel_dir"/debs/linux-source-6.1_*.deb |
-    tar -xO ./usr/src/linux-source-6.1.tar.xz | xz -dc |
-    tar -x -C "$src" --strip-components=1 linux-source-6.1/drivers/gpio/gpio-sim.c \
-      linux-source-6.1/drivers/gpio/gpiolib.h linux-source-6.1/kernel/irq/irq_sim.c
   mv "$src/drivers/gpio/gpio-sim.c" "$src/gpio-sim-main.c"
   mv "$src/drivers/gpio/gpiolib.h" "$src/kernel/irq/irq_sim.c" "$src/"
   # irq_to_desc() is not exported to modules; generic_handle_irq() does the same lookup.
@@ -177,13 +186,17 @@ prepare_kernel() {
   local started=$SECONDS root="$kernel_dir/root"
   rm -rf "$kernel_dir" && mkdir -p "$kernel_dir"
   fetch_packages
-  note "unpacking the kernel packages"
+  note "unpacking the kernel packages and the gpio-sim sources"
+  # Both are single-threaded xz streams: unpack them side by side.
+  extract_gpio_sim_sources &
+  local sources_job=$!
   mkdir -p "$root"
   for deb in "$kernel_dir"/debs/linux-{image,headers,kbuild}-*.deb; do dpkg-deb -x "$deb" "$root"; done
   extract_vmlinux "$root/boot/vmlinuz-$kernel_release"
+  wait "$sources_job" || die "extracting the gpio-sim sources from linux-source-$series failed"
   build_gpio_sim "$root"
   stage_modules "$root"
-  rm -rf "$root" "$kernel_dir/gpio-sim-src" "$kernel_dir/debs" # keep what boots, ~80 MB
+  rm -rf "$root" "$gpio_sim_src" "$kernel_dir/debs" # keep what boots, ~80 MB
   # Keep only this kernel: older ABIs are never booted again.
   find "$cache_dir" -mindepth 1 -maxdepth 1 -type d ! -path "$kernel_dir" -exec rm -rf {} +
   touch "$kernel_dir/ready"
@@ -267,7 +280,6 @@ run_guest() { # -> $guest_log; returns QEMU's status
   return "$status"
 }
 
-mkdir -p "$cache_dir"
 exec 9>"$cache_dir/.lock"
 flock 9 # two builds sharing a cache must not prepare the kernel at once
 prepare_kernel

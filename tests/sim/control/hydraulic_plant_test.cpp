@@ -167,3 +167,45 @@ TEST(HydraulicPlant, RejectsBadParametersByName) {
 
 }  // namespace
 }  // namespace weedspray::control::plant
+
+namespace weedspray::control::plant {
+namespace {
+
+TEST(HydraulicPlant, ValveReversedMidTravelCoastsOnThenReverses) {
+  PlantParams params;
+  params.nozzle.delay_spread_sigma = 0.0;
+  HydraulicPlant plant(params, 3);
+  plant.set_pump(true);
+  plant.set_valves(0x1);
+  // Open dead time, then half the travel.
+  plant.step(params.nozzle.open_delay_s + 0.5 * params.nozzle.open_travel_s);
+  const double halfway = plant.valve_opening(0);
+  ASSERT_GT(halfway, 0.3);
+  ASSERT_LT(halfway, 0.7);
+  plant.set_valves(0x0);
+  // During the closing dead time the spool keeps going the way it was going (not frozen).
+  plant.step(0.5 * params.nozzle.open_travel_s);
+  EXPECT_GT(plant.valve_opening(0), halfway + 0.3);
+  plant.step(params.nozzle.close_delay_s);  // dead time over: it is closing now
+  const double later = plant.valve_opening(0);
+  plant.step(0.5 * params.nozzle.close_travel_s);
+  EXPECT_LT(plant.valve_opening(0), later);
+  plant.step(params.nozzle.close_travel_s);
+  EXPECT_EQ(plant.valve_opening(0), 0.0);
+}
+
+TEST(HydraulicPlant, ValveCommandedBackWithinItsDeadTimeNeverMoves) {
+  PlantParams params;
+  params.nozzle.delay_spread_sigma = 0.0;
+  HydraulicPlant plant(params, 3);
+  plant.set_valves(0x1);
+  plant.step(0.5 * params.nozzle.open_delay_s);
+  plant.set_valves(0x0);
+  for (int i = 0; i < 20; ++i) {
+    plant.step(0.005);
+    EXPECT_EQ(plant.valve_opening(0), 0.0);
+  }
+}
+
+}  // namespace
+}  // namespace weedspray::control::plant

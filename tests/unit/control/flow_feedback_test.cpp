@@ -56,12 +56,82 @@ TEST(FlowTrim, ClosedLoopConvergesToTheMeterGain) {
   EXPECT_NEAR(trim.correction(), 1.0 / 0.92, 1e-3);
 }
 
+TEST(FlowTrim, ErrorIsNormalisedByTheTrimmableShare) {
+  // Three nozzles held at 100 % (0.9 L/min) and one modulated nozzle asked for 0.3 L/min that
+  // gives 10 % too much: the error is the modulated nozzle's, not diluted by the other three.
+  FlowTrimConfig config;
+  config.max_rate_per_s = 10.0;  // no rate limit in the way
+  config.min_trimmable_fraction = 0.05;
+  FlowTrim diluted(config);
+  FlowTrim shared(config);
+  FlowTrimInput in;
+  in.requested_total_l_per_min = 3.0;
+  in.trimmable_l_per_min = 0.3;
+  in.measured_total_l_per_min = 3.03;
+  in.open_fraction = 0.85;
+  in.dt_s = 1.0;
+  shared.update(in);
+  diluted.update(3.0, 3.03, 0.85, 1.0);
+  EXPECT_NEAR(shared.correction() - 1.0, -config.gain_per_s * 0.1, 1e-12);
+  EXPECT_NEAR(diluted.correction() - 1.0, -config.gain_per_s * 0.01, 1e-12);
+}
+
+TEST(FlowTrim, WoundUpTrimUnwindsInSecondsWithNozzlesHeldOpen) {
+  // Start wound up at the lower bound; the modulated nozzle's true gain is 1, so the trim must
+  // come back to 1 within 30 s although three nozzles are held fully open.
+  FlowTrimConfig config;
+  config.min_correction = 0.7;
+  config.min_trimmable_fraction = 0.05;
+  FlowTrim trim(config);
+  FlowTrimInput in;
+  in.requested_total_l_per_min = 3.0;
+  in.trimmable_l_per_min = 0.3;
+  in.open_fraction = 0.85;
+  in.dt_s = 1.0;
+  for (int i = 0; i < 40; ++i) {  // wind it up: the meter reads far too much
+    in.measured_total_l_per_min = 4.0;
+    trim.update(in);
+  }
+  ASSERT_NEAR(trim.correction(), 0.7, 1e-12);
+  for (int i = 0; i < 30; ++i) {
+    in.measured_total_l_per_min = 2.7 + 0.3 * trim.correction();
+    trim.update(in);
+  }
+  EXPECT_NEAR(trim.correction(), 1.0, 0.01);
+}
+
+TEST(FlowTrim, FreezesWhilePressureIsOffSetPointOrNothingIsTrimmable) {
+  FlowTrim trim(FlowTrimConfig{});
+  FlowTrimInput in;
+  in.requested_total_l_per_min = 1.0;
+  in.trimmable_l_per_min = 1.0;
+  in.measured_total_l_per_min = 0.5;
+  in.open_fraction = 0.5;
+  in.dt_s = 1.0;
+  in.pressure_error_fraction = 0.2;  // start-up in the window
+  EXPECT_DOUBLE_EQ(trim.update(in), 1.0);
+  EXPECT_TRUE(trim.frozen());
+  in.pressure_error_fraction = 0.0;
+  in.trimmable_l_per_min = 0.0;  // all nozzles closed or fully open
+  EXPECT_DOUBLE_EQ(trim.update(in), 1.0);
+  EXPECT_TRUE(trim.frozen());
+  in.trimmable_l_per_min = 0.2;  // below min_trimmable_fraction (0.25) of the request
+  EXPECT_DOUBLE_EQ(trim.update(in), 1.0);
+  EXPECT_TRUE(trim.frozen());
+  in.trimmable_l_per_min = 1.0;
+  EXPECT_GT(trim.update(in), 1.0);
+  EXPECT_FALSE(trim.frozen());
+}
+
 TEST(FlowTrim, RejectsBadConfig) {
   FlowTrimConfig config;
   config.min_correction = 1.1;
   EXPECT_THROW(FlowTrim{config}, std::invalid_argument);
   config = FlowTrimConfig{};
   config.max_rate_per_s = -1.0;
+  EXPECT_THROW(FlowTrim{config}, std::invalid_argument);
+  config = FlowTrimConfig{};
+  config.max_pressure_error_fraction = 0.0;
   EXPECT_THROW(FlowTrim{config}, std::invalid_argument);
 }
 

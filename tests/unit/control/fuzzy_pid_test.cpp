@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -164,6 +165,46 @@ TEST(FuzzyPid, ErrorRateRangeDefaultsToTwiceTheRange) {
   // -> qe = -1.2 (NS 0.6, ZO 0.4). dKp: (NS,NB) = PM, (ZO,NB) = PM -> 4.
   pid.update(0.0, 0.1, 0.1);
   EXPECT_NEAR(pid.last_correction().d_kp, 4.0, 1e-9);
+}
+
+TEST(FuzzyInference, ExactCentroidIsTheLimitOfTheSampledOne) {
+  const FuzzyInferenceConfig exact{FuzzyDefuzzification::kExactCentroid, 0.01};
+  const FuzzyInferenceConfig fine{FuzzyDefuzzification::kSampledCentroid, 0.001};
+  for (double qe = -6.0; qe <= 6.0; qe += 0.7) {
+    for (double qec = -6.0; qec <= 6.0; qec += 0.9) {
+      const FuzzyGainCorrection a = fuzzy_infer(qe, qec, exact);
+      const FuzzyGainCorrection b = fuzzy_infer(qe, qec, fine);
+      EXPECT_NEAR(a.d_kp, b.d_kp, 1e-4) << qe << "," << qec;
+      EXPECT_NEAR(a.d_ki, b.d_ki, 1e-4) << qe << "," << qec;
+      EXPECT_NEAR(a.d_kd, b.d_kd, 1e-4) << qe << "," << qec;
+    }
+  }
+  EXPECT_NEAR(fuzzy_infer(-6.0, -6.0, exact).d_kp, 16.0 / 3.0, 1e-12);
+}
+
+TEST(FuzzyPid, SharesOneTableAndRetunesWithoutRebuilding) {
+  const FuzzyInferenceConfig inference{};
+  const auto a = shared_fuzzy_gain_table(inference, 10);
+  EXPECT_EQ(a.get(), shared_fuzzy_gain_table(inference, 10).get());
+  EXPECT_NE(a.get(), shared_fuzzy_gain_table(inference, 5).get());
+
+  FuzzyPidConfig config;
+  config.base.gains = {1.0, 0.5, 0.05};
+  config.correction_weights = {0.1, 0.02, 0.001};
+  config.error_range = 1.0;
+  FuzzyPid pid(config);
+  pid.enable(0.0, 0.5, 0.0);
+  pid.update(0.5, 0.0, 0.01);
+  const FuzzyGainCorrection c = pid.last_correction();
+  pid.set_correction_weights({0.3, 0.0, 0.0});
+  pid.set_base_gains({2.0, 0.1, 0.0});
+  pid.update(0.5, 0.0, 0.01);  // same e, ec = 0 again: same correction
+  EXPECT_NEAR(pid.last_correction().d_kp, c.d_kp, 1e-12);
+  EXPECT_NEAR(pid.current_gains().kp, std::max(0.0, 2.0 + c.d_kp * 0.3), 1e-12);
+  EXPECT_NEAR(pid.current_gains().ki, 0.1, 1e-12);
+  EXPECT_NEAR(pid.config().correction_weights.kp, 0.3, 0.0);
+  pid.set_correction_weights({std::nan(""), 0.0, 0.0});  // ignored
+  EXPECT_NEAR(pid.config().correction_weights.kp, 0.3, 0.0);
 }
 
 TEST(FuzzyPid, RejectsBadConfig) {

@@ -58,7 +58,7 @@ TEST(SprayRateLaw, DecisionThresholdAndStandstillSprayNothing) {
 }
 
 TEST(SprayRateLaw, PressureCompensationFollowsSqrtLaw) {
-  const NozzleLine through_origin{0.01, 0.0, 0.4};
+  const NozzleLine through_origin{0.01, 0.0, 0.4, 0.0};
   // b = 0: duty scales exactly by sqrt(P_cal / P).
   const double at_cal = raw_duty_for_flow_pct(through_origin, 0.5, 0.4);
   EXPECT_NEAR(raw_duty_for_flow_pct(through_origin, 0.5, 0.3), at_cal * std::sqrt(0.4 / 0.3),
@@ -71,6 +71,47 @@ TEST(SprayRateLaw, PressureCompensationFollowsSqrtLaw) {
   }
   // Unusable pressure: no compensation.
   EXPECT_DOUBLE_EQ(raw_duty_for_flow_pct(line, 0.45, 0.0), raw_duty_for_flow_pct(line, 0.45, 0.4));
+}
+
+TEST(SprayRateLaw, RequestAtFullOpenFlowHoldsTheValveOpen) {
+  NozzleLine line;  // A = 0.00393, b = 0.217 at 0.4 MPa: the line gives 0.61 at 100 %
+  line.full_open_flow_l_per_min = 0.58;
+  EXPECT_DOUBLE_EQ(raw_duty_for_flow_pct(line, 0.58, 0.4), 100.0);
+  EXPECT_DOUBLE_EQ(raw_duty_for_flow_pct(line, 0.70, 0.4), 100.0);
+  // Below it the line rules; at another pressure the full-open flow scales with sqrt(P).
+  EXPECT_NEAR(raw_duty_for_flow_pct(line, 0.57, 0.4), (0.57 - 0.217) / 0.00393, 1e-9);
+  EXPECT_DOUBLE_EQ(raw_duty_for_flow_pct(line, 0.58 * std::sqrt(0.5), 0.2), 100.0);
+  EXPECT_LT(raw_duty_for_flow_pct(line, 0.57 * std::sqrt(0.5), 0.2), 100.0);
+  // Above the calibration pressure the calibrated full flow itself still holds the valve open.
+  EXPECT_DOUBLE_EQ(raw_duty_for_flow_pct(line, 0.58, 0.41), 100.0);
+  // Unknown (0): no rule.
+  line.full_open_flow_l_per_min = 0.0;
+  EXPECT_GT(raw_duty_for_flow_pct(line, 0.70, 0.4), 100.0);
+  line.full_open_flow_l_per_min = -1.0;
+  EXPECT_THROW(validate(line), std::invalid_argument);
+}
+
+TEST(SprayRateLaw, LowDutyPolicyRaisesWeedyZonesToTheMinimumDose) {
+  SprayLawConfig config;
+  config.max_density = 0.75;
+  config.decision_threshold = 0.05;
+  const NozzleLine line;
+  // Density 0.1: q = 0.082 L/min, below the intercept: raw duty negative.
+  const SprayDecision closed = spray_decision(config, line, 0.1, 1.0, 0.4);
+  EXPECT_LT(closed.raw_duty_pct, 0.0);
+  EXPECT_DOUBLE_EQ(closed.duty_pct, 0.0);
+  config.low_duty_policy = LowDutyPolicy::kRaiseToMin;
+  EXPECT_DOUBLE_EQ(spray_decision(config, line, 0.1, 1.0, 0.4).duty_pct, 20.0);
+  // Below the decision threshold nothing is sprayed under either policy.
+  EXPECT_DOUBLE_EQ(spray_decision(config, line, 0.04, 1.0, 0.4).duty_pct, 0.0);
+  // In the valid band and above it the policies agree.
+  const SprayDecision mid = spray_decision(config, line, 0.6, 1.0, 0.4);
+  EXPECT_NEAR(mid.duty_pct, mid.raw_duty_pct, 1e-12);
+  EXPECT_DOUBLE_EQ(clamp_duty_for_flow_pct(config, 90.0, 0.6), 100.0);
+  EXPECT_DOUBLE_EQ(clamp_duty_for_flow_pct(config, 10.0, 0.0), 0.0);
+  EXPECT_DOUBLE_EQ(clamp_duty_for_flow_pct(config, std::nan(""), 0.3), 20.0);
+  // clamp_duty_pct keeps the SPEC clamp whatever the policy (it does not know the flow).
+  EXPECT_DOUBLE_EQ(clamp_duty_pct(config, 10.0), 0.0);
 }
 
 TEST(SprayRateLaw, ApplicationRate) {

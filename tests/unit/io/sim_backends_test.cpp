@@ -8,6 +8,7 @@
 #include "io/signal_conversion.hpp"
 #include "io/sim/hydraulic_rig.hpp"
 #include "io/sim/manual_clock.hpp"
+#include "io/sim/manual_digital_input.hpp"
 #include "io/sim/memory_output_bank.hpp"
 #include "io/sim/paced_clock.hpp"
 
@@ -147,6 +148,19 @@ TEST(MemoryOutputBank, RecordsWritesAndForceSafe) {
   ASSERT_EQ(bank.history().size(), 1U);
   EXPECT_EQ(bank.history()[0].time, 1ms);
   EXPECT_THROW(MemoryOutputBank(33, 0, clock), std::invalid_argument);
+}
+
+TEST(ManualDigitalInput, ReportsChangesWithTheirTime) {
+  ManualClock clock;
+  ManualDigitalInput key(clock);
+  EXPECT_FALSE(key.sample().active);
+  clock.advance(2s);
+  key.set(true);
+  key.set(true);  // no change
+  const DigitalInputSample s = key.sample();
+  EXPECT_TRUE(s.active);
+  EXPECT_EQ(s.time, 2s);
+  EXPECT_EQ(s.change_count, 1U);
 }
 
 TEST(Debouncer, AcceptsALevelOnlyAfterItHolds) {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 #include "test_images.hpp"
@@ -152,6 +153,41 @@ TEST(DefaultFixedThreshold, SitsBetweenSoilAndPlantOnEachColourScale) {
         << to_string(index);
     EXPECT_GT(vegetation_index_of(index, test::kPlant.r, test::kPlant.g, test::kPlant.b), level)
         << to_string(index);
+  }
+}
+
+}  // namespace
+}  // namespace weedspray::vision
+
+namespace weedspray::vision {
+namespace {
+
+// Normalised ExG depends on G and R + G + B only: one pixel per (G, R + B) pair covers every
+// division the reciprocal table replaces.
+TEST(ComputeVegetationIndex, NormalisedExgExactForEveryGreenAndSum) {
+  const int width = 511;  // R + B = 0..510
+  test::BgrFrame frame(width, 256, test::kBlack);
+  for (int g = 0; g < 256; ++g) {
+    for (int rb = 0; rb < width; ++rb) {
+      const int r = std::min(rb, 255);
+      frame.set(rb, g,
+                {static_cast<std::uint8_t>(rb - r), static_cast<std::uint8_t>(g),
+                 static_cast<std::uint8_t>(r)});
+    }
+  }
+  for (VegetationIndex index : {VegetationIndex::kExgNormalized, VegetationIndex::kExgChroma}) {
+    std::vector<std::uint8_t> out(width * 256);
+    Histogram histogram{};
+    compute_vegetation_index(frame.view(), index, {0, 0, width, 256}, out.data(), width, histogram);
+    for (int g = 0; g < 256; ++g) {
+      for (int rb = 0; rb < width; ++rb) {
+        const int r = std::min(rb, 255);
+        ASSERT_EQ(out[g * width + rb], vegetation_index_of(index, static_cast<std::uint8_t>(r),
+                                                           static_cast<std::uint8_t>(g),
+                                                           static_cast<std::uint8_t>(rb - r)))
+            << to_string(index) << " G " << g << " R+B " << rb;
+      }
+    }
   }
 }
 
