@@ -26,7 +26,7 @@ struct FlowTrimConfig {
   // Trimmable share of the request below this: frozen. The meter sees only the total, so a
   // small modulated share cannot be told apart from the fixed nozzles' model error (which the
   // normalised error would amplify by total / trimmable).
-  double min_trimmable_fraction = 0.25;
+  double min_trimmable_fraction = 0.3;
   // Worst |P - P_set| / P_set seen during the window above this: frozen.
   double max_pressure_error_fraction = 0.05;
 };

@@ -114,7 +114,9 @@ Backends make_sim_backends(const Config& config, const Options& options) {
     replay.source = images;
     replay.loop = true;
     const auto footprint = control::ground_footprint(camera_geometry(camera_config));
-    replay.footprint_length_m = footprint.far_m - footprint.near_m;
+    // A frame every 80 % of a footprint: consecutive images overlap, as a streaming camera's
+    // do, so speed changes between two frames leave no unseen ground.
+    replay.footprint_length_m = 0.8 * (footprint.far_m - footprint.near_m);
     replay.ground_speed_m_per_s = [speed]() { return speed->load(); };
     auto camera = std::make_shared<io::sim::ReplayCamera>(replay, *clock);
     b.cameras.push_back(camera.get());

@@ -53,7 +53,7 @@ struct ValvePwmStats {
   std::chrono::nanoseconds max_lateness{0};
   std::uint32_t last_mask = 0;
   std::chrono::nanoseconds schedule_start{0};  // t0 of the schedule's current run
-  bool expired = true;  // valves held closed: no fresh command
+  bool expired = true;                         // valves held closed: no fresh command
 };
 
 template <class Schedule>

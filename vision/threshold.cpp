@@ -277,7 +277,9 @@ bool looks_bimodal(const Histogram& histogram, int t, const ThresholdParams& par
 
 ThresholdResult compute_threshold(const Histogram& histogram, ThresholdMethod method,
                                   const ThresholdParams& params) {
-  const int fixed = std::clamp(params.fixed_threshold, 0, 255);
+  const int fixed = params.fixed_threshold == ThresholdParams::kIndexDefault
+                        ? 255
+                        : std::clamp(params.fixed_threshold, 0, 255);
   const Extent extent = occupied_extent(histogram);
   // Empty or single-level frames (black, saturated, uniform): nothing to split.
   if (histogram_total(histogram) == 0 || extent.max_level <= extent.min_level) {

@@ -49,8 +49,9 @@ struct ThresholdParams {
   double min_separability = 0.65;
   double min_mean_gap = 5.0;
   // Level on the index scale used by kFixed and as the answer for unimodal/degenerate frames.
-  // kIndexDefault: the Pipeline puts the index's own level (default_fixed_threshold);
-  // compute_threshold itself needs a level in [0, 255].
+  // kIndexDefault: the Pipeline puts the index's own level (default_fixed_threshold). Left
+  // unresolved, compute_threshold uses 255 (nothing is vegetation): a frame that cannot be
+  // judged must not open valves.
   static constexpr int kIndexDefault = -1;
   int fixed_threshold = kIndexDefault;
   // PSO / IPSO (2018 paper): M particles, iterations, c1 = c2, inertia from w_max to w_min.

@@ -102,6 +102,13 @@ TEST(SavingsExperiment, VariableSprayingSavesLiquidOnASparseField) {
   EXPECT_GT(r.savings_pct, 20.0);
   EXPECT_LT(r.savings_pct, 90.0);
   EXPECT_LT(r.under_dosed_zones, r.zones / 4);
+  // Equal coverage leaves no weedy zone dry; the SPEC clamp does on this sparse field, and
+  // saves more liquid by doing so.
+  EXPECT_EQ(r.unsprayed_weedy_zones, 0);
+  EXPECT_EQ(r.equal_coverage.unsprayed_weedy_zones, 0);
+  EXPECT_GT(r.spec_clamp.unsprayed_weedy_zones, 0);
+  EXPECT_GT(r.spec_clamp.savings_pct, r.savings_pct);
+  EXPECT_EQ(r.zone_delivered_l.size(), zones.size());
   // All-dense field: nothing to save.
   const std::vector<std::array<double, 4>> dense(10, {0.75, 0.75, 0.75, 0.75});
   EXPECT_NEAR(run_savings(dense, SavingsOptions{}).savings_pct, 0.0, 2.0);

@@ -115,12 +115,13 @@ TEST(Placement, SprayStartsAndStopsWithin5cmOfTheImagedGround) {
   // test judges the distance scheduling, not the duty cycle.
   config.spray.max_density = 0.001;
   config.spray.nominal_flow_l_per_min = 20;
-  config.spray.decision_threshold = 0.01;
+  config.spray.decision_threshold = 0.15;
   config.spray.quantiser_levels = 0;
   config.spray.pressure_compensation = false;
   // The simulated valves' datasheet delays (plant: 15 ms + 4 ms travel / 25 ms + 6 ms).
   config.boom.valve_open_delay_s = 0.017;
   config.boom.valve_close_delay_s = 0.028;
+  if (const char* hz = std::getenv("PLACEMENT_PWM_HZ")) config.pwm.frequency_hz = std::atof(hz);
   Options options;
   options.sim = true;
 

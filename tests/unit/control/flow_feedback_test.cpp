@@ -115,7 +115,7 @@ TEST(FlowTrim, FreezesWhilePressureIsOffSetPointOrNothingIsTrimmable) {
   in.trimmable_l_per_min = 0.0;  // all nozzles closed or fully open
   EXPECT_DOUBLE_EQ(trim.update(in), 1.0);
   EXPECT_TRUE(trim.frozen());
-  in.trimmable_l_per_min = 0.2;  // below min_trimmable_fraction (0.25) of the request
+  in.trimmable_l_per_min = 0.2;  // below min_trimmable_fraction (0.3) of the request
   EXPECT_DOUBLE_EQ(trim.update(in), 1.0);
   EXPECT_TRUE(trim.frozen());
   in.trimmable_l_per_min = 1.0;

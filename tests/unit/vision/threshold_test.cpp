@@ -177,3 +177,18 @@ TEST(LooksBimodal, SparsePlantsOnSoilAreBimodal) {
 
 }  // namespace
 }  // namespace weedspray::vision
+
+namespace weedspray::vision {
+namespace {
+
+// Without a resolved fixed level a frame that cannot be split must not become "all plants".
+TEST(Thresholds, UnresolvedFixedLevelIsTheSafeSide) {
+  Histogram uniform{};
+  uniform[200] = 100;
+  const ThresholdResult result = compute_threshold(uniform, ThresholdMethod::kOtsu, {});
+  EXPECT_EQ(result.threshold, 255);
+  EXPECT_FALSE(result.bimodal);
+}
+
+}  // namespace
+}  // namespace weedspray::vision
