@@ -1,4 +1,7 @@
 # CPack: a Debian package of the whole install tree (owner: daemon engineer).
+# Build packages from a tree configured with -DCMAKE_INSTALL_PREFIX=/usr: GNUInstallDirs then
+# puts the configuration in /etc/weedspray, the unit in /usr/lib/systemd/system, and the
+# daemon's built-in default config path follows.
 set(CPACK_GENERATOR "DEB")
 set(CPACK_PACKAGE_NAME "weedspray")
 set(CPACK_PACKAGE_VENDOR "weedspray")
@@ -15,5 +18,4 @@ set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
 set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
 file(WRITE "${CMAKE_CURRENT_BINARY_DIR}/conffiles"
      "${CMAKE_INSTALL_FULL_SYSCONFDIR}/weedspray/weedspray.toml\n")
-set(CPACK_PACKAGING_INSTALL_PREFIX "/usr")
 include(CPack)

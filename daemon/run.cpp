@@ -92,7 +92,9 @@ class Daemon final : public CommandHandler {
         dbus_ = std::make_unique<DbusService>(event_, options_.user_bus, *this);
       } catch (const std::exception& error) {
         if (!options_.sim) throw;
-        spdlog::warn("{}; simulating without D-Bus", error.what());
+        // Nothing could send Start: spray as soon as the simulation is up.
+        spdlog::warn("{}; simulating without D-Bus, spraying at once", error.what());
+        config_.daemon.autostart = true;
       }
     }
 

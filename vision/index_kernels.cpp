@@ -30,6 +30,22 @@ inline std::uint32_t divide_by_twice(std::uint32_t n, int s) {
   return static_cast<std::uint32_t>((n * kReciprocals.multiplier[s]) >> 32);
 }
 
+// floor(n / (108 s)) for n < 2^24 and 1 <= s <= 765 (exg_exr), the same way with 2^44: the
+// error n / 2^44 < 2^-20 stays below the 1 / (108 s) >= 2^-17 gap; n m < 2^62 fits 64 bits.
+struct ExgExrReciprocalTable {
+  std::array<std::uint64_t, 766> multiplier{};
+  constexpr ExgExrReciprocalTable() {
+    for (std::uint64_t s = 1; s < multiplier.size(); ++s) {
+      multiplier[s] = (std::uint64_t{1} << 44) / (108 * s) + 1;
+    }
+  }
+};
+constexpr ExgExrReciprocalTable kExgExrReciprocals;
+
+inline std::uint32_t divide_by_108_times(std::uint64_t n, int s) {
+  return static_cast<std::uint32_t>((n * kExgExrReciprocals.multiplier[s]) >> 44);
+}
+
 // One pixel's index given R, G, B; the reference semantics of vegetation_index_of, with the
 // expensive ones on integer arithmetic.
 template <VegetationIndex kIndex>
@@ -44,8 +60,10 @@ inline std::uint8_t pixel_index(int r, int g, int b) {
   } else if constexpr (kIndex == VegetationIndex::kExgRaw) {
     return static_cast<std::uint8_t>((2 * g - r - b + 512) >> 2);
   } else if constexpr (kIndex == VegetationIndex::kExgMinusExr) {
-    return vegetation_index_of(kIndex, static_cast<std::uint8_t>(r), static_cast<std::uint8_t>(g),
-                               static_cast<std::uint8_t>(b));
+    const int sum = r + g + b;
+    if (sum == 0) return kExgExrGreyLevel;
+    return static_cast<std::uint8_t>(
+        divide_by_108_times(static_cast<std::uint64_t>(510 * (54 * g + 14 * b) + 54 * sum), sum));
   } else if constexpr (kIndex == VegetationIndex::kCive) {
     return static_cast<std::uint8_t>((kCiveOffset + 52 * g - 28 * r - 25 * b) >> 7);
   } else if constexpr (kIndex == VegetationIndex::kMaxValue) {
@@ -97,6 +115,10 @@ void yuyv_rows(const ImageView& frame, PixelRect rect, std::uint8_t* out, std::s
         // Luma is the weighted gray: no conversion at all.
         first = in[0];
         second = in[2];
+      } else if constexpr (kIndex == VegetationIndex::kCive) {
+        // Linear in Y, U, V: no RGB conversion (vegetation_index.hpp).
+        first = cive_of_yuv(in[0], in[1], in[3]);
+        second = cive_of_yuv(in[2], in[1], in[3]);
       } else {
         const Rgb p0 = yuv_to_rgb(in[0], in[1], in[3]);
         const Rgb p1 = yuv_to_rgb(in[2], in[1], in[3]);
@@ -151,7 +173,11 @@ template <VegetationIndex kIndex>
 struct YuyvKernel {
   static void run(const ImageView& frame, PixelRect rect, std::uint8_t* out, std::size_t out_stride,
                   Histogram& histogram) {
-    yuyv_rows<kIndex>(frame, rect, out, out_stride, histogram);
+    if constexpr (kIndex == VegetationIndex::kCive) {
+      cive_yuyv_rows_simd(frame, rect, out, out_stride, histogram);
+    } else {
+      yuyv_rows<kIndex>(frame, rect, out, out_stride, histogram);
+    }
   }
 };
 

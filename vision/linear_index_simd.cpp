@@ -1,8 +1,8 @@
 // Hand-written with OpenCV's universal intrinsics (one source for SSE2/AVX2 and NEON):
 // cv::cvtColor + cv::calcHist would need temporary images and three passes over the frame;
-// this needs one and allocates nothing. All arithmetic is modulo 2^16 in 16-bit lanes; the
-// fixed-point formulas of vegetation_index.hpp end in [0, 32767], so the result equals
-// vegetation_index_of bit for bit.
+// this needs one and allocates nothing. All arithmetic is in 16-bit lanes: modulo 2^16 for
+// the RGB formulas (they end in [0, 32767]), saturating for the YUYV one (its max(0, ...)),
+// so the results equal vegetation_index_of / cive_of_yuv bit for bit.
 #include "vision/linear_index_simd.hpp"
 
 #include <opencv2/core/hal/intrin.hpp>
@@ -38,6 +38,7 @@ struct SplitHistogram {
 // GCC turns a multiply by a constant vector into longer shift-and-add chains; read through
 // a volatile once per call, the weights are opaque and stay one multiply instruction each.
 volatile std::uint16_t g_cive_weights[3] = {52, 28, 25};  // green, red, blue
+volatile std::uint16_t g_yuv_cive_weights[2] = {71, 87};  // U, V
 
 struct CiveFormula {
   cv::v_uint16x8 green_weight = cv::v_setall_u16(g_cive_weights[0]);
@@ -109,6 +110,49 @@ void linear_rows(const ImageView& frame, PixelRect rect, std::uint8_t* out, std:
 }
 
 }  // namespace
+
+void cive_yuyv_rows_simd(const ImageView& frame, PixelRect rect, std::uint8_t* out,
+                         std::size_t out_stride, Histogram& histogram) {
+  const cv::v_uint16x8 offset = cv::v_setall_u16(36670);
+  const cv::v_uint16x8 u_weight = cv::v_setall_u16(g_yuv_cive_weights[0]);
+  const cv::v_uint16x8 v_weight = cv::v_setall_u16(g_yuv_cive_weights[1]);
+  const cv::v_uint16x8 low_byte = cv::v_setall_u16(0xFF);
+  SplitHistogram split;
+  for (int y = 0; y < rect.height; ++y) {
+    const std::uint8_t* in = frame.data + (rect.y + y) * frame.stride + rect.x * 2;
+    std::uint8_t* row_out = out + y * out_stride;
+    int x = 0;
+    for (; x + 16 <= rect.width; x += 16) {
+      // 16 pixels: luma Y0..Y15 and chroma U0 V0 U1 V1 ... (one U, V per pixel pair).
+      cv::v_uint8x16 luma, chroma;
+      cv::v_load_deinterleave(in + 2 * x, luma, chroma);
+      const cv::v_uint16x8 pairs = cv::v_reinterpret_as_u16(chroma);
+      const cv::v_uint16x8 u = pairs & low_byte;
+      const cv::v_uint16x8 v = pairs >> 8;
+      // 71 U + 87 V <= 40290: fits 16 bits.
+      const cv::v_uint16x8 chroma_term =
+          cv::v_add_wrap(cv::v_mul_wrap(u, u_weight), cv::v_mul_wrap(v, v_weight));
+      cv::v_uint16x8 chroma_low, chroma_high;
+      cv::v_zip(chroma_term, chroma_term, chroma_low, chroma_high);  // both pixels of a pair
+      cv::v_uint16x8 luma_low, luma_high;
+      cv::v_expand(luma, luma_low, luma_high);
+      // OpenCV's 16-bit - saturates at 0: exactly cive_of_yuv's max(0, ...).
+      const cv::v_uint16x8 value_low = (offset - luma_low - chroma_low) >> 7;
+      const cv::v_uint16x8 value_high = (offset - luma_high - chroma_high) >> 7;
+      const cv::v_uint8x16 value = cv::v_pack(value_low, value_high);  // saturates at 255
+      cv::v_store(row_out + x, value);
+      split.add16(value);
+    }
+    for (; x + 1 < rect.width; x += 2) {
+      const std::uint8_t* pair = in + 2 * x;
+      row_out[x] = cive_of_yuv(pair[0], pair[1], pair[3]);
+      row_out[x + 1] = cive_of_yuv(pair[2], pair[1], pair[3]);
+      ++split.bins[0][row_out[x]];
+      ++split.bins[1][row_out[x + 1]];
+    }
+  }
+  split.merge_into(histogram);
+}
 
 void cive_rows_simd(const ImageView& frame, PixelRect rect, std::uint8_t* out,
                     std::size_t out_stride, Histogram& histogram) {

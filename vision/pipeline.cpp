@@ -46,14 +46,9 @@ PixelRect region_of(const ImageView& frame, const RegionOfInterest& roi) {
 }  // namespace
 
 PipelineConfig default_pipeline_config() {
-  PipelineConfig config;
-  // Measured on data/ews-train (weedspray-lab vision-eval): CIVE with Otsu where the
-  // histogram is bimodal and CIVE's fixed level where it is not (sparse seedlings, bare soil)
-  // beats the UGV paper's normalised ExG + FIT, whose best possible per-image threshold
-  // reaches only about 0.57 IoU there.
-  config.index = VegetationIndex::kCive;
-  config.threshold = ThresholdMethod::kOtsu;
-  return config;
+  // Measured on data/ews-train (weedspray-lab vision-eval): CIVE beats the UGV paper's
+  // normalised ExG, whose best possible per-image threshold reaches only about 0.57 IoU there.
+  return PipelineConfig{};
 }
 
 void validate(const PipelineConfig& config) {

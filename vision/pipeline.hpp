@@ -20,9 +20,10 @@ namespace weedspray::vision {
 
 inline constexpr int kMaxZones = 64;  // rows * cols
 
+// Defaults are the project's pipeline (default_pipeline_config()).
 struct PipelineConfig {
-  VegetationIndex index = VegetationIndex::kExgNormalized;
-  ThresholdMethod threshold = ThresholdMethod::kFit;
+  VegetationIndex index = VegetationIndex::kCive;
+  ThresholdMethod threshold = ThresholdMethod::kOtsu;
   ThresholdParams threshold_params{};
   int rows = 1;  // zones along travel
   int cols = 4;  // zones across the boom: one per nozzle
@@ -33,7 +34,9 @@ struct PipelineConfig {
 };
 
 // The project's default: the index and threshold the daemon uses unless configured otherwise
-// (chosen by measured IoU on data/ews-train; see weedspray-lab vision-eval).
+// (chosen by measured IoU on data/ews-train; see weedspray-lab vision-eval). CIVE with Otsu
+// where the histogram is bimodal and CIVE's fixed level where it is not; the UGV paper's
+// choice is index = kExgNormalized, threshold = kFit.
 PipelineConfig default_pipeline_config();
 
 // Throws std::invalid_argument naming the offending field (start-up only).

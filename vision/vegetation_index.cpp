@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
 
 #include "vision/index_kernels.hpp"
 
@@ -17,10 +16,6 @@ constexpr std::array kIndices = {
 constexpr std::array<std::string_view, kIndices.size()> kIndexNames = {
     "exg_norm", "exg_raw", "exg_exr", "cive", "max_value", "weighted", "mono", "exg_chroma",
 };
-
-std::uint8_t clamp_to_byte(long value) {
-  return static_cast<std::uint8_t>(std::clamp(value, 0L, 255L));
-}
 
 }  // namespace
 
@@ -82,11 +77,11 @@ std::uint8_t vegetation_index_of(VegetationIndex index, std::uint8_t red, std::u
     case VegetationIndex::kExgRaw:
       // (2G - R - B + 510) / 4, rounded half up.
       return static_cast<std::uint8_t>((2 * g - r - b + 510 + 2) / 4);
-    case VegetationIndex::kExgMinusExr: {
-      if (sum == 0) return kExgExrGreyLevel;
-      const double x = (3.0 * g - 2.4 * r - b) / sum;
-      return clamp_to_byte(std::lround((x + 2.4) * 255.0 / 5.4));
-    }
+    case VegetationIndex::kExgMinusExr:
+      // (x + 2.4) * 255 / 5.4 = 255 (54 G + 14 B) / (54 S): rounded half up, in integers.
+      return sum == 0
+                 ? kExgExrGreyLevel
+                 : static_cast<std::uint8_t>((510 * (54 * g + 14 * b) + 54 * sum) / (108 * sum));
     case VegetationIndex::kCive:
       return static_cast<std::uint8_t>((kCiveOffset + 52 * g - 28 * r - 25 * b) >> 7);
     case VegetationIndex::kMaxValue:

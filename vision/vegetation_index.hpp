@@ -7,12 +7,18 @@
 //              Black pixels (R+G+B = 0) map to 85 (no colour, not a plant).
 //   exg_raw    2G - R - B on bytes, in [-510, 510]; v = round((ExG + 510) / 4), 128 is ExG = 0.
 //   exg_exr    ExG - ExR on chromatic coordinates, ExR = 1.4 r - g, so ExG - ExR = 3g - 2.4r - b,
-//              in [-2.4, 3]; v = round((x + 2.4) * 255 / 5.4), 113 is 0 (Meyer's zero threshold),
-//              grey and black (no colour) are 107.
+//              in [-2.4, 3]; v = round((x + 2.4) * 255 / 5.4) = round(255 (54 G + 14 B) / (54 S))
+//              with S = R + G + B, halves up; 113 is 0 (Meyer's zero threshold), grey and
+//              black (no colour) are 107.
 //   cive       CIVE = 0.441 R - 0.811 G + 0.385 B + 18.78745 (Kataoka), plants low, so
 //              v = 128 - (CIVE - 18.78745) / 2 in 7-bit fixed point:
 //              v = (16448 + 52 G - 28 R - 25 B) >> 7 (range 22..232, 128 is CIVE = 18.79;
 //              coefficients within 1.5 % of Kataoka's, and 16-bit SIMD friendly).
+//              YUYV frames: CIVE is linear in R, G, B and so in Y, U, V (BT.601 limited range);
+//              it is computed from them directly, without converting to RGB (cive_of_yuv):
+//              v = max(0, 36670 - Y - 71 U - 87 V) >> 7, capped at 255. In-gamut colours
+//              agree with the RGB formula within a level or two; colours outside the RGB
+//              gamut are not clipped first.
 //   max_value  max(R, G, B) (the UGV paper's "maximum value method" of graying).
 //   weighted   0.299 R + 0.587 G + 0.114 B (weighted gray; Y for YUYV frames).
 //   mono       the camera's own grey level: GREY bytes as they are, Y of YUYV, weighted gray
@@ -75,6 +81,12 @@ void compute_vegetation_index(const ImageView& frame, VegetationIndex index, Pix
 // data/ews-train (weedspray-lab vision-eval --bounds), used where a frame's histogram cannot
 // be split (unimodal, degenerate).
 int default_fixed_threshold(VegetationIndex index);
+
+// CIVE of one YUYV pixel (see above).
+inline std::uint8_t cive_of_yuv(std::uint8_t y, std::uint8_t u, std::uint8_t v) {
+  const int scaled = 36670 - y - 71 * u - 87 * v;
+  return static_cast<std::uint8_t>(scaled <= 0 ? 0 : (scaled >> 7 > 255 ? 255 : scaled >> 7));
+}
 
 // The index value of one pixel (reference implementation, used by tests and the lab tool).
 std::uint8_t vegetation_index_of(VegetationIndex index, std::uint8_t red, std::uint8_t green,

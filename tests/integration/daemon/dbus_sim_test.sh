@@ -4,8 +4,8 @@
 # set-point, a refused broken reload (old config keeps running), SIGTERM -> valves closed, exit 0.
 # usage: dbus_sim_test.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
-BUILD=$1
-SOURCE=$2
+BUILD=$(realpath "$1")
+SOURCE=$(realpath "$2")
 WEEDSPRAYD=$BUILD/daemon/weedsprayd
 SPRAYCTL=$BUILD/daemon/sprayctl
 PY=/usr/bin/python3

@@ -9,6 +9,9 @@
 
 #include "io/sim/manual_clock.hpp"
 
+#include <opencv2/core.hpp>
+#include <opencv2/videoio.hpp>
+
 namespace weedspray::io::sim {
 namespace {
 
@@ -75,6 +78,37 @@ TEST(ReplayCamera, SingleImageWithoutLoopEnds) {
   Frame f;
   EXPECT_EQ(camera.next_frame(f, 1s), FrameStatus::kOk);
   EXPECT_EQ(camera.next_frame(f, 1s), FrameStatus::kEnd);
+}
+
+TEST(ReplayCamera, ReplaysAVideoFileFrameByFrame) {
+  char tmpl[] = "/tmp/weedspray-replay-XXXXXX";
+  ASSERT_NE(mkdtemp(tmpl), nullptr);
+  const std::string path = std::string(tmpl) + "/run.avi";
+  {
+    cv::VideoWriter writer(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0,
+                           cv::Size(64, 48));
+    ASSERT_TRUE(writer.isOpened()) << "OpenCV cannot write " << path;
+    for (int i = 0; i < 5; ++i) writer.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar(i * 40, 0, 0)));
+  }
+  ManualClock clock;
+  ReplayCameraConfig config;
+  config.source = path;
+  config.loop = false;
+  config.fps = 5.0;
+  ReplayCamera camera(config, clock);
+  ASSERT_TRUE(camera.start()) << camera.last_error();
+  Frame f;
+  int frames = 0;
+  FrameStatus status;
+  while ((status = camera.next_frame(f, 1s)) == FrameStatus::kOk) {
+    EXPECT_EQ(f.view.width, 64);
+    EXPECT_EQ(f.view.height, 48);
+    EXPECT_EQ(f.timestamp, frames * 200ms);
+    ++frames;
+  }
+  EXPECT_EQ(status, FrameStatus::kEnd);
+  EXPECT_EQ(frames, 5);
+  std::filesystem::remove_all(tmpl);
 }
 
 TEST(ReplayCamera, MissingSourceIsAClearError) {

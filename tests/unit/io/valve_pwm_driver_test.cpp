@@ -6,6 +6,7 @@
 #include <stop_token>
 
 #include "control/pwm_schedule.hpp"
+#include "io/sim/hydraulic_rig.hpp"
 #include "io/sim/manual_clock.hpp"
 #include "io/sim/memory_output_bank.hpp"
 
@@ -191,6 +192,49 @@ TEST(ValvePwmDriver, NoCommandMeansNoValveEverOpens) {
   EXPECT_TRUE(rig.bank.history().empty());
   EXPECT_EQ(rig.bank.mask(), 0U);
   EXPECT_EQ(rig.driver.stats().edges_written, 0U);
+}
+
+// The driver on the simulated machine: the plant's valves follow the duties (more duty, more
+// liquid) and every valve ends closed.
+TEST(ValvePwmDriver, DrivesThePlantValvesAndLeavesThemClosed) {
+  ScriptedClock clock;
+  sim::HydraulicRig rig(sim::RigConfig{}, clock);
+  sim::RigValveBank valves(rig);
+  sim::RigPumpRelay pump(rig);
+  sim::RigReturnValveDac dac(rig, ValveDriveConfig{});
+  pump.write(1);
+  dac.write(0.3);
+  control::PwmConfig pwm;
+  control::PwmSchedule schedule(pwm);
+  ValvePwmDriverConfig config;
+  config.command_expiry = 10s;
+  ValvePwmDriver<control::PwmSchedule> driver(clock, valves, schedule, config);
+  ValveCommand cmd;
+  cmd.valve_count = 4;
+  cmd.duty_pct = {20, 40, 60, 80};
+  cmd.issued_at = 0ns;
+  driver.command(cmd);
+  std::uint32_t max_mask_seen = 0;
+  clock.on_sleep = [&](nanoseconds) { max_mask_seen |= valves.mask(); };
+  clock.stop_at = 5s;
+  driver.run(clock.stop.get_token());
+
+  EXPECT_EQ(max_mask_seen, 0xFU) << "every valve opened at some point";
+  EXPECT_EQ(valves.mask(), 0U) << "every valve ended closed";
+  std::array<double, 4> delivered{};
+  rig.with_plant([&](auto& plant) {
+    for (int i = 0; i < 4; ++i)
+      delivered[static_cast<std::size_t>(i)] = plant.nozzle_delivered_l(i);
+  });
+  for (std::size_t i = 1; i < 4; ++i)
+    EXPECT_GT(delivered[i], delivered[i - 1] * 1.2) << "nozzle " << i << " has more duty";
+  EXPECT_GT(delivered[0], 0.0);
+  double plant_time_s = 0.0;
+  rig.with_plant([&](auto& plant) { plant_time_s = plant.time_s(); });
+  EXPECT_NEAR(plant_time_s, 5.0, 0.05) << "the plant followed the clock";
+  RecordProperty("delivered_l", std::to_string(delivered[0]) + " " + std::to_string(delivered[1]) +
+                                    " " + std::to_string(delivered[2]) + " " +
+                                    std::to_string(delivered[3]));
 }
 
 }  // namespace

@@ -193,3 +193,89 @@ TEST(ComputeVegetationIndex, NormalisedExgExactForEveryGreenAndSum) {
 
 }  // namespace
 }  // namespace weedspray::vision
+
+namespace weedspray::vision {
+namespace {
+
+TEST(CiveOfYuv, HandComputedAndClamped) {
+  // Grey Y 126 (RGB 128): 36670 - 126 - 9088 - 11136 = 16320 -> 127, as cive of RGB 128.
+  EXPECT_EQ(cive_of_yuv(126, 128, 128), 127);
+  EXPECT_EQ(vegetation_index_of(VegetationIndex::kCive, 128, 128, 128), 127);
+  // Green Y 145 U 54 V 34: 36670 - 145 - 3834 - 2958 = 29733 -> 232.
+  EXPECT_EQ(cive_of_yuv(145, 54, 34), 232);
+  EXPECT_EQ(cive_of_yuv(255, 255, 255), 0);  // below zero: clamped
+  EXPECT_EQ(cive_of_yuv(0, 0, 0), 255);      // 286: capped
+}
+
+// In-gamut colours: CIVE from YUV agrees with CIVE from the RGB they encode.
+TEST(CiveOfYuv, AgreesWithRgbCiveInGamut) {
+  std::mt19937 random(3);
+  for (int i = 0; i < 20000; ++i) {
+    const int r = random() % 256, g = random() % 256, b = random() % 256;
+    // BT.601 limited-range RGB -> YUV in 8-bit fixed point.
+    const int y = ((66 * r + 129 * g + 25 * b + 128) >> 8) + 16;
+    const int u = ((-38 * r - 74 * g + 112 * b + 128) >> 8) + 128;
+    const int v = ((112 * r - 94 * g - 18 * b + 128) >> 8) + 128;
+    const int from_rgb = vegetation_index_of(VegetationIndex::kCive, r, g, b);
+    const int from_yuv = cive_of_yuv(y, u, v);
+    ASSERT_NEAR(from_yuv, from_rgb, 2) << r << "," << g << "," << b;
+  }
+}
+
+TEST(ComputeVegetationIndex, YuyvCiveKernelMatchesPixelReference) {
+  std::mt19937 random(11);
+  const int width = 70, height = 5;  // odd number of 16-pixel blocks plus a tail
+  const std::size_t stride = width * 2 + 6;
+  std::vector<std::uint8_t> yuyv(stride * height);
+  for (auto& byte : yuyv) byte = static_cast<std::uint8_t>(random());
+  const ImageView view{yuyv.data(), width, height, stride, PixelFormat::kYuyv};
+  const PixelRect rect{2, 1, 66, 4};
+  std::vector<std::uint8_t> out(rect.width * rect.height);
+  Histogram histogram{};
+  compute_vegetation_index(view, VegetationIndex::kCive, rect, out.data(), rect.width, histogram);
+  Histogram expected_histogram{};
+  for (int y = 0; y < rect.height; ++y) {
+    for (int x = 0; x < rect.width; ++x) {
+      const std::uint8_t* pair = &yuyv[(rect.y + y) * stride + ((rect.x + x) & ~1) * 2];
+      const std::uint8_t expected = cive_of_yuv(pair[(x & 1) * 2], pair[1], pair[3]);
+      ASSERT_EQ(out[y * rect.width + x], expected) << x << "," << y;
+      ++expected_histogram[expected];
+    }
+  }
+  EXPECT_EQ(histogram, expected_histogram);
+}
+
+}  // namespace
+}  // namespace weedspray::vision
+
+namespace weedspray::vision {
+namespace {
+
+// ExG - ExR depends on G, B and R + G + B: every (R, G, B) once, against the reference.
+TEST(ComputeVegetationIndex, ExgMinusExrExactForEveryColour) {
+  test::BgrFrame frame(256, 256, test::kBlack);
+  std::vector<std::uint8_t> out(256 * 256);
+  for (int g = 0; g < 256; ++g) {
+    for (int r = 0; r < 256; ++r) {
+      for (int b = 0; b < 256; ++b) {
+        frame.set(b, r,
+                  {static_cast<std::uint8_t>(b), static_cast<std::uint8_t>(g),
+                   static_cast<std::uint8_t>(r)});
+      }
+    }
+    Histogram histogram{};
+    compute_vegetation_index(frame.view(), VegetationIndex::kExgMinusExr, {0, 0, 256, 256},
+                             out.data(), 256, histogram);
+    for (int r = 0; r < 256; ++r) {
+      for (int b = 0; b < 256; ++b) {
+        ASSERT_EQ(out[r * 256 + b],
+                  vegetation_index_of(VegetationIndex::kExgMinusExr, static_cast<std::uint8_t>(r),
+                                      static_cast<std::uint8_t>(g), static_cast<std::uint8_t>(b)))
+            << r << "," << g << "," << b;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace weedspray::vision

@@ -1,0 +1,115 @@
+#!/usr/bin/env bash
+# The D-Bus policy file on a private bus that loads it (like the system bus does): root may
+# own the name and call methods; any other user (here: nobody, not in group weedspray) may read
+# properties and introspect, but every method call is denied. Also: a malformed policy is
+# rejected by dbus-daemon, so the file is known to parse.
+# usage: bus_policy_test.sh BUILD_DIR SOURCE_DIR   (runs as root; skipped otherwise)
+set -euo pipefail
+BUILD=$(realpath "$1")
+SOURCE=$(realpath "$2")
+POLICY=$SOURCE/systemd/org.weedspray.Sprayer1.conf
+if [ "$(id -u)" -ne 0 ] || ! id nobody >/dev/null 2>&1; then
+  echo "SKIP: needs root and user nobody"
+  exit 0
+fi
+T=$(mktemp -d /tmp/weedspray-policy-test.XXXXXX)
+chmod 755 "$T"
+DAEMON_PID=
+BUS_PID=
+cleanup() {
+  [ -n "$DAEMON_PID" ] && kill -KILL "$DAEMON_PID" 2>/dev/null || true
+  [ -n "$BUS_PID" ] && kill "$BUS_PID" 2>/dev/null || true
+  rm -rf "$T"
+}
+trap cleanup EXIT
+fail() {
+  echo "FAIL: $*" >&2
+  tail -n 20 "$T/daemon.log" >&2 || true
+  exit 1
+}
+
+write_bus_config() {  # write_bus_config POLICY_FILE OUTPUT
+  cat >"$2" <<XML
+<!DOCTYPE busconfig PUBLIC "-//freedesktop//DTD D-BUS Bus Configuration 1.0//EN"
+ "http://www.freedesktop.org/standards/dbus/1.0/busconfig.dtd">
+<busconfig>
+  <type>custom</type>
+  <listen>unix:path=$T/bus</listen>
+  <auth>EXTERNAL</auth>
+  <!-- the system bus's defaults: deny owning and sending unless a policy allows it -->
+  <policy context="default">
+    <allow user="*"/>
+    <deny own="*"/>
+    <deny send_type="method_call"/>
+    <allow send_destination="org.freedesktop.DBus"/>
+    <allow send_type="signal"/>
+    <allow send_requested_reply="true" send_type="method_return"/>
+    <allow send_requested_reply="true" send_type="error"/>
+    <allow receive_type="method_call"/>
+    <allow receive_type="method_return"/>
+    <allow receive_type="error"/>
+    <allow receive_type="signal"/>
+  </policy>
+  <include>$1</include>
+</busconfig>
+XML
+}
+
+# A malformed policy must not load.
+sed 's/send_destination/sned_destination/' "$POLICY" >"$T/bad.conf"
+write_bus_config "$T/bad.conf" "$T/bad-bus.conf"
+if dbus-daemon --config-file="$T/bad-bus.conf" --fork --nopidfile --print-address=1 \
+  >/dev/null 2>&1; then
+  fail "dbus-daemon accepted a malformed policy (the check cannot tell good from bad)"
+fi
+
+write_bus_config "$POLICY" "$T/bus.conf"
+dbus-daemon --config-file="$T/bus.conf" --fork --nopidfile --print-address=3 --print-pid=4 \
+  3>"$T/bus.addr" 4>"$T/bus.pid" 2>"$T/bus.err" || fail "bus: $(cat "$T/bus.err")"
+BUS_PID=$(cat "$T/bus.pid")
+export DBUS_SESSION_BUS_ADDRESS=$(cat "$T/bus.addr")
+chmod 777 "$T/bus"
+
+mkdir -p "$T/state"
+"$BUILD/daemon/weedsprayd" --sim --user --config "$SOURCE/etc/weedspray.toml" \
+  --state-dir "$T/state" >"$T/daemon.log" 2>&1 &
+DAEMON_PID=$!
+as_nobody() { setpriv --reuid=nobody --regid=nogroup --clear-groups "$@"; }
+for _ in $(seq 1 100); do
+  state=$(busctl --user get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
+    org.weedspray.Sprayer1 State 2>/dev/null || true)
+  [ "$state" = 's "Idle"' ] && break
+  kill -0 "$DAEMON_PID" 2>/dev/null || fail "weedsprayd could not start on the policy bus"
+  sleep 0.2
+done
+
+# Anyone reads and introspects.
+as_nobody busctl --user get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
+  org.weedspray.Sprayer1 State >"$T/out.txt" 2>&1 || fail "nobody cannot read State: $(cat "$T/out.txt")"
+as_nobody "$BUILD/daemon/sprayctl" --user status --json >"$T/out.txt" 2>&1 ||
+  fail "nobody cannot GetAll: $(cat "$T/out.txt")"
+as_nobody busctl --user introspect org.weedspray.Sprayer1 /org/weedspray/Sprayer1 >/dev/null 2>&1 ||
+  fail "nobody cannot introspect"
+echo "ok: reading allowed to everyone"
+
+# Methods: denied to nobody, allowed to root.
+for cmd in start stop clear-alarms reload "set-pressure 0.3"; do
+  # shellcheck disable=SC2086
+  if as_nobody "$BUILD/daemon/sprayctl" --user $cmd 2>"$T/err.txt"; then
+    fail "nobody was allowed to call $cmd"
+  fi
+  grep -q "AccessDenied" "$T/err.txt" || fail "$cmd by nobody: $(cat "$T/err.txt")"
+done
+if as_nobody busctl --user set-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
+  org.weedspray.Sprayer1 State s Spraying 2>/dev/null; then
+  fail "nobody could Set a property"
+fi
+echo "ok: methods denied to other users"
+"$BUILD/daemon/sprayctl" --user start || fail "root cannot Start"
+[ "$(busctl --user get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
+  org.weedspray.Sprayer1 State)" = 's "Spraying"' ] || fail "root's Start had no effect"
+echo "ok: root may call methods"
+kill -TERM "$DAEMON_PID"
+wait "$DAEMON_PID" || fail "exit status $? after SIGTERM"
+DAEMON_PID=
+echo "PASS"
