@@ -62,8 +62,12 @@ void validate(const PipelineConfig& config) {
           "roi must satisfy 0 <= top < bottom <= 1");
   require(config.inter_row_fraction > 0.0 && config.inter_row_fraction < 1.0,
           "inter_row_fraction must lie in (0, 1)");
-  if (auto problem = validate_density_cuts(config.level_cuts))
-    require(false, std::string(*problem));
+  if (auto problem = validate_density_cuts(config.level_cuts)) {
+    require(false, "level_cuts: " + std::string(*problem));
+  }
+  if (auto problem = validate_density_cuts(config.inter_row_cuts)) {
+    require(false, "inter_row_cuts: " + std::string(*problem));
+  }
   const ThresholdParams& params = config.threshold_params;
   require(params.fixed_threshold == ThresholdParams::kIndexDefault ||
               (params.fixed_threshold >= 0 && params.fixed_threshold <= 255),
@@ -142,7 +146,7 @@ const FrameResult& Pipeline::process(const ImageView& frame) {
                                columns);
     }
     find_inter_row_intervals({columns, static_cast<std::size_t>(region_.width)}, pixels,
-                             config_.inter_row_fraction, config_.level_cuts, result_.inter_row);
+                             config_.inter_row_fraction, config_.inter_row_cuts, result_.inter_row);
   }
   last_frame_ok_ = true;
   return result_;

@@ -28,9 +28,10 @@ struct PipelineConfig {
   int rows = 1;  // zones along travel
   int cols = 4;  // zones across the boom: one per nozzle
   RegionOfInterest roi{};
-  DensityLevelCuts level_cuts{};
+  DensityLevelCuts level_cuts{};          // zone density -> level
   bool inter_row_map = false;             // also compute the 2018 lateral-histogram map
   double inter_row_fraction = 1.0 / 3.0;  // columns <= this fraction of the max are inter-row
+  DensityLevelCuts inter_row_cuts{};      // p(n), share of the region's pixels -> level
 };
 
 // The project's default: the index and threshold the daemon uses unless configured otherwise
