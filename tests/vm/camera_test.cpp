@@ -5,27 +5,18 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
-#include <filesystem>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "io/linux/monotonic_clock.hpp"
 #include "io/linux/v4l2_camera.hpp"
+#include "tests/vm/vivid_fixture.hpp"
 
 namespace weedspray::io::hw {
 namespace {
 
 using namespace std::chrono_literals;
-
-// guest-init.sh loads vivid with one capture node; its number is up to the kernel.
-std::string vivid_device() {
-  for (const auto& entry : std::filesystem::directory_iterator("/sys/class/video4linux")) {
-    const std::string node = entry.path().filename();
-    if (node.rfind("video", 0) == 0) return "/dev/" + node;
-  }
-  return "";
-}
 
 std::size_t bytes_per_pixel_row(vision::PixelFormat format, int width) {
   switch (format) {
@@ -60,8 +51,7 @@ TEST_P(CameraStreamTest, StreamsFramesWithPlausibleTimestamps) {
   constexpr int kFps = 30;
   MonotonicClock clock;
   V4l2CameraConfig config;
-  config.device = vivid_device();
-  ASSERT_FALSE(config.device.empty()) << "vivid made no /dev/video node";
+  config.device = vm_test::vivid_video_node();
   config.width = 640;
   config.height = 360;
   config.fps = kFps;
@@ -131,7 +121,7 @@ TEST(CameraErrorTest, MissingDeviceIsAClearError) {
 TEST(CameraErrorTest, SizeTheDeviceCannotDeliverIsAClearError) {
   MonotonicClock clock;
   V4l2CameraConfig config;
-  config.device = vivid_device();
+  config.device = vm_test::vivid_video_node();
   config.width = 1234;  // vivid's webcam input has fixed sizes only
   config.height = 567;
   V4l2Camera camera(config, clock);
