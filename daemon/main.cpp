@@ -6,6 +6,7 @@
 #include "daemon/config_schema.hpp"
 #include "daemon/options.hpp"
 #include "daemon/run.hpp"
+#include "daemon/sim_faults.hpp"
 
 int main(int argc, char** argv) {
   using namespace weedspray::daemon;
@@ -26,7 +27,18 @@ int main(int argc, char** argv) {
                  "sim: write the final valve states here on exit");
   app.add_option("--run-seconds", options.run_seconds, "exit by itself after this long")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--sim-fault", options.sim_faults,
+                 "sim: inject NAME@SECONDS (sensor_open, sensor_short, filter_blocked, "
+                 "tank_empty, nozzleN_blocked)")
+      ->check([](const std::string& value) {
+        return weedspray::daemon::parse_sim_fault(value) ? std::string()
+                                                         : "expected NAME@SECONDS, got " + value;
+      });
   CLI11_PARSE(app, argc, argv);
+  if (!options.sim_faults.empty() && !options.sim) {
+    std::cerr << "weedsprayd: --sim-fault needs --sim\n";
+    return 1;
+  }
 
   if (options.print_default_config) {
     std::cout << documented_config();

@@ -20,6 +20,7 @@
 #include "daemon/config.hpp"
 #include "daemon/dbus_service.hpp"
 #include "daemon/logging.hpp"
+#include "daemon/sim_faults.hpp"
 #include "daemon/sprayer.hpp"
 #include "daemon/state_machine.hpp"
 #include "daemon/status.hpp"
@@ -260,6 +261,7 @@ class Daemon final : public CommandHandler {
     const Nanos now = backends_.clock->now();
     const double t = seconds(now - start_time_);
     if (backends_.drive_world) backends_.drive_world(t);
+    inject_sim_faults(t);
     const PressureStatus pressure = sprayer_->pressure();
     const ControlStatus control = sprayer_->control();
 
@@ -294,6 +296,17 @@ class Daemon final : public CommandHandler {
       persist_totals();
     }
     if (options_.run_seconds > 0 && t >= options_.run_seconds) sd_event_exit(event_, 0);
+  }
+
+  void inject_sim_faults(double t) {
+    if (!backends_.with_plant) return;
+    for (std::size_t i = sim_faults_done_; i < options_.sim_faults.size(); ++i) {
+      const auto fault = parse_sim_fault(options_.sim_faults[i]);
+      if (!fault || t < fault->at_s) continue;
+      spdlog::warn("sim: injecting fault {}", fault->name);
+      backends_.with_plant(fault->apply);
+      sim_faults_done_ = i + 1;
+    }
   }
 
   void drain_latencies() {
@@ -506,6 +519,7 @@ class Daemon final : public CommandHandler {
   double setpoint_mpa_;
   std::uint64_t trip_reset_ = 0;
   std::uint64_t key_changes_ = 0;
+  std::size_t sim_faults_done_ = 0;
   std::uint64_t coverage_gaps_seen_ = 0;
   Nanos start_time_{};
   Nanos tank_last_ok_{};

@@ -88,6 +88,10 @@ struct V4l2Camera::Impl {
   bool driver_sequence = true;  // the driver's buffer sequence numbers are usable
   std::uint32_t last_driver_sequence = 0;
   std::uint64_t last_sequence = 0;
+  // After a reopen the driver numbers frames from 0 again; this offset keeps Frame::sequence
+  // increasing across the gap so consumers never see it go backwards.
+  bool restarted = false;
+  std::int64_t sequence_offset = 0;
   milliseconds backoff{0};
   nanoseconds next_reopen{0};
 
@@ -216,6 +220,7 @@ struct V4l2Camera::Impl {
     v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     if (xioctl(fd, VIDIOC_STREAMON, &type) != 0) return fail_errno("STREAMON");
     streaming = true;
+    restarted = have_sequence || restarted;
     have_sequence = false;
     driver_sequence = true;
     return true;
@@ -329,11 +334,13 @@ FrameStatus V4l2Camera::next_frame(Frame& frame, milliseconds timeout) {
   // sequence 0 for every frame: once the driver's numbers stop increasing, count ourselves.
   if (m.have_sequence && m.driver_sequence && buf.sequence <= m.last_driver_sequence)
     m.driver_sequence = false;
+  if (!m.have_sequence && m.restarted)
+    m.sequence_offset = static_cast<std::int64_t>(m.last_sequence + 1) - buf.sequence;
   if (m.driver_sequence) {
     if (m.have_sequence && buf.sequence > m.last_driver_sequence + 1)
       m.counters.dropped += buf.sequence - m.last_driver_sequence - 1;
     m.last_driver_sequence = buf.sequence;
-    frame.sequence = buf.sequence;
+    frame.sequence = static_cast<std::uint64_t>(m.sequence_offset + buf.sequence);
   } else {
     frame.sequence = m.last_sequence + 1;
   }

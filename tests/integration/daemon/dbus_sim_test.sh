@@ -162,4 +162,39 @@ echo "ok: SIGTERM -> valves closed, pump off, exit 0"
 csv=$(ls "$T"/state/as-applied/as-applied-*.csv | head -1)
 [ "$(wc -l <"$csv")" -gt 20 ] || fail "as-applied log too short: $csv"
 grep -q "^area_m2 = " "$T/state/totals.toml" || fail "totals not saved"
+area=$(sed -n 's/^area_m2 = //p' "$T/state/totals.toml")
+echo "ok: as-applied log and totals ($area m^2)"
+
+# Restart: totals restored; then a pressure-sensor wire breaks while spraying.
+"$WEEDSPRAYD" --sim --user --config "$T/etc/weedspray.toml" --state-dir "$T/state" \
+  --valve-state-file "$T/valves.txt" --sim-fault sensor_open@4 >"$T/daemon.log" 2>&1 &
+DAEMON_PID=$!
+for _ in $(seq 1 100); do
+  [ "$(prop State 2>/dev/null || true)" = '"Idle"' ] && break
+  sleep 0.2
+done
+$PY -c "import sys; assert float(sys.argv[1]) >= float(sys.argv[2]) > 0, sys.argv" \
+  "$(prop AreaCovered)" "$area" || fail "totals not restored: $(prop AreaCovered) < $area"
+"$SPRAYCTL" --user monitor >"$T/monitor.txt" 2>&1 &
+MONITOR_PID=$!
+"$SPRAYCTL" --user start || fail "Start"
+for _ in $(seq 1 50); do
+  [ "$(prop State)" = '"Fault"' ] && break
+  sleep 0.2
+done
+[ "$(prop State)" = '"Fault"' ] || fail "no Fault after the sensor wire broke"
+[ "$(prop Alarms)" = '1 "pressure_sensor_fault"' ] || fail "Alarms: $(prop Alarms)"
+[ "$(prop NozzleDuty)" = "4 0 0 0 0" ] || fail "valves commanded open in Fault: $(prop NozzleDuty)"
+if "$SPRAYCTL" --user start 2>/dev/null; then fail "Start accepted in Fault"; fi
+sleep 0.5
+kill "$MONITOR_PID"
+grep -q "^alarm-raised: pressure_sensor_fault" "$T/monitor.txt" || fail "no AlarmRaised signal"
+grep -q "alarm raised: pressure_sensor_fault" "$T/daemon.log" || fail "alarm not logged"
+kill -TERM "$DAEMON_PID"
+rc=0
+wait "$DAEMON_PID" || rc=$?
+DAEMON_PID=
+[ "$rc" -eq 0 ] || fail "exit status $rc after SIGTERM in Fault"
+[ "$(cat "$T/valves.txt")" = "valves=0x0 pump=0" ] || fail "outputs at exit: $(cat "$T/valves.txt")"
+echo "ok: sensor fault -> Fault, AlarmRaised, valves closed; totals restored"
 echo "PASS"
