@@ -300,12 +300,13 @@ class Daemon final : public CommandHandler {
 
   void inject_sim_faults(double t) {
     if (!backends_.with_plant) return;
-    for (std::size_t i = sim_faults_done_; i < options_.sim_faults.size(); ++i) {
+    sim_faults_done_.resize(options_.sim_faults.size(), false);
+    for (std::size_t i = 0; i < options_.sim_faults.size(); ++i) {
       const auto fault = parse_sim_fault(options_.sim_faults[i]);
-      if (!fault || t < fault->at_s) continue;
+      if (sim_faults_done_[i] || !fault || t < fault->at_s) continue;
       spdlog::warn("sim: injecting fault {}", fault->name);
       backends_.with_plant(fault->apply);
-      sim_faults_done_ = i + 1;
+      sim_faults_done_[i] = true;
     }
   }
 
@@ -519,7 +520,7 @@ class Daemon final : public CommandHandler {
   double setpoint_mpa_;
   std::uint64_t trip_reset_ = 0;
   std::uint64_t key_changes_ = 0;
-  std::size_t sim_faults_done_ = 0;
+  std::vector<bool> sim_faults_done_;
   std::uint64_t coverage_gaps_seen_ = 0;
   Nanos start_time_{};
   Nanos tank_last_ok_{};

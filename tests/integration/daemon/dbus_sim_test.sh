@@ -173,7 +173,7 @@ for _ in $(seq 1 100); do
   [ "$(prop State 2>/dev/null || true)" = '"Idle"' ] && break
   sleep 0.2
 done
-$PY -c "import sys; assert float(sys.argv[1]) >= float(sys.argv[2]) > 0, sys.argv" \
+$PY -c "import sys; assert float(sys.argv[1]) >= float(sys.argv[2]) - 0.01 > 0, sys.argv" \
   "$(prop AreaCovered)" "$area" || fail "totals not restored: $(prop AreaCovered) < $area"
 "$SPRAYCTL" --user monitor >"$T/monitor.txt" 2>&1 &
 MONITOR_PID=$!
