@@ -1,5 +1,6 @@
 // Renders the key table as the commented default configuration file.
 #include <toml++/toml.h>
+#include <charconv>
 #include <sstream>
 
 #include "daemon/config_schema.hpp"
@@ -18,6 +19,14 @@ std::string format_value(const DefaultValue& value) {
           out << array;
         } else if constexpr (std::is_same_v<V, int>) {
           out << toml::value<std::int64_t>(v);
+        } else if constexpr (std::is_same_v<V, double>) {
+          // Shortest text that reads back to the same double (3.3, not 3.2999999999999998),
+          // always with a '.' or exponent so TOML reads it as a float.
+          char text[32];
+          const auto end = std::to_chars(text, text + sizeof text, v).ptr;
+          std::string number(text, end);
+          if (number.find_first_of(".en") == std::string::npos) number += ".0";
+          out << number;
         } else {
           out << toml::value<V>(v);
         }
