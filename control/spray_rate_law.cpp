@@ -169,41 +169,6 @@ double DutyQuantiser::quantise(double duty_pct) noexcept {
   return levels_[current_];
 }
 
-void validate(const DensityLevelCuts& cuts) {
-  for (std::size_t i = 0; i < cuts.cut_points.size(); ++i) {
-    require(std::isfinite(cuts.cut_points[i]) && cuts.cut_points[i] >= 0.0,
-            "density levels: cut point " + std::to_string(i) + " must be >= 0");
-    require(
-        i == 0 || cuts.cut_points[i] > cuts.cut_points[i - 1],
-        "density levels: cut points must be strictly ascending (entry " + std::to_string(i) + ")");
-  }
-}
-
-DensityLevel classify_density(const DensityLevelCuts& cuts, double density) noexcept {
-  if (!std::isfinite(density)) return DensityLevel::kNone;
-  std::size_t level = 0;
-  while (level < cuts.cut_points.size() && density >= cuts.cut_points[level]) ++level;
-  return static_cast<DensityLevel>(level);
-}
-
-const char* to_string(DensityLevel level) noexcept {
-  switch (level) {
-    case DensityLevel::kNone:
-      return "none";
-    case DensityLevel::kFew:
-      return "few";
-    case DensityLevel::kModerate:
-      return "moderate";
-    case DensityLevel::kMany:
-      return "many";
-    case DensityLevel::kSevere:
-      return "severe";
-    case DensityLevel::kVerySevere:
-      return "very severe";
-  }
-  return "unknown";
-}
-
 std::uint8_t combination_mask_for_mode(int mode) noexcept {
   static constexpr std::array<std::uint8_t, 8> kMasks{0b000, 0b001, 0b010, 0b100,
                                                       0b011, 0b101, 0b110, 0b111};

@@ -122,15 +122,8 @@ class DutyQuantiser {
   bool has_level_ = false;
 };
 
-// Six weed-density levels of the 2018 paper.
-enum class DensityLevel : std::uint8_t { kNone, kFew, kModerate, kMany, kSevere, kVerySevere };
-// cut_points[i] is the lowest density of level i+1 (ascending). Throws if not ascending.
-struct DensityLevelCuts {
-  std::array<double, 5> cut_points{0.01, 0.05, 0.10, 0.20, 0.35};
-};
-void validate(const DensityLevelCuts& cuts);
-DensityLevel classify_density(const DensityLevelCuts& cuts, double density) noexcept;
-const char* to_string(DensityLevel level) noexcept;
+// The 2018 paper's six density levels are classified where the densities are measured:
+// vision/zones.hpp (classify_density, DensityLevelCuts), reported per zone in FrameResult.
 
 // Nozzle-combination mode (2018 paper): three nozzles of different sizes per row, each on/off.
 // Flows are at reference pressure; they scale with sqrt(P / P_ref).

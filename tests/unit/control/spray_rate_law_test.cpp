@@ -147,20 +147,6 @@ TEST(DutyQuantiser, CustomLevelsAndValidation) {
   EXPECT_THROW(DutyQuantiser::evenly_spaced(1, 0.0), std::invalid_argument);
 }
 
-TEST(DensityLevels, SixLevelsFromCutPoints) {
-  const DensityLevelCuts cuts{};
-  EXPECT_EQ(classify_density(cuts, 0.0), DensityLevel::kNone);
-  EXPECT_EQ(classify_density(cuts, 0.01), DensityLevel::kFew);
-  EXPECT_EQ(classify_density(cuts, 0.07), DensityLevel::kModerate);
-  EXPECT_EQ(classify_density(cuts, 0.15), DensityLevel::kMany);
-  EXPECT_EQ(classify_density(cuts, 0.3), DensityLevel::kSevere);
-  EXPECT_EQ(classify_density(cuts, 0.9), DensityLevel::kVerySevere);
-  EXPECT_STREQ(to_string(DensityLevel::kVerySevere), "very severe");
-  DensityLevelCuts bad{};
-  bad.cut_points[2] = 0.01;
-  EXPECT_THROW(validate(bad), std::invalid_argument);
-}
-
 TEST(NozzleCombination, ModesOfThe2018Paper) {
   EXPECT_EQ(combination_mask_for_mode(0), 0b000);
   EXPECT_EQ(combination_mask_for_mode(1), 0b001);
