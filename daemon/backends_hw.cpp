@@ -27,20 +27,26 @@ T* keep(Backends& b, std::shared_ptr<T> device) {
   return device.get();
 }
 
-io::DigitalOutputBank* single_line(Backends& b, const GpioSection& gpio, int offset,
-                                   bool active_low) {
-  if (offset < 0) return nullptr;
+bool wired(const std::string& name, int offset) {
+  return !name.empty() || offset >= 0;
+}
+
+io::DigitalOutputBank* single_line(Backends& b, const GpioSection& gpio, const std::string& name,
+                                   int offset, bool active_low) {
+  if (!wired(name, offset)) return nullptr;
   io::hw::GpioOutputBankConfig config;
   config.chip = gpio.chip;
   config.lines.push_back(io::hw::GpioLineConfig{
-      .name = {}, .offset = offset, .active_low = active_low, .safe_value = false});
+      .name = name, .offset = offset, .active_low = active_low, .safe_value = false});
   return keep(b, std::make_shared<io::hw::GpioOutputBank>(config));
 }
 
-io::PulseInput* pulse_line(Backends& b, const GpioSection& gpio, int offset) {
-  if (offset < 0) return nullptr;
+io::PulseInput* pulse_line(Backends& b, const GpioSection& gpio, const std::string& name,
+                           int offset) {
+  if (!wired(name, offset)) return nullptr;
   io::hw::GpioPulseInputConfig config;
   config.chip = gpio.chip;
+  config.line.name = name;
   config.line.offset = offset;
   return keep(b, std::make_shared<io::hw::GpioPulseInput>(config));
 }
@@ -52,9 +58,9 @@ Backends make_hw_backends(const Config& config) {
   b.mode = "hw";
   b.clock = keep(b, std::make_shared<io::hw::MonotonicClock>());
   const auto& gpio = config.gpio;
-  if (gpio.valve_offsets.empty()) {
+  if (gpio.valve_offsets.empty() && gpio.valve_names.empty()) {
     throw std::runtime_error(
-        "gpio.valve_offsets is empty: no valve lines to drive (use --sim "
+        "gpio.valve_offsets and gpio.valve_names are empty: no valve lines to drive (use --sim "
         "to run without hardware)");
   }
   io::hw::GpioOutputBankConfig valves;
@@ -63,19 +69,27 @@ Backends make_hw_backends(const Config& config) {
     valves.lines.push_back(io::hw::GpioLineConfig{
         .name = {}, .offset = offset, .active_low = gpio.valve_active_low, .safe_value = false});
   }
+  for (const auto& name : gpio.valve_names) {
+    valves.lines.push_back(io::hw::GpioLineConfig{
+        .name = name, .offset = -1, .active_low = gpio.valve_active_low, .safe_value = false});
+  }
   // Lines are requested with their safe values as defaults: no valve glitches open here.
   b.valves = keep(b, std::make_shared<io::hw::GpioOutputBank>(valves));
-  b.pump = single_line(b, gpio, gpio.pump_offset, gpio.pump_active_low);
-  b.buzzer = single_line(b, gpio, gpio.buzzer_offset, false);
-  b.led = single_line(b, gpio, gpio.led_offset, false);
-  b.flow = pulse_line(b, gpio, gpio.flow_offset);
-  b.wheel = config.wheel.source == "fixed" ? nullptr : pulse_line(b, gpio, gpio.wheel_offset);
+  b.pump = single_line(b, gpio, gpio.pump_name, gpio.pump_offset, gpio.pump_active_low);
+  b.buzzer = single_line(b, gpio, gpio.buzzer_name, gpio.buzzer_offset, false);
+  b.led = single_line(b, gpio, gpio.led_name, gpio.led_offset, false);
+  b.flow = pulse_line(b, gpio, gpio.flow_name, gpio.flow_offset);
+  b.wheel = config.wheel.source == "fixed"
+                ? nullptr
+                : pulse_line(b, gpio, gpio.wheel_name, gpio.wheel_offset);
   if (config.wheel.source == "pulses" && b.wheel == nullptr) {
-    throw std::runtime_error("wheel.source = \"pulses\" needs gpio.wheel_offset");
+    throw std::runtime_error(
+        "wheel.source = \"pulses\" needs gpio.wheel_offset or gpio.wheel_name");
   }
-  if (gpio.key_offset >= 0) {
+  if (wired(gpio.key_name, gpio.key_offset)) {
     io::hw::GpioDigitalInputConfig key;
     key.chip = gpio.chip;
+    key.line.name = gpio.key_name;
     key.line.offset = gpio.key_offset;
     key.line.active_low = gpio.key_active_low;
     b.key = keep(b, std::make_shared<io::hw::GpioDigitalInput>(key));

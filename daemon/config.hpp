@@ -94,16 +94,24 @@ struct PressureSection {
 
 struct GpioSection {
   std::string chip;
+  // Each line is named by offset on `chip` or, when its *_name is not empty, by line name.
   std::vector<int> valve_offsets;  // one per nozzle, boom order; empty = not wired
+  std::vector<std::string> valve_names;
   bool valve_active_low;
   int pump_offset;  // -1 = not wired
+  std::string pump_name;
   bool pump_active_low;
   int buzzer_offset;
+  std::string buzzer_name;
   int led_offset;
+  std::string led_name;
   int key_offset;
+  std::string key_name;
   bool key_active_low;
   int flow_offset;
+  std::string flow_name;
   int wheel_offset;
+  std::string wheel_name;
 };
 
 struct AdcSection {

@@ -13,9 +13,10 @@ std::string format_value(const DefaultValue& value) {
   std::visit(
       [&](const auto& v) {
         using V = std::decay_t<decltype(v)>;
-        if constexpr (std::is_same_v<V, std::vector<int>>) {
+        if constexpr (std::is_same_v<V, std::vector<int>> ||
+                      std::is_same_v<V, std::vector<std::string>>) {
           toml::array array;
-          for (int element : v) array.push_back(element);
+          for (const auto& element : v) array.push_back(element);
           out << array;
         } else if constexpr (std::is_same_v<V, int>) {
           out << toml::value<std::int64_t>(v);

@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "daemon/config.hpp"
 #include "daemon/config_schema.hpp"
@@ -137,6 +138,20 @@ void set_from_node(const KeySpec<Root>& spec, Root& root, const toml::node& node
       std::get<std::vector<int>& (*)(Root&)>(spec.field)(root) = std::move(values);
       break;
     }
+    case KeyType::kStringList: {
+      if (!node.is_array()) expect("array of strings");
+      std::vector<std::string> values;
+      for (const auto& element : *node.as_array()) {
+        if (!element.is_string()) {
+          throw ConfigError(
+              where.file, line_of(element), where.key,
+              "expected strings in the array, got " + std::string(node_type_name(element)));
+        }
+        values.push_back(element.as_string()->get());
+      }
+      std::get<std::vector<std::string>& (*)(Root&)>(spec.field)(root) = std::move(values);
+      break;
+    }
   }
 }
 
@@ -266,6 +281,26 @@ class Loader {
            std::to_string(c.gpio.valve_offsets.size()) +
                " lines listed for boom.nozzles = " + std::to_string(c.boom.nozzles));
     }
+    if (!c.gpio.valve_names.empty() &&
+        c.gpio.valve_names.size() != static_cast<std::size_t>(c.boom.nozzles)) {
+      fail("gpio.valve_names",
+           std::to_string(c.gpio.valve_names.size()) +
+               " lines listed for boom.nozzles = " + std::to_string(c.boom.nozzles));
+    }
+    if (!c.gpio.valve_names.empty() && !c.gpio.valve_offsets.empty()) {
+      fail("gpio.valve_names", "name the valve lines by offset or by name, not both");
+    }
+    for (const auto& [name, offset, key] :
+         {std::tuple{&c.gpio.pump_name, c.gpio.pump_offset, "gpio.pump_name"},
+          std::tuple{&c.gpio.buzzer_name, c.gpio.buzzer_offset, "gpio.buzzer_name"},
+          std::tuple{&c.gpio.led_name, c.gpio.led_offset, "gpio.led_name"},
+          std::tuple{&c.gpio.key_name, c.gpio.key_offset, "gpio.key_name"},
+          std::tuple{&c.gpio.flow_name, c.gpio.flow_offset, "gpio.flow_name"},
+          std::tuple{&c.gpio.wheel_name, c.gpio.wheel_offset, "gpio.wheel_name"}}) {
+      if (!name->empty() && offset >= 0) {
+        fail(key, "set either the line name or its offset, not both");
+      }
+    }
     if (c.spray.quantiser_levels == 1) {
       fail("spray.quantiser_levels", "must be 0 (no quantisation) or 2..14");
     }
@@ -362,9 +397,10 @@ void insert_value(toml::table& table, const KeySpec<Root>& spec, Root& root) {
       [&](auto access) {
         const auto& value = access(root);
         using Value = std::remove_cvref_t<decltype(value)>;
-        if constexpr (std::is_same_v<Value, std::vector<int>>) {
+        if constexpr (std::is_same_v<Value, std::vector<int>> ||
+                      std::is_same_v<Value, std::vector<std::string>>) {
           toml::array array;
-          for (int element : value) array.push_back(element);
+          for (const auto& element : value) array.push_back(element);
           table.insert_or_assign(spec.name, std::move(array));
         } else {
           table.insert_or_assign(spec.name, value);

@@ -28,8 +28,10 @@ KeyType KeySpec<Root>::type() const {
       return KeyType::kDouble;
     case 3:
       return choices.empty() ? KeyType::kString : KeyType::kEnum;
-    default:
+    case 4:
       return KeyType::kIntList;
+    default:
+      return KeyType::kStringList;
   }
 }
 
@@ -55,6 +57,8 @@ std::string_view key_type_name(KeyType type) {
       return "choice";
     case KeyType::kIntList:
       return "array of integers";
+    case KeyType::kStringList:
+      return "array of strings";
   }
   return "?";
 }
@@ -163,23 +167,37 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "GPIO chip (name or /dev path) holding every line below"},
     {WS_KEY(gpio, valve_offsets), std::vector<int>{}, 0, 1023, "line",
      "valve line offsets, one per nozzle in boom order (empty = not wired)"},
+    {WS_KEY(gpio, valve_names), std::vector<std::string>{}, 0, 0, "",
+     "valve line names instead of offsets, one per nozzle (as in gpioinfo; empty = use offsets)"},
     {WS_KEY(gpio, valve_active_low), false, 0, 1, "",
      "valve lines are active-low"},
     {WS_KEY(gpio, pump_offset), -1, -1, 1023, "line",
      "pump relay line (-1 = not wired)"},
+    {WS_KEY(gpio, pump_name), std::string(""), 0, 0, "",
+     "pump relay line by name instead of offset (empty = use the offset)"},
     {WS_KEY(gpio, pump_active_low), false, 0, 1, "",
      "pump relay line is active-low"},
     {WS_KEY(gpio, buzzer_offset), -1, -1, 1023, "line",
      "alarm buzzer line (-1 = none)"},
+    {WS_KEY(gpio, buzzer_name), std::string(""), 0, 0, "",
+     "alarm buzzer line by name instead of offset (empty = use the offset)"},
     {WS_KEY(gpio, led_offset), -1, -1, 1023, "line", "alarm LED line (-1 = none)"},
+    {WS_KEY(gpio, led_name), std::string(""), 0, 0, "",
+     "alarm LED line by name instead of offset (empty = use the offset)"},
     {WS_KEY(gpio, key_offset), -1, -1, 1023, "line",
      "start/stop key input (-1 = none); each press toggles Idle/Spraying"},
+    {WS_KEY(gpio, key_name), std::string(""), 0, 0, "",
+     "start/stop key line by name instead of offset (empty = use the offset)"},
     {WS_KEY(gpio, key_active_low), true, 0, 1, "",
      "start/stop key pulls the line low when pressed"},
     {WS_KEY(gpio, flow_offset), -1, -1, 1023, "line",
      "flow meter pulse input (-1 = none)"},
+    {WS_KEY(gpio, flow_name), std::string(""), 0, 0, "",
+     "flow meter line by name instead of offset (empty = use the offset)"},
     {WS_KEY(gpio, wheel_offset), -1, -1, 1023, "line",
      "Hall wheel sensor pulse input (-1 = none)"},
+    {WS_KEY(gpio, wheel_name), std::string(""), 0, 0, "",
+     "Hall wheel sensor line by name instead of offset (empty = use the offset)"},
     // [adc]
     {WS_KEY(adc, iio_device), std::string("iio:device0"), 0, 0, "",
      "IIO device reading the pressure sensor: iio:deviceN, its path, or its name (ads1015)"},

@@ -12,13 +12,15 @@
 
 namespace weedspray::daemon {
 
-enum class KeyType { kBool, kInt, kDouble, kString, kEnum, kIntList };
+enum class KeyType { kBool, kInt, kDouble, kString, kEnum, kIntList, kStringList };
 
 template <class Root>
-using FieldAccess = std::variant<bool& (*)(Root&), int& (*)(Root&), double& (*)(Root&),
-                                 std::string& (*)(Root&), std::vector<int>& (*)(Root&)>;
+using FieldAccess =
+    std::variant<bool& (*)(Root&), int& (*)(Root&), double& (*)(Root&), std::string& (*)(Root&),
+                 std::vector<int>& (*)(Root&), std::vector<std::string>& (*)(Root&)>;
 
-using DefaultValue = std::variant<bool, int, double, std::string, std::vector<int>>;
+using DefaultValue =
+    std::variant<bool, int, double, std::string, std::vector<int>, std::vector<std::string>>;
 
 template <class Root>
 struct KeySpec {

@@ -68,6 +68,10 @@ std::pair<std::string, DefaultValue> other_value(const KeySpec<Root>& spec) {
       std::vector<int> v{5, 6, 7, 8};
       return {"[5, 6, 7, 8]", v};
     }
+    case KeyType::kStringList: {
+      std::vector<std::string> v{"v0", "v1", "v2", "v3"};
+      return {"[\"v0\", \"v1\", \"v2\", \"v3\"]", v};
+    }
   }
   return {};
 }
@@ -219,6 +223,26 @@ TEST(ConfigErrors, CrossKeyRulesNameTheKeyAndWhereItWasSet) {
                                "[boom]\nnozzles = 4\n[[camera]]\nnozzle_count = 3\n[[camera]]\n"
                                "first_nozzle = 2\nnozzle_count = 2\n"}});
   EXPECT_EQ(h.key(), "camera[1].first_nozzle");
+  const auto both_valves = parse_error(
+      {{"main.toml",
+        "[gpio]\nvalve_offsets = [1, 2, 3, 4]\nvalve_names = [\"a\", \"b\", \"c\", \"d\"]\n"}});
+  EXPECT_EQ(both_valves.key(), "gpio.valve_names");
+  EXPECT_EQ(both_valves.line(), 3);
+  const auto both_pump =
+      parse_error({{"main.toml", "[gpio]\npump_offset = 5\npump_name = \"pump\"\n"}});
+  EXPECT_EQ(both_pump.key(), "gpio.pump_name");
+  const auto not_strings = parse_error({{"main.toml", "[gpio]\nvalve_names = [\"a\", 2]\n"}});
+  EXPECT_EQ(not_strings.key(), "gpio.valve_names");
+}
+
+TEST(ConfigSchema, GpioLinesByName) {
+  Config config = parse(
+      "[gpio]\nvalve_names = [\"valve0\", \"valve1\", \"valve2\", \"valve3\"]\n"
+      "flow_name = \"flow\"\n");
+  EXPECT_EQ(config.gpio.valve_names.size(), 4U);
+  EXPECT_EQ(config.gpio.valve_names[3], "valve3");
+  EXPECT_EQ(config.gpio.flow_name, "flow");
+  EXPECT_EQ(config.gpio.flow_offset, -1);
 }
 
 class ConfigFiles : public ::testing::Test {
