@@ -25,7 +25,8 @@ PwmSchedule::PwmSchedule(const PwmConfig& config)
     : valve_count_(config.valve_count),
       period_(0),
       min_on_(config.min_on_time),
-      min_off_(config.min_off_time) {
+      min_off_(config.min_off_time),
+      immediate_(config.immediate_start_stop) {
   if (config.valve_count < 1 || config.valve_count > kMaxPwmValves) {
     throw std::invalid_argument("PwmConfig.valve_count must be 1..32, got " +
                                 std::to_string(config.valve_count));
@@ -74,19 +75,46 @@ void PwmSchedule::start(nanoseconds t0) noexcept {
     valve.next_period_start = t0 + valve.offset;
     valve.on_time = nanoseconds(0);
     valve.latched_duty_pct = 0.0;
+    valve.closed_at = t0 - min_off_;  // outputs were forced safe before a (re)start
   }
   cursor_ = t0;
   mask_ = 0;
 }
 
 void PwmSchedule::set_duty(std::size_t valve, double duty_pct) noexcept {
-  if (valve >= valve_count_) return;
-  valves_[valve].requested_duty_pct = std::isnan(duty_pct) ? 0.0 : std::clamp(duty_pct, 0.0, 100.0);
+  set_duty(valve, duty_pct, cursor_);
 }
 
 void PwmSchedule::set_duties(std::span<const double> duty_pct) noexcept {
+  set_duties(duty_pct, cursor_);
+}
+
+void PwmSchedule::set_duty(std::size_t valve, double duty_pct, nanoseconds now) noexcept {
+  if (valve >= valve_count_) return;
+  Valve& v = valves_[valve];
+  v.requested_duty_pct = std::isnan(duty_pct) ? 0.0 : std::clamp(duty_pct, 0.0, 100.0);
+  if (!immediate_) return;
+  now = std::max(now, cursor_);
+  const bool open = (mask_ >> valve & 1u) != 0;
+  // Closed for the rest of its period: never started, a 0 % period, or an immediate stop.
+  const bool closed_all_period =
+      !open && (!v.started || v.on_time == nanoseconds(0) || v.latched_duty_pct == 0.0);
+  if (closed_all_period && on_time_for(v.requested_duty_pct) > nanoseconds(0)) {
+    // Start a new period now instead of waiting for the stagger slot; next_edge() latches it.
+    v.next_period_start = std::min(v.next_period_start, std::max(now, v.closed_at + min_off_));
+  } else if (open && v.requested_duty_pct == 0.0) {
+    // Close now: end this period's pulse here (it still lasts at least min_on_time).
+    const nanoseconds close_at = std::max(now, v.period_start + min_on_);
+    if (close_at < v.period_start + v.on_time) {
+      v.on_time = close_at - v.period_start;
+      v.latched_duty_pct = 0.0;
+    }
+  }
+}
+
+void PwmSchedule::set_duties(std::span<const double> duty_pct, nanoseconds now) noexcept {
   const std::size_t n = std::min(duty_pct.size(), valve_count_);
-  for (std::size_t v = 0; v < n; ++v) set_duty(v, duty_pct[v]);
+  for (std::size_t v = 0; v < n; ++v) set_duty(v, duty_pct[v], now);
 }
 
 std::uint32_t PwmSchedule::force_closed() noexcept {
@@ -94,6 +122,7 @@ std::uint32_t PwmSchedule::force_closed() noexcept {
     valves_[v].requested_duty_pct = 0.0;
     valves_[v].latched_duty_pct = 0.0;
     valves_[v].on_time = nanoseconds(0);
+    if ((mask_ >> v & 1u) != 0) valves_[v].closed_at = cursor_;
   }
   mask_ = 0;
   return mask_;
@@ -148,22 +177,44 @@ std::uint32_t PwmSchedule::mask_at(nanoseconds t) const noexcept {
   return mask;
 }
 
-PwmEdge PwmSchedule::next_edge() noexcept {
-  // Every pending event lies strictly after the last applied one: period starts advance by
-  // T > 0 and an off event lies inside its period, so the earliest pending event is next.
-  auto close_time = [this](std::size_t v) {
-    const Valve& valve = valves_[v];
-    const bool closes_in_period = valve.started && (mask_ >> v & 1u) != 0 &&
-                                  valve.on_time > nanoseconds(0) && valve.on_time < period_;
-    return closes_in_period ? valve.period_start + valve.on_time : nanoseconds::max();
-  };
+nanoseconds PwmSchedule::close_time(std::size_t v) const noexcept {
+  const Valve& valve = valves_[v];
+  // on_time may be 0 for an open valve only after an immediate stop at its period start.
+  const bool closes_in_period = valve.started && (mask_ >> v & 1u) != 0 && valve.on_time < period_;
+  return closes_in_period ? valve.period_start + valve.on_time : nanoseconds::max();
+}
+
+nanoseconds PwmSchedule::next_event_time() const noexcept {
+  // Every pending event lies after the last applied one (or at it, for an immediate start/stop
+  // requested at that instant): period starts advance by T > 0 and an off event lies inside its
+  // period, so the earliest pending event is next.
   nanoseconds t = nanoseconds::max();
   for (std::size_t v = 0; v < valve_count_; ++v) {
     t = std::min({t, valves_[v].next_period_start, close_time(v)});
   }
+  return t;
+}
+
+PwmEdge PwmSchedule::peek_edge() const noexcept {
+  const nanoseconds t = next_event_time();
+  std::uint32_t mask = mask_;
+  for (std::size_t v = 0; v < valve_count_; ++v) {
+    const std::uint32_t bit = 1u << v;
+    if (close_time(v) == t) mask &= ~bit;
+    if (valves_[v].next_period_start == t) {
+      mask = on_time_for(valves_[v].requested_duty_pct) > nanoseconds(0) ? (mask | bit)
+                                                                         : (mask & ~bit);
+    }
+  }
+  return PwmEdge{t, mask};
+}
+
+PwmEdge PwmSchedule::next_edge() noexcept {
+  const nanoseconds t = next_event_time();
   for (std::size_t v = 0; v < valve_count_; ++v) {
     Valve& valve = valves_[v];
     const std::uint32_t bit = 1u << v;
+    const bool was_open = (mask_ & bit) != 0;
     if (close_time(v) == t) mask_ &= ~bit;
     if (valve.next_period_start == t) {
       valve.started = true;
@@ -173,6 +224,7 @@ PwmEdge PwmSchedule::next_edge() noexcept {
       valve.on_time = on_time_for(valve.latched_duty_pct);
       mask_ = valve.on_time > nanoseconds(0) ? (mask_ | bit) : (mask_ & ~bit);
     }
+    if (was_open && (mask_ & bit) == 0) valve.closed_at = t;
   }
   cursor_ = t;
   return PwmEdge{t, mask_};

@@ -5,7 +5,13 @@
 // valves do not open together; outer-first order (A D B C for four valves) disturbed the inner
 // nozzles least in the paper. In the synchronous mode all periods start together (for the
 // comparison). Each valve opens at its period start and closes after duty*T; the duty set with
-// set_duty() is latched only at that valve's next period start.
+// set_duty() is latched only at that valve's next period start (latched mode).
+// Immediate mode (PwmConfig.immediate_start_stop, used by the daemon so spray lands on the imaged
+// ground): set_duty(valve, duty, now) on a CLOSED valve (closed for its whole current period)
+// with duty > 0 starts a new period at once — at now, or later only as far as min_off_time since
+// the valve closed requires; its later periods follow on from that start, so its stagger slot is
+// given up. A duty of 0 on an OPEN valve closes it at once (at now, or at period start +
+// min_on_time if later). Other duty changes are still latched at the next period start.
 // Minimum on/off time: a pulse whose on part would be shorter than min_on_time is rounded to
 // the NEARER of 0 (closed all period) and min_on_time; an off part shorter than min_off_time
 // to the nearer of 0 (open all period) and min_off_time. This keeps the mean flow error of a
@@ -45,6 +51,8 @@ struct PwmConfig {
   std::vector<std::size_t> order{};
   std::chrono::nanoseconds min_on_time{0};
   std::chrono::nanoseconds min_off_time{0};
+  // false: latched mode (duty changes only at period starts); true: immediate mode (above).
+  bool immediate_start_stop = false;
 };
 
 // Outer-first stagger order: 0, N-1, 1, N-2, ... (for N = 4: A D B C).
@@ -70,15 +78,23 @@ class PwmSchedule {
 
   // Requested duty in percent, clamped to [0, 100] (NaN -> 0); latched at the valve's next
   // period start. Out-of-range valve index is ignored.
+  // In immediate mode, `now` (>= the last edge time; earlier is treated as it) is when the
+  // change is requested: a start/stop happens at or after it, never before. The overloads
+  // without `now` use the last edge time.
   void set_duty(std::size_t valve, double duty_pct) noexcept;
   void set_duties(std::span<const double> duty_pct) noexcept;
+  void set_duty(std::size_t valve, double duty_pct, std::chrono::nanoseconds now) noexcept;
+  void set_duties(std::span<const double> duty_pct, std::chrono::nanoseconds now) noexcept;
   // Close everything NOW: all requested and latched duties -> 0; returns the mask to write (0).
   // The following edges keep every valve closed until new duties are set.
   std::uint32_t force_closed() noexcept;
 
-  // Advance the cursor to the next edge strictly after the previous one (or at/after t0 for
-  // the first call) and return it.
+  // Advance the cursor to the next edge and return it: strictly after the previous one, except
+  // that an immediate start/stop requested at exactly the last edge time lies at that time.
   PwmEdge next_edge() noexcept;
+  // The edge next_edge() would return now, without advancing (the io layer peeks so a duty
+  // change made before the edge is due is reflected in it).
+  PwmEdge peek_edge() const noexcept;
   // Time of the last edge returned (t0 right after start()).
   std::chrono::nanoseconds last_edge_time() const noexcept { return cursor_; }
 
@@ -108,6 +124,7 @@ class PwmSchedule {
     std::chrono::nanoseconds period_start{0};       // start of the current period
     std::chrono::nanoseconds next_period_start{0};  // start of the next period
     std::chrono::nanoseconds on_time{0};            // of the current period
+    std::chrono::nanoseconds closed_at{0};          // last open -> closed edge (min off-time)
     bool started = false;                           // first period has begun
     double requested_duty_pct = 0.0;
     double latched_duty_pct = 0.0;
@@ -117,6 +134,10 @@ class PwmSchedule {
   std::chrono::nanoseconds period_;
   std::chrono::nanoseconds min_on_;
   std::chrono::nanoseconds min_off_;
+  std::chrono::nanoseconds close_time(std::size_t valve) const noexcept;
+  std::chrono::nanoseconds next_event_time() const noexcept;
+
+  bool immediate_;
   std::array<Valve, kMaxPwmValves> valves_{};
   std::chrono::nanoseconds cursor_{0};
   std::uint32_t mask_ = 0;

@@ -39,6 +39,9 @@ control::PwmConfig pwm_config(const Config& config) {
   }
   pwm.min_on_time = from_seconds(config.pwm.min_on_s);
   pwm.min_off_time = from_seconds(config.pwm.min_off_s);
+  // A spray start/stop happens when the ground under the nozzle starts/stops needing it, not at
+  // the valve's next period start (up to 50 cm later at 2.5 m/s and 5 Hz).
+  pwm.immediate_start_stop = true;
   return pwm;
 }
 
@@ -265,12 +268,6 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   const double boom_width_m = config_.boom.nozzle_width_m * static_cast<double>(nozzles);
   const double flow_ppl = config_.flow.pulses_per_litre;
   const Nanos record_period = from_seconds(1.0 / config_.pwm.frequency_hz);
-  // A duty is latched only at the valve's next period start, and the driver fetches each edge
-  // one edge ahead: on average a command takes effect T/2 + T/N later. Plan for the ground
-  // the nozzle will be over then, so placement errors straddle zero instead of all lagging.
-  const double pwm_period_s = 1.0 / config_.pwm.frequency_hz;
-  const double latch_lead_s =
-      pwm_period_s / 2 + (config_.pwm.staggered ? pwm_period_s / static_cast<double>(nozzles) : 0);
   LiveParams params = params_.read();
   std::uint64_t params_version = params_.version();
   ControlStatus status;
@@ -351,8 +348,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       if (owner >= 0) {
         const auto& worker = cameras_[static_cast<std::size_t>(owner)];
         density = worker.scheduler->duty_at(n - static_cast<std::size_t>(worker.first_nozzle),
-                                            status.distance_m + status.speed_m_per_s * latch_lead_s,
-                                            status.speed_m_per_s);
+                                            status.distance_m, status.speed_m_per_s);
       }
       status.density[n] = density;
       double duty = 0;

@@ -7,9 +7,13 @@
 // The schedule is control::PwmSchedule (control/pwm_schedule.hpp); it is a template parameter
 // only so tests can substitute a scripted one. The driver uses:
 //   void start(std::chrono::nanoseconds t0) noexcept;   // restart phases at t0
-//   void set_duties(std::span<const double> duty_pct) noexcept;  // latched at period starts
+//   void set_duties(std::span<const double> duty_pct, std::chrono::nanoseconds now) noexcept;
 //   std::uint32_t force_closed() noexcept;              // all duties -> 0
+//   PwmEdge peek_edge() const noexcept;                 // next edge, without advancing
 //   PwmEdge next_edge() noexcept;                       // .time, .valve_mask (all valves)
+// The driver never holds a fetched edge across a sleep: it peeks the next edge on every wake,
+// so new duties (an immediate spray start/stop in the schedule) apply at once, not one edge
+// late.
 #pragma once
 
 #include <algorithm>
@@ -73,13 +77,12 @@ class ValvePwmDriver {
   void run(std::stop_token stop) noexcept {
     bank_.force_safe();
     stats_.last_mask = bank_.safe_mask();
-    bool have_edge = false;
-    PwmEdgeT edge{};
     std::uint64_t seen_version = 0;
     std::chrono::nanoseconds refreshed_at{};
     bool have_command = false;
 
     while (!stop.stop_requested()) {
+      std::chrono::nanoseconds now = clock_.now();
       const std::uint64_t version = commands_.version();
       if (version != seen_version) {
         ValveCommand cmd;
@@ -87,14 +90,13 @@ class ValvePwmDriver {
           seen_version = version;
           const std::uint32_t n = std::min<std::uint32_t>(
               cmd.valve_count, static_cast<std::uint32_t>(std::min(bank_.size(), kMaxValves)));
-          schedule_.set_duties(std::span<const double>(cmd.duty_pct.data(), n));
+          schedule_.set_duties(std::span<const double>(cmd.duty_pct.data(), n), now);
           refreshed_at = cmd.issued_at;
           have_command = true;
           ++stats_.commands_applied;
         }
       }
 
-      std::chrono::nanoseconds now = clock_.now();
       const std::chrono::nanoseconds expires_at = refreshed_at + config_.command_expiry;
       if (!have_command || now >= expires_at) {
         if (!stats_.expired) {
@@ -104,7 +106,6 @@ class ValvePwmDriver {
           stats_.expired = true;
           ++stats_.deadman_expiries;
         }
-        have_edge = false;  // resynchronise with the schedule once commands return
         publish_stats();
         clock_.sleep_until(now + config_.max_sleep);
         continue;
@@ -114,47 +115,30 @@ class ValvePwmDriver {
         stats_.expired = false;
         schedule_.start(now);
         stats_.schedule_start = now;
-        have_edge = false;
-        have_pending_ = false;
       }
 
-      if (!have_edge) {
-        edge = schedule_.next_edge();
-        have_edge = true;
-        // Behind by more than one edge (e.g. resuming after expiry): skip to the latest due
-        // edge, which carries the current state of every valve.
-        for (int guard = 0; guard < kMaxSkip; ++guard) {
-          const PwmEdgeT following = schedule_.next_edge();
-          if (following.time > now) {
-            pending_ = following;
-            have_pending_ = true;
-            break;
-          }
-          ++stats_.skipped_edges;
-          edge = following;
-        }
-      }
-
+      // Peeked afresh on every wake, so duties set since the last wake are reflected.
+      const PwmEdgeT upcoming = schedule_.peek_edge();
       const std::chrono::nanoseconds wake =
-          std::min({edge.time, expires_at, now + config_.max_sleep});
+          std::min({upcoming.time, expires_at, now + config_.max_sleep});
       if (wake > now) {
         clock_.sleep_until(wake);
         continue;  // re-check stop, commands and expiry before the edge
       }
 
-      // The edge is due.
+      // The edge is due. Behind by more than one edge (e.g. a late wake): skip to the latest due
+      // edge, which carries the current state of every valve.
+      PwmEdgeT edge = schedule_.next_edge();
+      for (int guard = 0; guard < kMaxSkip && schedule_.peek_edge().time <= now; ++guard) {
+        ++stats_.skipped_edges;
+        edge = schedule_.next_edge();
+      }
       write_mask(edge.valve_mask);
       now = clock_.now();
       const std::chrono::nanoseconds lateness = now - edge.time;
       if (lateness > stats_.max_lateness) stats_.max_lateness = lateness;
       if (lateness > config_.late_threshold) ++stats_.late_edges;
       ++stats_.edges_written;
-      if (have_pending_) {
-        edge = pending_;
-        have_pending_ = false;
-      } else {
-        edge = schedule_.next_edge();
-      }
       publish_stats();
     }
     bank_.force_safe();
@@ -180,8 +164,6 @@ class ValvePwmDriver {
   LatestValue<ValveCommand> commands_;
   LatestValue<ValvePwmStats> published_stats_;
   ValvePwmStats stats_;
-  PwmEdgeT pending_{};
-  bool have_pending_ = false;
 };
 
 }  // namespace weedspray::io

@@ -246,5 +246,127 @@ TEST(PwmSchedule, RejectsBadConfig) {
   EXPECT_THROW(PwmSchedule{config}, std::invalid_argument);
 }
 
+PwmConfig immediate_four_valves() {
+  PwmConfig config = four_valves();
+  config.immediate_start_stop = true;
+  return config;
+}
+
+// Advances the schedule through every edge before `t`.
+void advance_to(PwmSchedule& pwm, nanoseconds t) {
+  while (pwm.peek_edge().time < t) pwm.next_edge();
+}
+
+// The next edge at which `valve` changes state (other valves' period starts are passed over).
+PwmEdge next_change(PwmSchedule& pwm, std::size_t valve) {
+  const std::uint32_t bit = 1u << valve;
+  const std::uint32_t was = pwm.current_mask() & bit;
+  PwmEdge edge = pwm.next_edge();
+  while ((edge.valve_mask & bit) == was) edge = pwm.next_edge();
+  return edge;
+}
+
+TEST(PwmSchedule, ImmediateModeStartsAClosedValveAtOnce) {
+  PwmSchedule pwm(immediate_four_valves());
+  pwm.start(0ns);
+  advance_to(pwm, 360ms);
+  // Valve 2's stagger slot is at 150 ms + k*200 ms: latched, it would open at 550 ms.
+  pwm.set_duty(2, 50.0, 360ms);
+  const PwmEdge opened = pwm.peek_edge();
+  EXPECT_EQ(opened.time, 360ms);
+  EXPECT_EQ(opened.valve_mask, 1u << 2);
+  EXPECT_EQ(pwm.next_edge().time, 360ms);
+  const PwmEdge closed = next_change(pwm, 2);
+  EXPECT_EQ(closed.time, 460ms) << "a full 50 % pulse from the new period start";
+  EXPECT_EQ(closed.valve_mask, 0u);
+  const PwmEdge next_period = next_change(pwm, 2);
+  EXPECT_EQ(next_period.time, 560ms) << "later periods follow on from the immediate start";
+  EXPECT_EQ(next_period.valve_mask, 1u << 2);
+}
+
+TEST(PwmSchedule, ImmediateModeClosesAnOpenValveAtOnceButKeepsMinOnTime) {
+  PwmConfig config = immediate_four_valves();
+  config.min_on_time = 40ms;
+  PwmSchedule pwm(config);
+  pwm.set_duty(0, 50.0);
+  pwm.start(0ns);
+  EXPECT_EQ(pwm.next_edge().valve_mask, 1u);  // valve 0 opens at 0 until 100 ms
+  pwm.set_duty(0, 0.0, 20ms);
+  PwmEdge edge = pwm.next_edge();
+  EXPECT_EQ(edge.time, 40ms) << "closed as soon as the minimum on-time allows";
+  EXPECT_EQ(edge.valve_mask, 0u);
+  // Later: open again, then close right away.
+  advance_to(pwm, 300ms);        // the 200 ms period latched 0
+  pwm.set_duty(0, 50.0, 300ms);  // min off-time 0: starts at once
+  edge = pwm.next_edge();
+  EXPECT_EQ(edge.time, 300ms);
+  EXPECT_EQ(edge.valve_mask, 1u);
+  advance_to(pwm, 370ms);
+  pwm.set_duty(0, 0.0, 370ms);
+  edge = pwm.next_edge();
+  EXPECT_EQ(edge.time, 370ms);
+  EXPECT_EQ(edge.valve_mask & 1u, 0u);
+  EXPECT_EQ(pwm.mask_at(450ms), 0u) << "stays closed";
+}
+
+TEST(PwmSchedule, ImmediateStartWaitsOnlyForTheMinimumOffTime) {
+  PwmConfig config = immediate_four_valves();
+  config.min_off_time = 60ms;
+  PwmSchedule pwm(config);
+  pwm.set_duty(0, 50.0);
+  pwm.start(0ns);
+  pwm.next_edge();              // opens at 0
+  pwm.set_duty(0, 0.0, 100ms);  // during the pulse ...
+  pwm.set_duty(0, 0.0, 10ms);   // ... closes at 10 ms
+  EXPECT_EQ(pwm.next_edge().time, 10ms);
+  advance_to(pwm, 200ms);
+  pwm.next_edge();  // the 200 ms period start latches 0: closed all period
+  pwm.set_duty(0, 50.0, 205ms);
+  // Closed since 10 ms: min off-time long satisfied, so it opens at once.
+  EXPECT_EQ(pwm.peek_edge().time, 205ms);
+  pwm.next_edge();
+  pwm.set_duty(0, 0.0, 230ms);
+  EXPECT_EQ(pwm.next_edge().time, 230ms);
+  pwm.set_duty(0, 0.0, 240ms);
+  // Another valve's edge must not hide the off-time: request at 250 ms -> opens at 290 ms.
+  pwm.set_duty(0, 50.0, 250ms);
+  advance_to(pwm, 290ms);
+  const PwmEdge reopened = pwm.next_edge();
+  EXPECT_EQ(reopened.time, 290ms) << "closed at 230 ms + 60 ms minimum off-time";
+  EXPECT_EQ(reopened.valve_mask, 1u);
+}
+
+TEST(PwmSchedule, LatchedModeStillWaitsForThePeriodStart) {
+  PwmSchedule pwm(four_valves());
+  pwm.start(0ns);
+  advance_to(pwm, 360ms);
+  pwm.set_duty(2, 50.0, 360ms);
+  PwmEdge edge = pwm.next_edge();
+  while (edge.valve_mask == 0) edge = pwm.next_edge();
+  EXPECT_EQ(edge.time, 550ms);
+  EXPECT_EQ(edge.valve_mask, 1u << 2);
+}
+
+TEST(PwmSchedule, PeekEdgeMatchesNextEdge) {
+  PwmConfig config = immediate_four_valves();
+  config.min_on_time = 10ms;
+  PwmSchedule pwm(config);
+  pwm.start(0ns);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> duty(0.0, 100.0);
+  for (int i = 0; i < 2000; ++i) {
+    if (i % 5 == 0) {
+      const auto v = static_cast<std::size_t>(i / 5 % 4);
+      pwm.set_duty(v, i % 3 == 0 ? 0.0 : duty(rng), pwm.last_edge_time() + 1ms);
+    }
+    const PwmEdge peeked = pwm.peek_edge();
+    const nanoseconds before = pwm.last_edge_time();
+    const PwmEdge edge = pwm.next_edge();
+    ASSERT_EQ(peeked.time, edge.time);
+    ASSERT_EQ(peeked.valve_mask, edge.valve_mask);
+    ASSERT_GE(edge.time, before);
+  }
+}
+
 }  // namespace
 }  // namespace weedspray::control

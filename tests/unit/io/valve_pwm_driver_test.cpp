@@ -185,6 +185,54 @@ TEST(ValvePwmDriver, ResumesAfterExpiryWhenCommandsReturn) {
   EXPECT_EQ(stats.late_edges, 0U);
 }
 
+// With the immediate schedule, a spray start/stop is written when the command arrives, not at
+// the valve's next period start (nor one fetched edge later).
+TEST(ValvePwmDriver, AppliesAnImmediateStartAndStopWhenTheCommandArrives) {
+  ScriptedClock clock;
+  sim::MemoryOutputBank bank{4, 0, clock, 100000};
+  control::PwmConfig pwm;
+  pwm.immediate_start_stop = true;
+  control::PwmSchedule schedule(pwm);
+  ValvePwmDriverConfig config;
+  config.command_expiry = 10s;
+  ValvePwmDriver<control::PwmSchedule> driver(clock, bank, schedule, config);
+  ValveCommand closed;
+  closed.valve_count = 4;
+  driver.command(closed);
+  ValveCommand spray_valve_2 = closed;
+  spray_valve_2.duty_pct[2] = 60;  // valve 2's slot: 150 ms + k*200 ms
+  nanoseconds started_at{-1};
+  nanoseconds stopped_at{-1};
+  clock.on_sleep = [&](nanoseconds now) {
+    if (started_at < 0ns && now >= 363ms) {
+      started_at = now;
+      spray_valve_2.issued_at = now;
+      driver.command(spray_valve_2);
+    } else if (stopped_at < 0ns && now >= 407ms) {
+      stopped_at = now;
+      closed.issued_at = now;
+      driver.command(closed);
+    }
+  };
+  clock.stop_at = 1s;
+  driver.run(clock.stop.get_token());
+
+  ASSERT_GE(started_at, 363ms);
+  ASSERT_LT(started_at, 363ms + config.max_sleep);
+  std::vector<sim::OutputWrite> valve_2_changes;
+  std::uint32_t previous = 0;
+  for (const auto& w : bank.history()) {
+    if ((w.mask ^ previous) & 4u) valve_2_changes.push_back(w);
+    previous = w.mask;
+  }
+  ASSERT_EQ(valve_2_changes.size(), 2U) << "opened once, closed once";
+  EXPECT_EQ(valve_2_changes[0].time, started_at) << "not at the 550 ms period start";
+  EXPECT_EQ(valve_2_changes[0].mask & 4u, 4u);
+  EXPECT_EQ(valve_2_changes[1].time, stopped_at) << "not at the end of the 120 ms pulse";
+  EXPECT_EQ(valve_2_changes[1].mask & 4u, 0u);
+  EXPECT_EQ(driver.stats().late_edges, 0U);
+}
+
 TEST(ValvePwmDriver, NoCommandMeansNoValveEverOpens) {
   Rig rig(ValvePwmDriverConfig{});
   rig.clock.stop_at = 1s;
