@@ -141,24 +141,18 @@ bool NozzleScheduler::find_last_before(std::size_t nozzle, double x, double& dut
   return found && x - latest_end <= config_.hold_last_max_m;
 }
 
-double NozzleScheduler::duty_at(std::size_t nozzle, double odometer_m,
-                                double speed_m_per_s) const noexcept {
-  if (nozzle >= config_.nozzles || !std::isfinite(odometer_m)) return 0.0;
+NozzleScheduler::LookAhead NozzleScheduler::look_ahead(double odometer_m,
+                                                       double speed_m_per_s) const noexcept {
   const double speed = std::isfinite(speed_m_per_s) ? std::max(0.0, speed_m_per_s) : 0.0;
   const double under_nozzle = odometer_m - config_.geometry.camera_to_nozzle_m;
   // Command early by the distance travelled while the valve moves.
-  const double open_look = under_nozzle + speed * config_.opening_delay_s;
-  const double close_look = under_nozzle + speed * config_.closing_delay_s;
-  double duty = 0.0;
-  if (find(nozzle, open_look, duty) && duty > 0.0) return duty;
-  // An interval that the closing look-ahead has not yet left keeps the valve open.
-  double closing_duty = 0.0;
-  if (find(nozzle, close_look, closing_duty) && closing_duty > 0.0) return closing_duty;
-  if (config_.gap_policy == GapPolicy::kHoldLast) {
-    double held = 0.0;
-    if (!find(nozzle, open_look, duty) && find_last_before(nozzle, open_look, held)) return held;
-  }
-  return 0.0;
+  return {under_nozzle + speed * config_.opening_delay_s,
+          under_nozzle + speed * config_.closing_delay_s};
+}
+
+double NozzleScheduler::duty_at(std::size_t nozzle, double odometer_m,
+                                double speed_m_per_s) const noexcept {
+  return value_at(nozzle, odometer_m, speed_m_per_s, [](double duty) { return duty > 0.0; });
 }
 
 }  // namespace weedspray::control

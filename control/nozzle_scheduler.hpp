@@ -17,6 +17,7 @@
 // (GapPolicy::kHoldLast, until a later interval or hold_last_max_m further). Units: m, m/s, s.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <span>
 #include <vector>
@@ -73,6 +74,13 @@ class NozzleScheduler {
 
   // Duty to command now for `nozzle`, at odometer reading odometer_m and speed speed_m_per_s.
   double duty_at(std::size_t nozzle, double odometer_m, double speed_m_per_s) const noexcept;
+  // The same, for plans that hold a value the caller turns into a command (e.g. weed density
+  // -> duty through the rate law): `sprays(value)` says whether that value opens the valve, so
+  // a planned value that sprays nothing (below the decision threshold) closes the valve with
+  // the closing lead, not the opening one. Returns the planned value to use, 0 for closed.
+  template <class Sprays>
+  double value_at(std::size_t nozzle, double odometer_m, double speed_m_per_s,
+                  Sprays&& sprays) const noexcept;
 
   // Forget all plans (e.g. vision lost: valves close).
   void clear() noexcept;
@@ -91,11 +99,49 @@ class NozzleScheduler {
   // Latest end (and its duty) of intervals ending at or before x, for kHoldLast.
   bool find_last_before(std::size_t nozzle, double x, double& duty) const noexcept;
 
+  // Ground points under the nozzle where an opening and a closing command must look now.
+  struct LookAhead {
+    double open_m;
+    double close_m;
+  };
+  LookAhead look_ahead(double odometer_m, double speed_m_per_s) const noexcept;
+
   NozzleSchedulerConfig config_;
   std::vector<GroundInterval> row_intervals_;
   std::vector<PlannedInterval> plans_;  // nozzles x plan_capacity rings
   std::vector<std::size_t> plan_size_;
   std::vector<std::size_t> plan_head_;  // next write slot
 };
+
+template <class Sprays>
+double NozzleScheduler::value_at(std::size_t nozzle, double odometer_m, double speed_m_per_s,
+                                 Sprays&& sprays) const noexcept {
+  if (nozzle >= config_.nozzles || !std::isfinite(odometer_m)) return 0.0;
+  const LookAhead look = look_ahead(odometer_m, speed_m_per_s);
+  // A command takes effect after the opening delay when it opens the valve and after the
+  // closing delay when it closes it, so the look-ahead point that reaches a spray patch's edge
+  // first must wait for the other one:
+  //  - closing slower than opening (the usual case): open while BOTH points need spray — the
+  //    nearer opening point starts the spray, the farther closing point ends it in time;
+  //  - opening slower: open while EITHER point needs spray.
+  // (Patches or gaps shorter than speed x |delay difference| cannot be laid exactly.)
+  double value = 0.0;
+  double closing = 0.0;
+  const bool open_point_sprays = find(nozzle, look.open_m, value) && sprays(value);
+  const bool close_point_sprays = find(nozzle, look.close_m, closing) && sprays(closing);
+  if (look.close_m > look.open_m) {
+    if (open_point_sprays && close_point_sprays) return value;
+  } else {
+    if (open_point_sprays) return value;
+    if (close_point_sprays) return closing;
+  }
+  if (config_.gap_policy == GapPolicy::kHoldLast) {
+    double held = 0.0;
+    if (!find(nozzle, look.open_m, value) && find_last_before(nozzle, look.open_m, held) &&
+        sprays(held))
+      return held;
+  }
+  return 0.0;
+}
 
 }  // namespace weedspray::control

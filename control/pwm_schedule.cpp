@@ -103,8 +103,9 @@ void PwmSchedule::set_duty(std::size_t valve, double duty_pct, nanoseconds now) 
     // Start a new period now instead of waiting for the stagger slot; next_edge() latches it.
     v.next_period_start = std::min(v.next_period_start, std::max(now, v.closed_at + min_off_));
   } else if (open && v.requested_duty_pct == 0.0) {
-    // Close now: end this period's pulse here (it still lasts at least min_on_time).
-    const nanoseconds close_at = std::max(now, v.period_start + min_on_);
+    // Close now: end this period's pulse here. The valve has been open since opened_at, which
+    // may be many periods ago at 100 % duty; only that opening must last min_on_time.
+    const nanoseconds close_at = std::max({now, v.opened_at + min_on_, v.period_start});
     if (close_at < v.period_start + v.on_time) {
       v.on_time = close_at - v.period_start;
       v.latched_duty_pct = 0.0;
@@ -225,6 +226,7 @@ PwmEdge PwmSchedule::next_edge() noexcept {
       mask_ = valve.on_time > nanoseconds(0) ? (mask_ | bit) : (mask_ & ~bit);
     }
     if (was_open && (mask_ & bit) == 0) valve.closed_at = t;
+    if (!was_open && (mask_ & bit) != 0) valve.opened_at = t;
   }
   cursor_ = t;
   return PwmEdge{t, mask_};

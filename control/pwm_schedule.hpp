@@ -125,6 +125,7 @@ class PwmSchedule {
     std::chrono::nanoseconds next_period_start{0};  // start of the next period
     std::chrono::nanoseconds on_time{0};            // of the current period
     std::chrono::nanoseconds closed_at{0};          // last open -> closed edge (min off-time)
+    std::chrono::nanoseconds opened_at{0};          // last closed -> open edge (min on-time)
     bool started = false;                           // first period has begun
     double requested_duty_pct = 0.0;
     double latched_duty_pct = 0.0;

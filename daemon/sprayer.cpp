@@ -347,8 +347,15 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       double density = 0;
       if (owner >= 0) {
         const auto& worker = cameras_[static_cast<std::size_t>(owner)];
-        density = worker.scheduler->duty_at(n - static_cast<std::size_t>(worker.first_nozzle),
-                                            status.distance_m, status.speed_m_per_s);
+        // The plan holds densities: the rate law says which of them open the valve, so ground
+        // that needs no spray closes the valve with the closing lead.
+        const auto sprays = [&](double planned_density) {
+          return control::spray_decision(params.law, params.line, planned_density,
+                                         status.speed_m_per_s, compensation_pressure)
+                     .duty_pct > 0.0;
+        };
+        density = worker.scheduler->value_at(n - static_cast<std::size_t>(worker.first_nozzle),
+                                             status.distance_m, status.speed_m_per_s, sprays);
       }
       status.density[n] = density;
       double duty = 0;

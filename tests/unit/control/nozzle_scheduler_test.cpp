@@ -323,6 +323,22 @@ TEST(NozzleScheduler, OpeningLeadScalesWithSpeed) {
   EXPECT_DOUBLE_EQ(scheduler.duty_at(0, 10.0, 0.0), 100.0);
 }
 
+TEST(NozzleScheduler, SlowerClosingEndsTheSprayByTheClosingLead) {
+  NozzleSchedulerConfig config;
+  config.nozzles = 1;
+  config.opening_delay_s = 0.05;
+  config.closing_delay_s = 0.1;  // solenoid valves usually close slower than they open
+  config.geometry.camera_to_nozzle_m = 0.0;
+  NozzleScheduler scheduler(config);
+  scheduler.add_interval(0, 10.0, 11.0, 100.0);
+  // At 2 m/s: opened 0.1 m early (not 0.2 m, which the closing point would suggest) ...
+  EXPECT_DOUBLE_EQ(scheduler.duty_at(0, 9.85, 2.0), 0.0);
+  EXPECT_DOUBLE_EQ(scheduler.duty_at(0, 9.91, 2.0), 100.0);
+  // ... and closed 0.2 m early (not 0.1 m, which the opening point would suggest).
+  EXPECT_DOUBLE_EQ(scheduler.duty_at(0, 10.79, 2.0), 100.0);
+  EXPECT_DOUBLE_EQ(scheduler.duty_at(0, 10.85, 2.0), 0.0);
+}
+
 TEST(NozzleScheduler, HoldLastGapPolicy) {
   NozzleSchedulerConfig config;
   config.nozzles = 1;

@@ -309,6 +309,22 @@ TEST(PwmSchedule, ImmediateModeClosesAnOpenValveAtOnceButKeepsMinOnTime) {
   EXPECT_EQ(pwm.mask_at(450ms), 0u) << "stays closed";
 }
 
+TEST(PwmSchedule, ImmediateStopOfAValveHeldOpenIgnoresItsLatestPeriodStart) {
+  PwmConfig config = immediate_four_valves();
+  config.min_on_time = 40ms;
+  PwmSchedule pwm(config);
+  pwm.set_duty(0, 100.0);
+  pwm.start(0ns);
+  EXPECT_EQ(pwm.next_edge().valve_mask & 1u, 1u);  // open since 0, periods 0, 200, 400 ms
+  advance_to(pwm, 405ms);
+  // The valve has been open for 405 ms: a stop 5 ms after its period start closes it now,
+  // not 40 ms after that period start.
+  pwm.set_duty(0, 0.0, 405ms);
+  const PwmEdge edge = next_change(pwm, 0);
+  EXPECT_EQ(edge.time, 405ms);
+  EXPECT_EQ(edge.valve_mask & 1u, 0u);
+}
+
 TEST(PwmSchedule, ImmediateStartWaitsOnlyForTheMinimumOffTime) {
   PwmConfig config = immediate_four_valves();
   config.min_off_time = 60ms;
