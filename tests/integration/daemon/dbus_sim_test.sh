@@ -78,12 +78,18 @@ for m in Start Stop SetPressureSetpoint ReloadConfig ClearAlarms AlarmRaised Ala
 done
 [ "$(prop PressureSetpoint)" = "0.4" ] || fail "PressureSetpoint $(prop PressureSetpoint)"
 [ "$(prop NozzleDuty)" = "4 0 0 0 0" ] || fail "NozzleDuty in Idle: $(prop NozzleDuty)"
-$PY - "$(prop TankLevel)" "$(prop Speed)" <<'PYEOF' || fail "TankLevel/Speed out of range"
+# The wheel-speed estimate needs a few pulses after start-up: give it up to 5 s to settle.
+speed_ok=0
+for _ in $(seq 1 20); do
+  if $PY - "$(prop TankLevel)" "$(prop Speed)" <<'PYEOF'; then speed_ok=1; break; fi
 import sys
 tank, speed = float(sys.argv[1]), float(sys.argv[2])
 assert 0 < tank <= 100, tank
 assert 0.9 < speed < 1.1, speed
 PYEOF
+  sleep 0.25
+done
+[ "$speed_ok" = 1 ] || fail "TankLevel/Speed out of range: $(prop TankLevel) $(prop Speed)"
 echo "ok: properties present"
 
 "$SPRAYCTL" --user start || fail "Start refused"
