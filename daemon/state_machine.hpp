@@ -33,11 +33,10 @@ class StateMachine {
   SprayerState state() const noexcept { return state_; }
   Transition handle(StateEvent event);
 
-  // Valves may open only here; the pump runs in Idle and Spraying (pressure held ready).
+  // Valves may open and the pump run only while Spraying; Idle keeps sensors live, valves
+  // closed and the pump off.
   bool valves_enabled() const noexcept { return state_ == SprayerState::kSpraying; }
-  bool pump_enabled() const noexcept {
-    return state_ == SprayerState::kSpraying || state_ == SprayerState::kIdle;
-  }
+  bool pump_enabled() const noexcept { return state_ == SprayerState::kSpraying; }
 
  private:
   SprayerState state_ = SprayerState::kStarting;

@@ -90,6 +90,11 @@ PYEOF
   sleep 0.25
 done
 [ "$speed_ok" = 1 ] || fail "TankLevel/Speed out of range: $(prop TankLevel) $(prop Speed)"
+# Idle: pump off, so the line holds no pressure.
+$PY - "$(prop Pressure)" <<'PYEOF' || fail "pressure in Idle: $(prop Pressure) MPa (pump should be off)"
+import sys
+assert float(sys.argv[1]) < 0.05, sys.argv[1]
+PYEOF
 echo "ok: properties present"
 
 "$SPRAYCTL" --user start || fail "Start refused"

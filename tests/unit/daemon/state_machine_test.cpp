@@ -19,13 +19,15 @@ TEST(StateMachine, IdleSprayingIdle) {
   StateMachine sm;
   EXPECT_TRUE(sm.handle(StateEvent::kSetupDone).accepted);
   EXPECT_EQ(sm.state(), SprayerState::kIdle);
-  EXPECT_TRUE(sm.pump_enabled());
+  EXPECT_FALSE(sm.pump_enabled()) << "Idle: pump off";
   EXPECT_FALSE(sm.valves_enabled());
   EXPECT_TRUE(sm.handle(StateEvent::kStart).accepted);
   EXPECT_TRUE(sm.valves_enabled());
+  EXPECT_TRUE(sm.pump_enabled());
   EXPECT_FALSE(sm.handle(StateEvent::kStart).accepted);
   EXPECT_TRUE(sm.handle(StateEvent::kStop).accepted);
   EXPECT_EQ(sm.state(), SprayerState::kIdle);
+  EXPECT_FALSE(sm.pump_enabled());
   EXPECT_FALSE(sm.handle(StateEvent::kStop).accepted);
 }
 
