@@ -63,6 +63,7 @@ struct SpraySection {
   int quantiser_levels;
   double hysteresis_pct;
   double decision_threshold;
+  std::string low_duty_policy;  // "raise_to_min" | "close"
   bool pressure_compensation;
 };
 

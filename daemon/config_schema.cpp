@@ -124,6 +124,10 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "a quantised duty changes level only past this margin"},
     {WS_KEY(spray, decision_threshold), 0.01, 0, 1, "",
      "zones with a weed density below this are not sprayed"},
+    {WS_KEY(spray, low_duty_policy), std::string("raise_to_min"), 0, 0, "",
+     "a weedy zone whose duty falls below duty_min_pct: raise_to_min sprays it at duty_min_pct "
+     "(every weed sprayed); close leaves it dry (the wheat paper's s < 20 % -> 0 clamp)",
+     {"raise_to_min", "close"}},
     {WS_KEY(spray, pressure_compensation), true, 0, 1, "",
      "scale duty by sqrt(P_cal / P) when the line pressure is off its calibration point"},
     // [pwm]

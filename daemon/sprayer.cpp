@@ -83,6 +83,9 @@ LiveParams live_params_from(const Config& config) {
   p.law.decision_threshold = config.spray.decision_threshold;
   p.law.min_duty_pct = config.spray.duty_min_pct;
   p.law.max_duty_pct = config.spray.duty_max_pct;
+  p.law.low_duty_policy = config.spray.low_duty_policy == "close"
+                              ? control::LowDutyPolicy::kClose
+                              : control::LowDutyPolicy::kRaiseToMin;
   p.line.slope_l_per_min_per_pct = config.spray.calibration_slope_l_per_min_per_pct;
   p.line.intercept_l_per_min = config.spray.calibration_offset_l_per_min;
   p.line.calibration_pressure_mpa = config.spray.calibration_pressure_mpa;
@@ -364,8 +367,9 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
             params.law, params.line, density, status.speed_m_per_s, compensation_pressure);
         duty = decision.duty_pct;
         if (!quantisers_.empty()) {
-          duty = control::clamp_duty_pct(
-              params.law, quantisers_[n].quantise(std::clamp(decision.raw_duty_pct, 0.0, 100.0)));
+          duty = control::clamp_duty_for_flow_pct(
+              params.law, quantisers_[n].quantise(std::clamp(decision.raw_duty_pct, 0.0, 100.0)),
+              decision.target_flow_l_per_min);
         }
         requested_l_per_min +=
             control::flow_for_duty_l_per_min(params.line, duty, compensation_pressure);
