@@ -347,7 +347,7 @@ int run_savings_command(const ExperimentOptions& o) {
   std::string dir = o.images_dir;
   if (dir.empty()) {
     const char* data = std::getenv("WEEDSPRAY_DATA_DIR");
-    dir = std::string(data ? data : "/work/shared/data") + "/ews-train/images";
+    dir = std::string(data ? data : WEEDSPRAY_DEFAULT_DATA_DIR) + "/ews-train/images";
   }
   const std::vector<std::array<double, 4>> zones = field_zone_densities(dir);
   ex::SavingsOptions options;
