@@ -30,6 +30,18 @@ struct ExperimentOptions {
 constexpr int kBlue = 0x1f77b4, kOrange = 0xff7f0e, kGreen = 0x2ca02c, kRed = 0xd62728,
               kGrey = 0x7f7f7f;
 
+// One plot series from a list of points, x and y picked by the two projections.
+template <class Points, class X, class Y>
+PlotSeries series_of(const Points& points, std::string name, int rgb, bool markers, X x_of,
+                     Y y_of) {
+  PlotSeries s{std::move(name), {}, {}, rgb, markers};
+  for (const auto& p : points) {
+    s.x.push_back(x_of(p));
+    s.y.push_back(y_of(p));
+  }
+  return s;
+}
+
 PlotSeries pressure_series(const std::vector<ex::TraceSample>& trace, const std::string& name,
                            int rgb, double t_offset = 0.0) {
   PlotSeries s{name, {}, {}, rgb, false};
@@ -236,15 +248,11 @@ int run_linearity_command(const ExperimentOptions& o) {
   }
   if (!o.plot.empty()) {
     PlotSpec spec{"Nozzle 1 volume in 30 s vs duty", "duty [%]", "volume [L]", {}};
-    PlotSeries req{"requested", {}, {}, kGrey};
-    PlotSeries got{"delivered (true)", {}, {}, kBlue, true};
-    for (const auto& p : r.points) {
-      req.x.push_back(p.duty_pct);
-      req.y.push_back(p.requested_l);
-      got.x.push_back(p.duty_pct);
-      got.y.push_back(p.delivered_l);
-    }
-    spec.series = {req, got};
+    const auto duty = [](const auto& p) { return p.duty_pct; };
+    spec.series = {series_of(r.points, "requested", kGrey, false, duty,
+                             [](const auto& p) { return p.requested_l; }),
+                   series_of(r.points, "delivered (true)", kBlue, true, duty,
+                             [](const auto& p) { return p.delivered_l; })};
     write_plot_png(spec, o.plot);
   }
   return 0;
@@ -329,15 +337,10 @@ int run_dose_command(const ExperimentOptions& o) {
                   "theoretical flow [L/min]",
                   "delivered flow [L/min]",
                   {}};
-    PlotSeries ideal{"y = x", {}, {}, kGrey};
-    PlotSeries got{"nozzle 1 (true)", {}, {}, kBlue, true};
-    for (const auto& p : r.points) {
-      ideal.x.push_back(p.theoretical_l_per_min);
-      ideal.y.push_back(p.theoretical_l_per_min);
-      got.x.push_back(p.theoretical_l_per_min);
-      got.y.push_back(p.delivered_l_per_min);
-    }
-    spec.series = {ideal, got};
+    const auto theoretical = [](const auto& p) { return p.theoretical_l_per_min; };
+    spec.series = {series_of(r.points, "y = x", kGrey, false, theoretical, theoretical),
+                   series_of(r.points, "nozzle 1 (true)", kBlue, true, theoretical,
+                             [](const auto& p) { return p.delivered_l_per_min; })};
     write_plot_png(spec, o.plot);
   }
   return 0;
