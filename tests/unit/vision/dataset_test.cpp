@@ -37,7 +37,9 @@ class EwsTrain : public ::testing::Test {
     images_ = nullptr;
   }
   void SetUp() override {
-    if (images_ == nullptr) GTEST_SKIP() << ews_folder() << " not found (WEEDSPRAY_DATA_DIR)";
+    // The figures are the point of these tests: missing data is a failure, not a skip.
+    ASSERT_NE(images_, nullptr) << ews_folder() << " not found (WEEDSPRAY_DATA_DIR)";
+    ASSERT_EQ(images_->size(), 142U) << "the EWS training split has 142 images";
   }
   static EvalRow evaluate(vision::VegetationIndex index, vision::ThresholdMethod method) {
     const std::array indices{index};
