@@ -400,7 +400,8 @@ class Daemon final : public CommandHandler {
   }
 
   std::uint64_t total_overruns(const PressureStatus& pressure, const ControlStatus& control) const {
-    return pressure.overruns + control.overruns + sprayer_->pwm().late_edges;
+    return pressure.overruns + control.overruns + sprayer_->pwm().late_edges +
+           sprayer_->analog_io().overruns;
   }
 
   // The watchdog is fed only while the real-time loops make progress.

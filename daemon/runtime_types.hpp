@@ -39,6 +39,7 @@ struct PressureStatus {
   std::uint64_t cycles = 0;
   std::uint64_t overruns = 0;
   std::uint64_t adc_errors = 0;
+  std::uint64_t stale_samples = 0;  // cycles whose newest ADC sample was too old to use
 };
 
 // Camera worker -> control loop, one per processed frame.

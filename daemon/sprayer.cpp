@@ -112,6 +112,10 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
   driver.max_sleep = std::chrono::milliseconds(2);
   pwm_driver_ = std::make_unique<io::ValvePwmDriver<control::PwmSchedule>>(*io_.clock, *io_.valves,
                                                                            *schedule_, driver);
+  io::AnalogIoTiming analog_timing;
+  analog_timing.period = pressure_period();
+  analog_io_ = std::make_unique<io::AnalogIoWorker>(*io_.pressure_adc, *io_.return_valve,
+                                                    *io_.clock, analog_timing);
   if (io_.wheel != nullptr) {
     control::OdometryConfig odometry;
     odometry.pulses_per_metre = config.wheel.pulses_per_metre;
@@ -175,8 +179,16 @@ void Sprayer::start() {
     thread_names_.push_back(std::move(name));
   };
   add(io::ThreadRole::kValvePwm, "valve PWM", [this](std::stop_token st) { pwm_driver_->run(st); });
+  // The converters' worker reads ahead of the pressure loop's deadlines: both start one
+  // period from now so the first sample can be waiting.
+  const Nanos first_pressure_deadline = io_.clock->now() + pressure_period();
+  add(io::ThreadRole::kAnalogIo, "analog I/O", [this, first_pressure_deadline](std::stop_token st) {
+    analog_io_->run(st, first_pressure_deadline);
+  });
   add(io::ThreadRole::kPressureLoop, "pressure loop",
-      [this](std::stop_token st) { pressure_loop(st); });
+      [this, first_pressure_deadline](std::stop_token st) {
+        pressure_loop(st, first_pressure_deadline);
+      });
   add(io::ThreadRole::kControl, "control loop", [this](std::stop_token st) { control_loop(st); });
   for (std::size_t i = 0; i < camera_count_; ++i) {
     add(io::ThreadRole::kCamera, "camera " + std::to_string(i),
@@ -207,9 +219,17 @@ void Sprayer::stop() noexcept {
   io_.force_safe();
 }
 
-void Sprayer::pressure_loop(std::stop_token stop) noexcept {
-  const Nanos period = from_seconds(1.0 / config_.pressure.loop_hz);
-  io::PeriodicLoop loop(*io_.clock, period, io_.clock->now());
+Nanos Sprayer::pressure_period() const noexcept {
+  return from_seconds(1.0 / config_.pressure.loop_hz);
+}
+
+void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept {
+  const Nanos period = pressure_period();
+  // Two missed converter reads are tolerated; a third (a hung I2C read, a silent Modbus
+  // module) makes the sample stale: sensor fault, pump off, return valve open.
+  const Nanos max_sample_age = 3 * period;
+  io::PeriodicLoop loop(*io_.clock, period, first_deadline);
+  io::AnalogSample sample;  // the newest copy obtained; kept when the slot is busy
   LiveParams params = params_.read();
   std::uint64_t params_version = params_.version();
   std::uint64_t trip_reset_seen = params.trip_reset;
@@ -222,11 +242,14 @@ void Sprayer::pressure_loop(std::stop_token stop) noexcept {
       params_version = params_.version();
       params_.try_read(params);
     }
-    const io::AnalogSample sample = io_.pressure_adc->read();
+    analog_io_->try_latest_sample(sample);
+    const bool fresh =
+        io::AnalogIoWorker::sample_is_fresh(sample, io_.clock->now(), max_sample_age);
+    if (sample.ok && !fresh) ++status.stale_samples;
     const io::PressureReading reading = io::pressure_from_sensor_volts(sample.volts, io_.sensor);
     status.time = sample.time;
     status.current_ma = reading.current_ma;
-    status.sensor_ok = sample.ok && reading.ok();
+    status.sensor_ok = fresh && reading.ok();
     status.pressure_mpa = status.sensor_ok ? reading.pressure_mpa : 0.0;
     status.adc_errors = sample.error_count;
     if (params.trip_reset != trip_reset_seen) {
@@ -244,10 +267,10 @@ void Sprayer::pressure_loop(std::stop_token stop) noexcept {
         controller_->enable(0.0, params.setpoint_mpa, status.pressure_mpa);
       }
       status.closure = controller_->update(params.setpoint_mpa, status.pressure_mpa, dt);
-      io_.return_valve->write(io::dac_volts_from_valve_opening(1.0 - status.closure, io_.drive));
+      analog_io_->command(io::dac_volts_from_valve_opening(1.0 - status.closure, io_.drive));
     } else if (!outputs_safe) {
       if (io_.pump != nullptr) io_.pump->force_safe();
-      io_.return_valve->force_safe();
+      analog_io_->command_safe();
       controller_->disable();
       status.pump_on = false;
       status.closure = 0.0;
@@ -258,7 +281,7 @@ void Sprayer::pressure_loop(std::stop_token stop) noexcept {
     pressure_.publish(status);
   }
   if (io_.pump != nullptr) io_.pump->force_safe();
-  io_.return_valve->force_safe();
+  analog_io_->command_safe();
 }
 
 void Sprayer::control_loop(std::stop_token stop) noexcept {

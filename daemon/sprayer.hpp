@@ -1,6 +1,7 @@
 // The running sprayer: the real-time loops and workers, wired to the backends.
 //   ws-valve-pwm  io::ValvePwmDriver executing control::PwmSchedule edges (highest priority)
-//   ws-pressure   ADC -> fuzzy PID / PID -> DAC, pump relay, over-pressure trip
+//   ws-analog     io::AnalogIoWorker: the pressure ADC reads and return-valve DAC writes
+//   ws-pressure   ADC sample -> fuzzy PID / PID -> DAC command, pump relay, over-pressure trip
 //   ws-control    wheel odometry, flow, frames -> NozzleScheduler -> spray-rate law -> duties
 //   ws-camera     one per camera: frame -> vision::Pipeline -> zone densities
 //   ws-modbus     tank level
@@ -22,6 +23,7 @@
 #include "daemon/backends.hpp"
 #include "daemon/config.hpp"
 #include "daemon/runtime_types.hpp"
+#include "io/analog_io_worker.hpp"
 #include "io/latest_value.hpp"
 #include "io/realtime.hpp"
 #include "io/spsc_queue.hpp"
@@ -60,6 +62,7 @@ class Sprayer {
   std::size_t camera_count() const noexcept { return camera_count_; }
   io::TankLevelSample tank() const noexcept { return tank_.read(); }
   io::ValvePwmStats pwm() const noexcept { return pwm_driver_->stats(); }
+  io::AnalogIoStats analog_io() const noexcept { return analog_io_->stats(); }
   // Threads that asked for SCHED_FIFO but did not get it.
   std::vector<std::string> realtime_warnings() const;
 
@@ -82,7 +85,8 @@ class Sprayer {
     double last_frame_distance_m = -1e9;
   };
 
-  void pressure_loop(std::stop_token stop) noexcept;
+  Nanos pressure_period() const noexcept;
+  void pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept;
   void control_loop(std::stop_token stop) noexcept;
   void camera_loop(std::stop_token stop, CameraWorker& worker) noexcept;
   void tank_loop(std::stop_token stop) noexcept;
@@ -94,6 +98,7 @@ class Sprayer {
   io::LatestValue<ControlStatus> control_;
   io::LatestValue<io::TankLevelSample> tank_;
   std::unique_ptr<control::PressureController> controller_;
+  std::unique_ptr<io::AnalogIoWorker> analog_io_;
   std::unique_ptr<control::PwmSchedule> schedule_;
   std::unique_ptr<io::ValvePwmDriver<control::PwmSchedule>> pwm_driver_;
   std::optional<control::Odometry> odometry_;

@@ -19,7 +19,8 @@ namespace weedspray::io {
 enum class ThreadRole {
   kValvePwm,      // valve edges: the tightest deadline in the system
   kPulseInput,    // flow meter / wheel edge readers
-  kPressureLoop,  // ADC -> fuzzy PID -> DAC
+  kAnalogIo,      // the pressure converters' blocking I/O (IIO on I2C, Modbus modules)
+  kPressureLoop,  // ADC sample -> fuzzy PID -> DAC command
   kControl,       // spray-rate law and distance scheduling
   kDigitalInput,  // start/stop key
   kCamera,        // capture + vision (normal priority)
@@ -33,9 +34,10 @@ struct ThreadPriority {
 };
 
 // The one table. Above the kernel's threaded IRQ handlers (50) only for the valve edges.
-inline constexpr std::array<ThreadPriority, 7> kThreadPriorities{{
+inline constexpr std::array<ThreadPriority, 8> kThreadPriorities{{
     {ThreadRole::kValvePwm, "ws-valve-pwm", 80},
     {ThreadRole::kPulseInput, "ws-pulses", 70},
+    {ThreadRole::kAnalogIo, "ws-analog", 65},
     {ThreadRole::kPressureLoop, "ws-pressure", 60},
     {ThreadRole::kControl, "ws-control", 40},
     {ThreadRole::kDigitalInput, "ws-key", 30},

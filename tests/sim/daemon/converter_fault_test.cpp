@@ -1,0 +1,89 @@
+// The pressure converters on their own thread (io::AnalogIoWorker): when the ADC hangs (an I2C
+// bus stuck, a Modbus module gone silent) the pressure loop keeps its rhythm, sees the sample
+// age, and makes the machine safe; when the ADC comes back, pressure control resumes.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <string>
+#include <thread>
+
+#include "daemon/backends.hpp"
+#include "daemon/sprayer.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+using namespace std::chrono_literals;
+
+class HangableAdc final : public io::AnalogInput {
+ public:
+  explicit HangableAdc(io::AnalogInput& inner) : inner_(inner) {}
+  io::AnalogSample read() noexcept override {
+    while (hung.load()) std::this_thread::sleep_for(1ms);
+    return inner_.read();
+  }
+  std::atomic<bool> hung{false};
+
+ private:
+  io::AnalogInput& inner_;
+};
+
+// Runs the simulated world for up to `limit` until `done()` holds; returns whether it did.
+template <class Done>
+bool run_until(Backends& backends, Done done, std::chrono::nanoseconds limit) {
+  const auto start = backends.clock->now();
+  while (backends.clock->now() - start < limit) {
+    backends.drive_world(std::chrono::duration<double>(backends.clock->now()).count());
+    if (done()) return true;
+    std::this_thread::sleep_for(5ms);
+  }
+  return done();
+}
+
+TEST(ConverterFault, HungPressureAdcStopsThePumpAndClosesTheValvesThenRecovers) {
+  Config config = default_config();
+  config.sim.speed_profile = "constant";
+  Options options;
+  options.sim = true;
+  Backends backends = make_sim_backends(config, options);
+  HangableAdc adc(*backends.pressure_adc);
+  backends.pressure_adc = &adc;
+  Sprayer sprayer(config, backends);
+  LiveParams params = live_params_from(config);
+  params.pump_enabled = true;
+  params.valves_enabled = true;
+  sprayer.set_params(params);
+  sprayer.start();
+
+  const auto at_setpoint = [&] {
+    const PressureStatus p = sprayer.pressure();
+    return p.pump_on && p.sensor_ok &&
+           std::abs(p.pressure_mpa - config.pressure.setpoint_mpa) < 0.03;
+  };
+  ASSERT_TRUE(run_until(backends, at_setpoint, 5s)) << "pressure never reached the set-point";
+  ASSERT_NE(backends.describe_outputs().find("pump=1"), std::string::npos);
+
+  adc.hung = true;
+  const auto safe = [&] {
+    const PressureStatus p = sprayer.pressure();
+    return !p.pump_on && !p.sensor_ok && sprayer.control().inputs_stale &&
+           backends.describe_outputs().find("pump=0") != std::string::npos &&
+           backends.describe_outputs().find("valves=0x0 ") != std::string::npos;
+  };
+  // Stale after 3 loop periods (30 ms); the valves close at the PWM thread's next wake.
+  EXPECT_TRUE(run_until(backends, safe, 300ms)) << backends.describe_outputs();
+  const PressureStatus hung = sprayer.pressure();
+  EXPECT_GT(hung.stale_samples, 0U);
+  const std::uint64_t cycles_when_hung = hung.cycles;
+  std::this_thread::sleep_for(100ms);
+  EXPECT_GE(sprayer.pressure().cycles, cycles_when_hung + 5) << "the loop kept its rhythm";
+
+  adc.hung = false;
+  EXPECT_TRUE(run_until(backends, at_setpoint, 5s)) << "pressure control did not resume";
+  EXPECT_GT(sprayer.analog_io().overruns, 0U) << "the hang shows as missed converter slots";
+  sprayer.stop();
+  EXPECT_NE(backends.describe_outputs().find("pump=0"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace weedspray::daemon
