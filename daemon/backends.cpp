@@ -10,4 +10,21 @@ void Backends::force_safe() noexcept {
   if (led != nullptr) led->force_safe();
 }
 
+io::CurrentLoopSensorConfig pressure_sensor_config(const Config& config) {
+  io::CurrentLoopSensorConfig sensor;
+  sensor.shunt_ohms = config.adc.shunt_ohms;
+  sensor.pressure_at_min_mpa = config.pressure.sensor_min_mpa;
+  sensor.pressure_at_max_mpa = config.pressure.sensor_max_mpa;
+  sensor.fault_below_ma = config.alarms.sensor_fault_low_ma;
+  sensor.fault_above_ma = config.alarms.sensor_fault_high_ma;
+  return sensor;
+}
+
+io::ValveDriveConfig valve_drive_config(const Config& config) {
+  io::ValveDriveConfig drive;
+  drive.dac_full_scale_volts = config.dac.full_scale_v;
+  drive.amplifier_gain = drive.valve_full_scale_volts / config.dac.full_scale_v;
+  return drive;
+}
+
 }  // namespace weedspray::daemon

@@ -55,8 +55,23 @@ struct Backends {
   void force_safe() noexcept;
 };
 
+// The 4-20 mA pressure sensor and the return-valve drive chain as configured (both backends).
+io::CurrentLoopSensorConfig pressure_sensor_config(const Config& config);
+io::ValveDriveConfig valve_drive_config(const Config& config);
+
 // Throws std::runtime_error naming the device that could not be opened.
 Backends make_hw_backends(const Config& config);
+
+// The board's pressure converters from [adc], [dac] and [analog_modbus]: IIO devices or Modbus
+// RTU analog modules, with the signal conversions that go with them. The DAC starts at its safe
+// value. Throws std::runtime_error naming the device.
+struct PressureConverters {
+  std::shared_ptr<io::AnalogInput> adc;
+  std::shared_ptr<io::AnalogOutput> dac;
+  io::CurrentLoopSensorConfig sensor{};
+  io::ValveDriveConfig drive{};
+};
+PressureConverters make_hw_pressure_converters(const Config& config, const io::Clock& clock);
 Backends make_sim_backends(const Config& config, const Options& options);
 
 }  // namespace weedspray::daemon

@@ -1,12 +1,11 @@
-// The board: libgpiod lines, IIO ADC/DAC, V4L2 cameras, libmodbus tank sensor, all configured
-// from the [gpio], [adc], [dac], [modbus] and [[camera]] sections.
+// The board: libgpiod lines, the pressure converters (backends_hw_converters.cpp), V4L2 cameras,
+// libmodbus tank sensor, configured from the [gpio], [modbus] and [[camera]] sections.
 #include <stdexcept>
 
 #include "daemon/backends.hpp"
 #include "io/linux/gpio_digital_input.hpp"
 #include "io/linux/gpio_output_bank.hpp"
 #include "io/linux/gpio_pulse_input.hpp"
-#include "io/linux/iio_analog.hpp"
 #include "io/linux/modbus_tank_level.hpp"
 #include "io/linux/monotonic_clock.hpp"
 #include "io/linux/v4l2_camera.hpp"
@@ -95,24 +94,11 @@ Backends make_hw_backends(const Config& config) {
     b.key = keep(b, std::make_shared<io::hw::GpioDigitalInput>(key));
   }
 
-  io::hw::IioChannelConfig adc;
-  adc.device = config.adc.iio_device;
-  adc.channel = config.adc.pressure_channel;
-  b.pressure_adc = keep(b, std::make_shared<io::hw::IioAnalogInput>(adc, *b.clock));
-  io::hw::IioAnalogOutputConfig dac;
-  dac.channel.device = config.dac.iio_device;
-  dac.channel.channel = config.dac.channel;
-  dac.full_scale_volts = config.dac.full_scale_v;
-  b.drive.dac_full_scale_volts = config.dac.full_scale_v;
-  b.drive.amplifier_gain = b.drive.valve_full_scale_volts / config.dac.full_scale_v;
-  // Safe: return valve fully open, so the line holds no pressure.
-  dac.safe_volts = io::dac_volts_from_valve_opening(1.0, b.drive);
-  b.return_valve = keep(b, std::make_shared<io::hw::IioAnalogOutput>(dac));
-  b.sensor.shunt_ohms = config.adc.shunt_ohms;
-  b.sensor.pressure_at_min_mpa = config.pressure.sensor_min_mpa;
-  b.sensor.pressure_at_max_mpa = config.pressure.sensor_max_mpa;
-  b.sensor.fault_below_ma = config.alarms.sensor_fault_low_ma;
-  b.sensor.fault_above_ma = config.alarms.sensor_fault_high_ma;
+  PressureConverters converters = make_hw_pressure_converters(config, *b.clock);
+  b.pressure_adc = keep(b, converters.adc);
+  b.return_valve = keep(b, converters.dac);
+  b.sensor = converters.sensor;
+  b.drive = converters.drive;
 
   if (config.modbus.enabled) {
     io::hw::ModbusTankLevelConfig modbus;

@@ -59,8 +59,7 @@ Backends make_sim_backends(const Config& config, const Options& options) {
   auto valves = std::make_shared<io::sim::RigValveBank>(*rig);
   auto pump = std::make_shared<io::sim::RigPumpRelay>(*rig);
   auto adc = std::make_shared<io::sim::RigPressureAdc>(*rig, *clock);
-  b.drive.dac_full_scale_volts = config.dac.full_scale_v;
-  b.drive.amplifier_gain = 10.0 / config.dac.full_scale_v;
+  b.drive = valve_drive_config(config);
   auto dac = std::make_shared<io::sim::RigReturnValveDac>(*rig, b.drive);
   auto flow = std::make_shared<io::sim::RigPulseInput>(*rig, io::sim::RigPulseSource::kFlowMeter);
   auto wheel = std::make_shared<io::sim::RigPulseInput>(*rig, io::sim::RigPulseSource::kWheel);
@@ -82,11 +81,7 @@ Backends make_sim_backends(const Config& config, const Options& options) {
         std::shared_ptr<void>(tank), std::shared_ptr<void>(buzzer), std::shared_ptr<void>(led)}) {
     b.owned.push_back(p);
   }
-  b.sensor.shunt_ohms = config.adc.shunt_ohms;
-  b.sensor.pressure_at_min_mpa = config.pressure.sensor_min_mpa;
-  b.sensor.pressure_at_max_mpa = config.pressure.sensor_max_mpa;
-  b.sensor.fault_below_ma = config.alarms.sensor_fault_low_ma;
-  b.sensor.fault_above_ma = config.alarms.sensor_fault_high_ma;
+  b.sensor = pressure_sensor_config(config);
 
   // The vehicle: its speed follows the [sim] profile; cameras pace their frames by it.
   auto speed = std::make_shared<std::atomic<double>>(sim_speed_m_per_s(config.sim, 0.0));

@@ -116,15 +116,32 @@ struct GpioSection {
 };
 
 struct AdcSection {
+  std::string source;  // iio|modbus
   std::string iio_device;
   int pressure_channel;
   double shunt_ohms;  // I/V resistor of the 4-20 mA loop
+  int modbus_slave_id;
+  int modbus_register;
+  std::string modbus_register_type;  // input|holding
+  double modbus_volts_per_count;
 };
 
 struct DacSection {
+  std::string source;  // iio|modbus
   std::string iio_device;
   int channel;
   double full_scale_v;
+  int modbus_slave_id;
+  int modbus_register;
+  double modbus_volts_per_count;
+};
+
+// The RS-485 bus of the Modbus analog modules (adc/dac source = "modbus").
+struct AnalogModbusSection {
+  std::string device;
+  int baud;
+  std::string parity;  // N|E|O
+  double timeout_s;
 };
 
 struct FlowSection {
@@ -196,6 +213,7 @@ struct Config {
   GpioSection gpio;
   AdcSection adc;
   DacSection dac;
+  AnalogModbusSection analog_modbus;
   FlowSection flow;
   WheelSection wheel;
   ModbusSection modbus;

@@ -327,8 +327,38 @@ class Loader {
     if (c.alarms.tank_empty_pct >= c.alarms.tank_low_pct) {
       fail("alarms.tank_empty_pct", "must be below alarms.tank_low_pct");
     }
+    validate_analog_modbus();
     if (c.sim.speed_min_m_per_s > c.sim.speed_max_m_per_s) {
       fail("sim.speed_min_m_per_s", "must not exceed sim.speed_max_m_per_s");
+    }
+  }
+
+  // The Modbus analog modules share one bus, served by the converters' thread alone.
+  void validate_analog_modbus() const {
+    const auto& c = config_;
+    const bool adc = c.adc.source == "modbus";
+    const bool dac = c.dac.source == "modbus";
+    if (!adc && !dac) return;
+    if (c.modbus.enabled && c.modbus.device == c.analog_modbus.device) {
+      fail("analog_modbus.device",
+           c.analog_modbus.device +
+               " is also the tank sensor's [modbus] port, which another thread polls: give the "
+               "analog modules their own port");
+    }
+    if (adc && dac && c.adc.modbus_slave_id == c.dac.modbus_slave_id &&
+        c.adc.modbus_register_type == "holding" && c.adc.modbus_register == c.dac.modbus_register) {
+      fail("dac.modbus_register", "is the register the pressure is read from");
+    }
+    // One RTU transaction: 8-byte request + 7-byte answer + two 3.5-character silences, 11 bits
+    // a character. The converters' thread reads at most half a loop period ahead.
+    const double transaction_s = 22.0 * 11.0 / c.analog_modbus.baud;
+    const double budget_s = 0.5 / c.pressure.loop_hz;
+    if (transaction_s > budget_s) {
+      fail("analog_modbus.baud",
+           std::to_string(c.analog_modbus.baud) + " baud needs about " +
+               format_number(transaction_s * 1e3) + " ms a transaction; pressure.loop_hz = " +
+               format_number(c.pressure.loop_hz) + " leaves " + format_number(budget_s * 1e3) +
+               " ms: raise the baud rate or lower pressure.loop_hz");
     }
   }
 

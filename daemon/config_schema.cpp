@@ -203,18 +203,51 @@ const std::vector<KeySpec<Config>>& config_keys() {
     {WS_KEY(gpio, wheel_name), std::string(""), 0, 0, "",
      "Hall wheel sensor line by name instead of offset (empty = use the offset)"},
     // [adc]
+    {WS_KEY(adc, source), std::string("iio"), 0, 0, "",
+     "the pressure ADC: a Linux IIO device, or a Modbus RTU analog input module on the "
+     "[analog_modbus] bus", {"iio", "modbus"}},
     {WS_KEY(adc, iio_device), std::string("iio:device0"), 0, 0, "",
      "IIO device reading the pressure sensor: iio:deviceN, its path, or its name (ads1015)"},
     {WS_KEY(adc, pressure_channel), 0, 0, 63, "",
      "IIO input channel N (in_voltageN_raw) of the pressure sensor"},
     {WS_KEY(adc, shunt_ohms), 165.0, 1, 10000, "ohm",
      "I/V resistor of the 4-20 mA loop (165 ohm maps 20 mA to 3.3 V)"},
+    {WS_KEY(adc, modbus_slave_id), 2, 1, 247, "",
+     "source = \"modbus\": the input module's slave address"},
+    {WS_KEY(adc, modbus_register), 0, 0, 65535, "",
+     "source = \"modbus\": the register holding the sensor voltage"},
+    {WS_KEY(adc, modbus_register_type), std::string("input"), 0, 0, "",
+     "source = \"modbus\": read it as an input register (function 04) or a holding register "
+     "(03)", {"input", "holding"}},
+    {WS_KEY(adc, modbus_volts_per_count), 0.001, 1e-9, 1, "V/count",
+     "source = \"modbus\": volts = register value x this (the module's unit, e.g. mV)"},
     // [dac]
+    {WS_KEY(dac, source), std::string("iio"), 0, 0, "",
+     "the return-valve DAC: a Linux IIO device, or a Modbus RTU analog output module on the "
+     "[analog_modbus] bus", {"iio", "modbus"}},
     {WS_KEY(dac, iio_device), std::string("iio:device1"), 0, 0, "",
      "IIO device driving the proportional return valve"},
     {WS_KEY(dac, channel), 0, 0, 63, "", "IIO output channel N (out_voltageN_raw)"},
     {WS_KEY(dac, full_scale_v), 3.3, 0.5, 12, "V",
      "DAC voltage for a 100 % valve command"},
+    {WS_KEY(dac, modbus_slave_id), 3, 1, 247, "",
+     "source = \"modbus\": the output module's slave address"},
+    {WS_KEY(dac, modbus_register), 0, 0, 65535, "",
+     "source = \"modbus\": the holding register written with the valve voltage (function 06)"},
+    {WS_KEY(dac, modbus_volts_per_count), 0.001, 1e-9, 1, "V/count",
+     "source = \"modbus\": register value = volts / this"},
+    // [analog_modbus]
+    {WS_KEY(analog_modbus, device), std::string("/dev/ttyUSB1"), 0, 0, "path",
+     "RS-485 serial device of the Modbus analog modules; not the tank sensor's [modbus] port, "
+     "which another thread polls"},
+    {WS_KEY(analog_modbus, baud), 115200, 1200, 921600, "baud",
+     "serial speed: a one-register transaction is about 22 character times, 2.1 ms at 115200 "
+     "and 25 ms at 9600; it must fit in half a pressure-loop period"},
+    {WS_KEY(analog_modbus, parity), std::string("N"), 0, 0, "", "serial parity",
+     {"N", "E", "O"}},
+    {WS_KEY(analog_modbus, timeout_s), 0.02, 0.005, 1, "s",
+     "response timeout; a module silent for 3 pressure-loop periods makes the sensor stale "
+     "(pump off, valves closed)"},
     // [flow]
     {WS_KEY(flow, pulses_per_litre), 8500.0, 1, 1e6, "pulses/L",
      "flow meter constant"},

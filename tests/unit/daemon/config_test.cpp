@@ -245,6 +245,44 @@ TEST(ConfigSchema, GpioLinesByName) {
   EXPECT_EQ(config.gpio.flow_offset, -1);
 }
 
+TEST(ConfigSchema, ModbusAnalogModulesOnTheirOwnBus) {
+  const Config config = parse(
+      "[adc]\nsource = \"modbus\"\nmodbus_slave_id = 5\nmodbus_register_type = \"holding\"\n"
+      "[dac]\nsource = \"modbus\"\nmodbus_register = 1\n"
+      "[analog_modbus]\ndevice = \"/dev/ttyAMA1\"\nbaud = 57600\n");
+  EXPECT_EQ(config.adc.source, "modbus");
+  EXPECT_EQ(config.adc.modbus_slave_id, 5);
+  EXPECT_EQ(config.adc.modbus_register_type, "holding");
+  EXPECT_EQ(config.dac.source, "modbus");
+  EXPECT_EQ(config.analog_modbus.device, "/dev/ttyAMA1");
+  EXPECT_EQ(config.analog_modbus.baud, 57600);
+
+  // The tank sensor's port is polled by another thread.
+  const auto shared_port =
+      parse_error({{"main.toml",
+                    "[modbus]\nenabled = true\ndevice = \"/dev/ttyUSB0\"\n"
+                    "[adc]\nsource = \"modbus\"\n[analog_modbus]\ndevice = \"/dev/ttyUSB0\"\n"}});
+  EXPECT_EQ(shared_port.key(), "analog_modbus.device");
+  EXPECT_EQ(shared_port.line(), 7);
+  EXPECT_NE(std::string(shared_port.what()).find("tank sensor"), std::string::npos)
+      << shared_port.what();
+  // Too slow a bus for the loop: 9600 baud needs ~25 ms, 100 Hz leaves 5 ms.
+  const auto slow =
+      parse_error({{"main.toml", "[dac]\nsource = \"modbus\"\n[analog_modbus]\nbaud = 9600\n"}});
+  EXPECT_EQ(slow.key(), "analog_modbus.baud");
+  EXPECT_NE(std::string(slow.what()).find("pressure.loop_hz"), std::string::npos) << slow.what();
+  EXPECT_NO_THROW(
+      (void)parse("[dac]\nsource = \"modbus\"\n[analog_modbus]\nbaud = 9600\n"
+                  "[pressure]\nloop_hz = 10\n"));
+  // IIO converters do not care about the analog bus.
+  EXPECT_NO_THROW((void)parse("[analog_modbus]\nbaud = 9600\n"));
+  const auto same_register = parse_error(
+      {{"main.toml",
+        "[adc]\nsource = \"modbus\"\nmodbus_slave_id = 3\nmodbus_register_type = \"holding\"\n"
+        "[dac]\nsource = \"modbus\"\n"}});
+  EXPECT_EQ(same_register.key(), "dac.modbus_register");
+}
+
 class ConfigFiles : public ::testing::Test {
  protected:
   void SetUp() override {
