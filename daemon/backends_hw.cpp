@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "daemon/backends.hpp"
+#include "io/linux/counter_pulse_input.hpp"
 #include "io/linux/gpio_digital_input.hpp"
 #include "io/linux/gpio_output_bank.hpp"
 #include "io/linux/gpio_pulse_input.hpp"
@@ -77,7 +78,13 @@ Backends make_hw_backends(const Config& config) {
   b.pump = single_line(b, gpio, gpio.pump_name, gpio.pump_offset, gpio.pump_active_low);
   b.buzzer = single_line(b, gpio, gpio.buzzer_name, gpio.buzzer_offset, false);
   b.led = single_line(b, gpio, gpio.led_name, gpio.led_offset, false);
-  b.flow = pulse_line(b, gpio, gpio.flow_name, gpio.flow_offset);
+  if (config.flow.counter.empty()) {
+    b.flow = pulse_line(b, gpio, gpio.flow_name, gpio.flow_offset);
+  } else {
+    io::hw::CounterPulseInputConfig counter;
+    counter.device = config.flow.counter;
+    b.flow = keep(b, std::make_shared<io::hw::CounterPulseInput>(counter));
+  }
   b.wheel = config.wheel.source == "fixed"
                 ? nullptr
                 : pulse_line(b, gpio, gpio.wheel_name, gpio.wheel_offset);

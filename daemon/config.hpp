@@ -146,6 +146,7 @@ struct AnalogModbusSection {
 
 struct FlowSection {
   double pulses_per_litre;
+  std::string counter;  // "" = GPIO edge events on gpio.flow_*; else a kernel counter device
 };
 
 struct WheelSection {

@@ -301,6 +301,11 @@ class Loader {
         fail(key, "set either the line name or its offset, not both");
       }
     }
+    if (!c.flow.counter.empty() && (!c.gpio.flow_name.empty() || c.gpio.flow_offset >= 0)) {
+      fail("flow.counter",
+           "the flow meter is wired either to a GPIO line (gpio.flow_offset / "
+           "gpio.flow_name) or to a kernel counter, not both");
+    }
     if (c.spray.quantiser_levels == 1) {
       fail("spray.quantiser_levels", "must be 0 (no quantisation) or 2..14");
     }

@@ -251,6 +251,11 @@ const std::vector<KeySpec<Config>>& config_keys() {
     // [flow]
     {WS_KEY(flow, pulses_per_litre), 8500.0, 1, 1e6, "pulses/L",
      "flow meter constant"},
+    {WS_KEY(flow, counter), std::string(""), 0, 0, "",
+     "count the flow meter in the kernel (Linux Counter subsystem, e.g. interrupt-cnt bound to "
+     "the meter's GPIO in the device tree) instead of GPIO edge events: counterN, its path, or "
+     "its name. For meters pulsing faster than ~10 kHz, where edge events can be lost. Empty = "
+     "gpio.flow_offset / gpio.flow_name"},
     // [wheel]
     {WS_KEY(wheel, source), std::string("pulses"), 0, 0, "",
      "speed from the Hall wheel sensor, or a fixed speed", {"pulses", "fixed"}},

@@ -1,8 +1,14 @@
 #include "tests/vm/gpio_sim_chip.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 
 namespace weedspray::vm_test {
 namespace {
@@ -42,6 +48,23 @@ int GpioSimChip::value(unsigned int offset) const {
 
 void GpioSimChip::pull(unsigned int offset, bool up) const {
   write_text(line_dir(offset) + "/pull", up ? "pull-up" : "pull-down");
+}
+
+GpioSimPullWriter::GpioSimPullWriter(const GpioSimChip& chip, unsigned int offset) {
+  const std::string path = chip.line_dir(offset) + "/pull";
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+  if (fd_ < 0) throw std::runtime_error("cannot open " + path + ": " + std::strerror(errno));
+}
+
+GpioSimPullWriter::~GpioSimPullWriter() {
+  ::close(fd_);
+}
+
+bool GpioSimPullWriter::set(bool up) const noexcept {
+  constexpr std::string_view kUp = "pull-up";
+  constexpr std::string_view kDown = "pull-down";
+  const std::string_view text = up ? kUp : kDown;
+  return ::pwrite(fd_, text.data(), text.size(), 0) == static_cast<ssize_t>(text.size());
 }
 
 }  // namespace weedspray::vm_test

@@ -12,6 +12,9 @@
 # Guest fixtures (the tests find them through configfs, never by assuming gpiochip numbers):
 #   gpio-sim chip labelled "weedspray-out", 8 lines: valve0 valve1 valve2 valve3 pump buzzer lamp aux
 #   gpio-sim chip labelled "weedspray-in",  3 lines: flow wheel key
+#   gpio-sim chip labelled "weedspray-count", 2 lines: flow_fast flow_fast_gpiod; the kernel's
+#     interrupt-cnt counts rising edges of flow_fast (counter named "interrupt-cnt", bound by
+#     the test-only interrupt_counter_fixture.ko; count0/enable left 0 for the tests to set)
 #   vivid with one video capture node (/dev/video*), timestamps at the start of exposure
 /bin/busybox --install -s /bin
 export PATH=/bin:/usr/bin
@@ -62,6 +65,17 @@ make_gpio_sim_chip() { # NAME LINE_NAME...
 }
 make_gpio_sim_chip weedspray-out valve0 valve1 valve2 valve3 pump buzzer lamp aux
 make_gpio_sim_chip weedspray-in flow wheel key
+make_gpio_sim_chip weedspray-count flow_fast flow_fast_gpiod
+
+# interrupt-cnt was loaded above; the fixture gives it flow_fast (x86 has no device tree).
+insmod "/lib/modules/$(uname -r)/extra/interrupt_counter_fixture.ko" \
+  chip_label=weedspray-count line=0 || setup_failed "insmod interrupt_counter_fixture.ko failed"
+counter_dir=""
+for dir in /sys/bus/counter/devices/counter*; do
+  [ "$(cat "$dir/name" 2>/dev/null)" = interrupt-cnt ] && counter_dir="$dir" && break
+done
+[ -n "$counter_dir" ] || setup_failed "interrupt-cnt registered no counter named interrupt-cnt"
+echo "interrupt-cnt: $counter_dir ($(cat "$counter_dir/signal0/name")), count0 enable=$(cat "$counter_dir/count0/enable")"
 
 video_node=""
 for _ in 1 2 3 4 5 6 7 8 9 10; do

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Runs guest test programs inside a QEMU x86-64 guest booted with Debian's own kernel, which
-# gets the kernel's gpio-sim (built out of tree here: Debian does not ship it) and vivid.
+# gets the kernel's gpio-sim, Counter subsystem and interrupt-cnt (built out of tree here:
+# Debian does not ship them), a test-only fixture binding interrupt-cnt to a gpio-sim line, and
+# vivid.
 #
 #   run-vm-tests.sh [--cache DIR] [--log FILE] [--timeout SECONDS] GUEST_PROGRAM...
 #
@@ -33,7 +35,7 @@ while (($#)); do
     --cache) cache_dir="${2:?--cache needs a directory}"; shift 2 ;;
     --log) log_file="${2:?--log needs a file}"; shift 2 ;;
     --timeout) boot_timeout_s="${2:?--timeout needs seconds}"; shift 2 ;;
-    -h | --help) sed -n '2,15p' "$0"; exit 0 ;;
+    -h | --help) sed -n '2,17p' "$0"; exit 0 ;;
     -*) die "unknown option '$1' (see --help)" ;;
     *) guest_programs+=("$1"); shift ;;
   esac
@@ -94,11 +96,23 @@ gcc_version="$(apt-cache depends "linux-headers-$kernel_release" 2>/dev/null |
 [ -n "$gcc_version" ] || die "cannot tell which gcc linux-headers-$kernel_release is built with"
 require_tool "gcc-$gcc_version" "gcc-$gcc_version"
 
-kernel_dir="$cache_dir/$kernel_release-$kernel_version"
+# The modules built here, from linux-source (file lists in extract_module_sources).
+built_modules=(gpio-sim counter interrupt-cnt)
+# Loaded by guest-init.sh after it has made the gpio-sim chips, not from modules.load.
+fixture_source="$script_dir/interrupt_counter_fixture.c"
+[ -f "$fixture_source" ] || die "$fixture_source is missing"
+# Bump when the module build steps change: a new value makes a new kernel_dir (and the old
+# one is removed), so a cache never lacks a module the guest now expects.
+module_build_revision=2
+module_set_key="$( (
+  echo "$module_build_revision ${built_modules[*]}"
+  cat "$fixture_source"
+) | sha256sum | cut -c1-12)"
+kernel_dir="$cache_dir/$kernel_release-$kernel_version-modules-$module_set_key"
 vmlinux="$kernel_dir/vmlinux"
 module_root="$kernel_dir/modules" # lib/modules/$kernel_release with only what the guest needs
 module_load_list="$kernel_dir/modules.load"
-guest_modules=(configfs gpio-sim vivid)
+guest_modules=(configfs gpio-sim vivid interrupt-cnt) # counter comes in as a dependency
 
 fetch_packages() { # -> $kernel_dir/debs
   local debs="$kernel_dir/debs"
@@ -124,35 +138,49 @@ extract_vmlinux() { # vmlinuz -> vmlinux: booting the ELF via PVH skips emulated
   mv "$vmlinux.tmp" "$vmlinux"
 }
 
-gpio_sim_src="$kernel_dir/gpio-sim-src"
-extract_gpio_sim_sources() { # -> $gpio_sim_src (the whole 1.3 GB tarball is read: ~10 s)
-  rm -rf "$gpio_sim_src" && mkdir -p "$gpio_sim_src"
-  local top="linux-source-$series"
+module_src="$kernel_dir/module-src"
+extract_module_sources() { # -> $module_src (the whole 1.3 GB tarball is read: ~10 s)
+  rm -rf "$module_src" && mkdir -p "$module_src"
+  local top="linux-source-$series" counter="linux-source-$series/drivers/counter"
+  # The Counter core's own headers are private; <linux/counter.h> is in the headers package.
   dpkg-deb --fsys-tarfile "$kernel_dir/debs/${top}_"*.deb |
     tar -xO "./usr/src/$top.tar.xz" | xz -dc |
-    tar -x -C "$gpio_sim_src" --strip-components=1 "$top/drivers/gpio/gpio-sim.c" \
-      "$top/drivers/gpio/gpiolib.h" "$top/kernel/irq/irq_sim.c"
+    tar -x -C "$module_src" --strip-components=1 "$top/drivers/gpio/gpio-sim.c" \
+      "$top/drivers/gpio/gpiolib.h" "$top/kernel/irq/irq_sim.c" \
+      "$counter/counter-core.c" "$counter/counter-sysfs.c" "$counter/counter-chrdev.c" \
+      "$counter/counter-sysfs.h" "$counter/counter-chrdev.h" "$counter/interrupt-cnt.c"
 }
 
-build_gpio_sim() { # ROOT -> ROOT/lib/modules/$kernel_release/extra/gpio-sim.ko
-  local root="$1" src="$gpio_sim_src"
+# ROOT -> ROOT/lib/modules/$kernel_release/extra/: gpio-sim.ko, counter.ko, interrupt-cnt.ko
+# (the modules Debian's kernel lacks) and interrupt_counter_fixture.ko (test-only).
+build_modules() {
+  local root="$1" src="$module_src"
   local headers="$root/usr/src/linux-headers-$kernel_release"
   mv "$src/drivers/gpio/gpio-sim.c" "$src/gpio-sim-main.c"
-  mv "$src/drivers/gpio/gpiolib.h" "$src/kernel/irq/irq_sim.c" "$src/"
+  mv "$src/drivers/gpio/gpiolib.h" "$src/kernel/irq/irq_sim.c" "$src/drivers/counter/"* "$src/"
+  cp "$fixture_source" "$src/"
   # irq_to_desc() is not exported to modules; generic_handle_irq() does the same lookup.
   grep -q 'handle_simple_irq(irq_to_desc(irqnum));' "$src/irq_sim.c" ||
-    die "irq_sim.c no longer has the line this script patches; update build_gpio_sim"
+    die "irq_sim.c no longer has the line this script patches; update build_modules"
   sed -i 's/handle_simple_irq(irq_to_desc(irqnum));/generic_handle_irq(irqnum);/' "$src/irq_sim.c"
-  printf 'obj-m := gpio-sim.o\ngpio-sim-y := gpio-sim-main.o irq_sim.o\n' >"$src/Kbuild"
+  # As drivers/{gpio,counter}/Makefile build them (CONFIG_GPIO_SIM, COUNTER, INTERRUPT_CNT).
+  cat >"$src/Kbuild" <<'KBUILD'
+obj-m := gpio-sim.o counter.o interrupt-cnt.o interrupt_counter_fixture.o
+gpio-sim-y := gpio-sim-main.o irq_sim.o
+counter-y := counter-core.o counter-sysfs.o counter-chrdev.o
+KBUILD
   # The headers' Makefile includes the -common one by absolute /usr/src path.
   sed -i "s#^include /usr/src/#include $root/usr/src/#" "$headers/Makefile"
-  note "building gpio-sim.ko against linux-headers-$kernel_release"
-  make -C "$headers" M="$src" -j2 modules >"$kernel_dir/gpio-sim-build.log" 2>&1 || {
-    cat "$kernel_dir/gpio-sim-build.log" >&2
-    die "building gpio-sim.ko failed"
+  note "building ${built_modules[*]} and the interrupt-cnt fixture against linux-headers-$kernel_release"
+  make -C "$headers" M="$src" -j2 modules >"$kernel_dir/modules-build.log" 2>&1 || {
+    cat "$kernel_dir/modules-build.log" >&2
+    die "building the out-of-tree modules failed"
   }
   mkdir -p "$root/lib/modules/$kernel_release/extra"
-  cp "$src/gpio-sim.ko" "$root/lib/modules/$kernel_release/extra/"
+  local module
+  for module in "${built_modules[@]}" interrupt_counter_fixture; do
+    cp "$src/$module.ko" "$root/lib/modules/$kernel_release/extra/"
+  done
 }
 
 stage_modules() { # ROOT -> $module_root + $module_load_list (insmod order, dependencies first)
@@ -186,17 +214,19 @@ prepare_kernel() {
   local started=$SECONDS root="$kernel_dir/root"
   rm -rf "$kernel_dir" && mkdir -p "$kernel_dir"
   fetch_packages
-  note "unpacking the kernel packages and the gpio-sim sources"
+  note "unpacking the kernel packages and the module sources"
   # Both are single-threaded xz streams: unpack them side by side.
-  extract_gpio_sim_sources &
+  extract_module_sources &
   local sources_job=$!
   mkdir -p "$root"
   for deb in "$kernel_dir"/debs/linux-{image,headers,kbuild}-*.deb; do dpkg-deb -x "$deb" "$root"; done
   extract_vmlinux "$root/boot/vmlinuz-$kernel_release"
-  wait "$sources_job" || die "extracting the gpio-sim sources from linux-source-$series failed"
-  build_gpio_sim "$root"
+  wait "$sources_job" || die "extracting the module sources from linux-source-$series failed"
+  build_modules "$root"
   stage_modules "$root"
-  rm -rf "$root" "$gpio_sim_src" "$kernel_dir/debs" # keep what boots, ~80 MB
+  local fixture="lib/modules/$kernel_release/extra/interrupt_counter_fixture.ko"
+  cp "$root/$fixture" "$module_root/$fixture"
+  rm -rf "$root" "$module_src" "$kernel_dir/debs" # keep what boots, ~80 MB
   # Keep only this kernel: older ABIs are never booted again.
   find "$cache_dir" -mindepth 1 -maxdepth 1 -type d ! -path "$kernel_dir" -exec rm -rf {} +
   touch "$kernel_dir/ready"
@@ -231,7 +261,7 @@ build_base_archive() { # -> $base_archive
   for tool in "${guest_tools[@]}"; do tool_paths+=("$(command -v "$tool")"); done
   mapfile -t libraries < <(shared_libraries "${tool_paths[@]}" "${guest_programs[@]}")
   key="$( (
-    echo "$kernel_release $kernel_version"
+    echo "$kernel_release $kernel_version $module_set_key" # the archive holds the modules
     # shellcheck disable=SC2016 # the format is stat's
     stat -L -c '%n %s %Y' /bin/busybox "${tool_paths[@]}" "${libraries[@]}"
   ) | sha256sum | cut -c1-16)"
@@ -310,6 +340,9 @@ setup_ok=1
 grep -qaE '^WEEDSPRAY-VM-SETUP OK$' "$guest_log" || setup_ok=0
 done_ok=1
 grep -qaE '^WEEDSPRAY-VM-DONE$' "$guest_log" || done_ok=0
+
+# Measured figures (e.g. the pulse rate reached): shown however the run ends.
+grep -a '^WEEDSPRAY-VM-FIGURE ' "$guest_log" | sed 's/^WEEDSPRAY-VM-FIGURE /run-vm-tests: figure: /' >&2 || true
 
 if ((${#failures[@]} == 0 && setup_ok && done_ok)); then
   note "all ${#guest_programs[@]} guest programs passed"

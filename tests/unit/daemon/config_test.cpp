@@ -283,6 +283,14 @@ TEST(ConfigSchema, ModbusAnalogModulesOnTheirOwnBus) {
   EXPECT_EQ(same_register.key(), "dac.modbus_register");
 }
 
+TEST(ConfigSchema, FlowMeterOnAKernelCounterOrAGpioLineNotBoth) {
+  EXPECT_EQ(parse("[flow]\ncounter = \"weedspray-flow\"\n").flow.counter, "weedspray-flow");
+  const auto both =
+      parse_error({{"main.toml", "[gpio]\nflow_offset = 4\n[flow]\ncounter = \"counter0\"\n"}});
+  EXPECT_EQ(both.key(), "flow.counter");
+  EXPECT_EQ(both.line(), 4);
+}
+
 class ConfigFiles : public ::testing::Test {
  protected:
   void SetUp() override {
