@@ -32,6 +32,7 @@ std::shared_ptr<io::AnalogInput> make_adc(const Config& config, const io::Clock&
   io::hw::IioChannelConfig adc;
   adc.device = config.adc.iio_device;
   adc.channel = config.adc.pressure_channel;
+  adc.scale_mv_override = config.adc.iio_scale_mv;
   return std::make_shared<io::hw::IioAnalogInput>(adc, clock);
 }
 
@@ -48,6 +49,7 @@ std::shared_ptr<io::AnalogOutput> make_dac(const Config& config, double safe_vol
   io::hw::IioAnalogOutputConfig dac;
   dac.channel.device = config.dac.iio_device;
   dac.channel.channel = config.dac.channel;
+  dac.channel.scale_mv_override = config.dac.iio_scale_mv;
   dac.full_scale_volts = config.dac.full_scale_v;
   dac.safe_volts = safe_volts;
   return std::make_shared<io::hw::IioAnalogOutput>(dac);

@@ -119,7 +119,8 @@ struct AdcSection {
   std::string source;  // iio|modbus
   std::string iio_device;
   int pressure_channel;
-  double shunt_ohms;  // I/V resistor of the 4-20 mA loop
+  double iio_scale_mv;  // mV per count; 0 = read in_voltageN_scale
+  double shunt_ohms;    // I/V resistor of the 4-20 mA loop
   int modbus_slave_id;
   int modbus_register;
   std::string modbus_register_type;  // input|holding
@@ -130,6 +131,7 @@ struct DacSection {
   std::string source;  // iio|modbus
   std::string iio_device;
   int channel;
+  double iio_scale_mv;  // mV per count; 0 = read out_voltageN_scale
   double full_scale_v;
   int modbus_slave_id;
   int modbus_register;

@@ -210,6 +210,9 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "IIO device reading the pressure sensor: iio:deviceN, its path, or its name (ads1015)"},
     {WS_KEY(adc, pressure_channel), 0, 0, 63, "",
      "IIO input channel N (in_voltageN_raw) of the pressure sensor"},
+    {WS_KEY(adc, iio_scale_mv), 0.0, 0, 1e6, "mV/count",
+     "IIO millivolts per count, for a driver without in_voltageN_scale or in_voltage_scale "
+     "(0 = read the driver's scale)"},
     {WS_KEY(adc, shunt_ohms), 165.0, 1, 10000, "ohm",
      "I/V resistor of the 4-20 mA loop (165 ohm maps 20 mA to 3.3 V)"},
     {WS_KEY(adc, modbus_slave_id), 2, 1, 247, "",
@@ -228,6 +231,9 @@ const std::vector<KeySpec<Config>>& config_keys() {
     {WS_KEY(dac, iio_device), std::string("iio:device1"), 0, 0, "",
      "IIO device driving the proportional return valve"},
     {WS_KEY(dac, channel), 0, 0, 63, "", "IIO output channel N (out_voltageN_raw)"},
+    {WS_KEY(dac, iio_scale_mv), 0.0, 0, 1e6, "mV/count",
+     "IIO millivolts per count, for a driver without out_voltageN_scale or out_voltage_scale "
+     "(0 = read the driver's scale)"},
     {WS_KEY(dac, full_scale_v), 3.3, 0.5, 12, "V",
      "DAC voltage for a 100 % valve command"},
     {WS_KEY(dac, modbus_slave_id), 3, 1, 247, "",

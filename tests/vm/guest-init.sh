@@ -48,21 +48,7 @@ done </modules.load
 
 mount -t configfs configfs /sys/kernel/config || setup_failed "cannot mount configfs"
 
-make_gpio_sim_chip() { # NAME LINE_NAME...
-  chip="/sys/kernel/config/gpio-sim/$1"
-  shift
-  mkdir "$chip" "$chip/bank0" || setup_failed "cannot create gpio-sim chip $chip"
-  echo $# >"$chip/bank0/num_lines"
-  basename "$chip" >"$chip/bank0/label" # the chip label tests may look it up by
-  offset=0
-  for line_name in "$@"; do
-    mkdir "$chip/bank0/line$offset"
-    echo "$line_name" >"$chip/bank0/line$offset/name"
-    offset=$((offset + 1))
-  done
-  echo 1 >"$chip/live" || setup_failed "cannot make gpio-sim chip $chip live"
-  echo "gpio-sim $(basename "$chip"): $(cat "$chip/dev_name")/$(cat "$chip/bank0/chip_name") lines: $*"
-}
+. /gpio-sim-chip.sh # make_gpio_sim_chip
 make_gpio_sim_chip weedspray-out valve0 valve1 valve2 valve3 pump buzzer lamp aux
 make_gpio_sim_chip weedspray-in flow wheel key
 make_gpio_sim_chip weedspray-count flow_fast flow_fast_gpiod

@@ -1,0 +1,233 @@
+#!/usr/bin/env bash
+# Boots a Debian 12 systemd guest in QEMU (Debian's kernel, TCG) with weedspray installed from
+# its own .deb, and checks the shipped weedsprayd.service in hardware mode against real kernel
+# drivers: gpio-sim, interrupt-cnt, vivid and the IIO dummy (ADC + DAC). See README.md.
+#
+#   run-systemd-vm-test.sh --source DIR [--cache DIR] [--log FILE] [--timeout SECONDS]
+#
+# --source: the weedspray checkout. The package is built the way the README says a user
+# builds it: a Release tree configured with -DCMAKE_INSTALL_PREFIX=/usr (tests off), then
+# `cpack -G DEB`; the tree is $WEEDSPRAY_BUILD_DIR/vm-systemd/pkg-build (or
+# $WEEDSPRAY_VM_SYSTEMD_PKG_BUILD) and is rebuilt incrementally.
+# The rootfs (debootstrap --variant=minbase bookworm + the .deb's Depends + test tools) is
+# cached in the vm cache keyed by its package list, the kernel and modules as in tests/vm.
+# Needs root (debootstrap, chroot dpkg -i). Exits 0 only when the guest reports every check
+# passed; a missing prerequisite, download, build or boot problem is an error, never a skip.
+# WEEDSPRAY_VM_KEEP_WORK=1 keeps the work dir (rootfs image, initramfs).
+set -Eeuo pipefail
+
+script_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+source_dir=""
+build_root="${WEEDSPRAY_BUILD_DIR:-$PWD}"
+cache_dir="${WEEDSPRAY_VM_CACHE:-$build_root/vm-cache}"
+log_file=""
+boot_timeout_s=480
+
+die() {
+  echo "run-systemd-vm-test: error: $*" >&2
+  exit 2
+}
+note() { echo "run-systemd-vm-test: $*" >&2; }
+trap 'echo "run-systemd-vm-test: error: command failed at line $LINENO: $BASH_COMMAND" >&2' ERR
+
+while (($#)); do
+  case "$1" in
+    --source) source_dir="${2:?--source needs a directory}"; shift 2 ;;
+    --cache) cache_dir="${2:?--cache needs a directory}"; shift 2 ;;
+    --log) log_file="${2:?--log needs a file}"; shift 2 ;;
+    --timeout) boot_timeout_s="${2:?--timeout needs seconds}"; shift 2 ;;
+    -h | --help) sed -n '2,17p' "$0"; exit 0 ;;
+    *) die "unknown argument '$1' (see --help)" ;;
+  esac
+done
+[ -n "$source_dir" ] || die "--source is required (see --help)"
+[ -f "$source_dir/CMakeLists.txt" ] || die "'$source_dir' is not the weedspray checkout"
+source_dir="$(cd "$source_dir" && pwd)"
+pkg_build="${WEEDSPRAY_VM_SYSTEMD_PKG_BUILD:-$build_root/vm-systemd/pkg-build}"
+[ "$(id -u)" -eq 0 ] || die "needs root: debootstrap and dpkg -i in the guest's rootfs"
+mkdir -p "$cache_dir" || die "cannot create the cache directory '$cache_dir'"
+cache_dir="$(cd "$cache_dir" && pwd)"
+
+# --- prerequisites -----------------------------------------------------------------------
+require_tool() { # TOOL DEBIAN_PACKAGE
+  command -v "$1" >/dev/null 2>&1 ||
+    die "'$1' not found: install the Debian package '$2' (./dev deps installs it)"
+}
+require_tool qemu-system-x86_64 qemu-system-x86
+require_tool debootstrap debootstrap
+require_tool mkfs.ext4 e2fsprogs
+require_tool cpio cpio
+require_tool cmake cmake
+require_tool cpack cmake
+require_tool ninja ninja-build
+require_tool dpkg-shlibdeps dpkg-dev # CPack's SHLIBDEPS
+require_tool chroot coreutils
+require_tool flock util-linux
+[ -x /bin/busybox ] || die "/bin/busybox not found: install the Debian package 'busybox-static'"
+if ldd /bin/busybox >/dev/null 2>&1; then
+  die "/bin/busybox is dynamically linked: install 'busybox-static' (not 'busybox')"
+fi
+# shellcheck source=tests/vm/vm-kernel.sh
+source "$source_dir/tests/vm/vm-kernel.sh"
+vm_kernel_init
+
+# --- the package, as a user builds it ----------------------------------------------------
+build_package() { # -> $deb
+  local started=$SECONDS
+  mkdir -p "$pkg_build" || die "cannot create the package tree '$pkg_build'"
+  if [ ! -f "$pkg_build/CMakeCache.txt" ]; then
+    note "configuring $pkg_build (Release, CMAKE_INSTALL_PREFIX=/usr, BUILD_TESTING=OFF)"
+    cmake -S "$source_dir" -B "$pkg_build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+      -DCMAKE_INSTALL_PREFIX=/usr -DBUILD_TESTING=OFF >"$pkg_build.configure.log" 2>&1 || {
+      cat "$pkg_build.configure.log" >&2
+      die "configuring the package tree failed"
+    }
+  fi
+  cmake --build "$pkg_build" -j"$(nproc)" >"$pkg_build.build.log" 2>&1 || {
+    tail -n 50 "$pkg_build.build.log" >&2
+    die "building the package tree failed (log: $pkg_build.build.log)"
+  }
+  rm -f "$pkg_build"/weedspray_*.deb
+  (cd "$pkg_build" && cpack -G DEB) >"$pkg_build.cpack.log" 2>&1 || {
+    cat "$pkg_build.cpack.log" >&2
+    die "cpack -G DEB failed"
+  }
+  local debs=("$pkg_build"/weedspray_*.deb)
+  [ -f "${debs[0]}" ] || die "cpack made no weedspray_*.deb in $pkg_build"
+  deb="${debs[0]}"
+  note "package $(basename "$deb") built in $((SECONDS - started)) s"
+}
+
+# --- the rootfs, cached by package list --------------------------------------------------
+# systemd as PID 1 with udev and the system bus; gpiod and v4l-utils for the fixtures.
+base_packages=(systemd systemd-sysv dbus udev kmod gpiod v4l-utils)
+debian_suite=bookworm
+debian_mirror="${WEEDSPRAY_DEBIAN_MIRROR:-http://deb.debian.org/debian}"
+
+package_depends() { # DEB -> the package names of its Depends (first alternative, no version)
+  local name provider
+  dpkg-deb -f "$1" Depends | tr ',' '\n' | sed -e 's/|.*//' -e 's/(.*)//' -e 's/ //g' |
+    sed '/^$/d' | while read -r name; do
+    # debootstrap cannot resolve a virtual package (libspdlog1.10-fmt9): name its provider.
+    if [ -n "$(apt-cache show --no-all-versions "$name" 2>/dev/null)" ]; then
+      echo "$name"
+      continue
+    fi
+    provider="$(apt-cache showpkg "$name" 2>/dev/null |
+      sed -n '/^Reverse Provides:/,$ { /^Reverse Provides:/d; s/ .*//p }' | head -n1)"
+    [ -n "$provider" ] || die "the package depends on '$name', which the package index lacks"
+    echo "$provider"
+  done
+}
+
+prepare_rootfs() { # -> $rootfs_dir (read-only cache; each run copies it)
+  local packages key started=$SECONDS
+  packages="$( (printf '%s\n' "${base_packages[@]}"; package_depends "$deb") | sort -u | paste -sd, -)"
+  key="$(echo "$debian_suite $debian_mirror $packages" | sha256sum | cut -c1-16)"
+  rootfs_dir="$cache_dir/systemd-rootfs-$key"
+  [ -f "$rootfs_dir.ready" ] && return 0
+  find "$cache_dir" -mindepth 1 -maxdepth 1 -name 'systemd-rootfs-*' -exec rm -rf {} +
+  note "debootstrap --variant=minbase $debian_suite with $packages (about 2.5 min)"
+  debootstrap --variant=minbase --include="$packages" "$debian_suite" "$rootfs_dir" \
+    "$debian_mirror" >"$rootfs_dir.log" 2>&1 || {
+    tail -n 30 "$rootfs_dir.log" >&2
+    die "debootstrap failed (network? log: $rootfs_dir.log)"
+  }
+  rm -f "$rootfs_dir"/var/cache/apt/archives/*.deb # 180 MB nobody reads in the guest
+  touch "$rootfs_dir.ready"
+  note "rootfs prepared in $((SECONDS - started)) s ($(du -sh "$rootfs_dir" | cut -f1))"
+}
+
+# --- this run's disk image ------------------------------------------------------------------
+build_disk() { # -> $work_dir/rootfs.ext4
+  local root="$work_dir/root" unit_dir
+  cp -a "$rootfs_dir" "$root"
+  # Installed the way a user installs it; the postinst runs systemd-sysusers and
+  # systemd-tmpfiles in the chroot (systemctl and udevadm find no running system there).
+  cp "$deb" "$root/tmp/weedspray.deb"
+  chroot "$root" dpkg -i /tmp/weedspray.deb >"$work_dir/dpkg.log" 2>&1 || {
+    cat "$work_dir/dpkg.log" >&2
+    die "dpkg -i $(basename "$deb") in the guest rootfs failed"
+  }
+  rm "$root/tmp/weedspray.deb"
+  grep -q '^weedspray:' "$root/etc/passwd" || die "the package's postinst made no user weedspray"
+  # The kernel's modules the guest loads (gpio-sim, vivid, iio_dummy, ...), with depmod's files.
+  mkdir -p "$root/lib/modules"
+  cp -a "$module_root/lib/modules/$kernel_release" "$root/lib/modules/"
+  # The test: a oneshot unit after multi-user.target that powers the guest off in any case.
+  install -D -m 755 "$script_dir/guest-test.sh" "$root/usr/local/lib/weedspray-vm-test/guest-test.sh"
+  install -m 644 "$script_dir/../vm/gpio-sim-chip.sh" "$root/usr/local/lib/weedspray-vm-test/"
+  unit_dir="$root/etc/systemd/system"
+  install -D -m 644 "$script_dir/weedspray-vm-test.service" "$unit_dir/weedspray-vm-test.service"
+  mkdir -p "$unit_dir/multi-user.target.wants"
+  ln -sf ../weedspray-vm-test.service "$unit_dir/multi-user.target.wants/"
+  # No login prompt on the console the markers use; no first-boot questions.
+  ln -sf /dev/null "$unit_dir/serial-getty@ttyS0.service"
+  ln -sf /dev/null "$unit_dir/getty@tty1.service"
+  echo weedspray-vm >"$root/etc/hostname"
+  echo 0123456789abcdef0123456789abcdef >"$root/etc/machine-id"
+  local size_mb=$(($(du -sm "$root" | cut -f1) + 400))
+  mkfs.ext4 -q -F -L root -d "$root" "$work_dir/rootfs.ext4" "${size_mb}M" >/dev/null ||
+    die "mkfs.ext4 -d failed"
+  rm -rf "$root"
+}
+
+build_stage1() { # -> $work_dir/stage1.cpio: busybox, the root disk's modules, /init
+  local root="$work_dir/stage1" path
+  mkdir -p "$root"/{bin,dev,proc,sys,newroot}
+  cp /bin/busybox "$root/bin/busybox"
+  # ext4's soft dependency crc32c-intel needs SSE4.2, which the emulated qemu64 CPU lacks
+  # (insmod: No such device); crc32c_generic serves ext4 instead.
+  vm_module_load_list virtio_pci virtio_blk ext4 crc32c_generic |
+    grep -v '/crc32c-intel\.ko$' >"$root/modules.load"
+  while read -r path; do
+    mkdir -p "$root$(dirname "$path")"
+    cp "$module_root$path" "$root$path"
+  done <"$root/modules.load"
+  install -m 755 "$script_dir/stage1-init.sh" "$root/init"
+  (cd "$root" && find . -print0 | cpio --null -o -H newc --quiet) >"$work_dir/stage1.cpio"
+}
+
+run_guest() { # returns QEMU's status
+  local status=0
+  timeout --foreground "$boot_timeout_s" qemu-system-x86_64 -accel tcg -cpu qemu64 -smp 2 \
+    -m 1536 -nographic -no-reboot -nodefaults -serial stdio \
+    -kernel "$vmlinux" -initrd "$work_dir/stage1.cpio" \
+    -drive "file=$work_dir/rootfs.ext4,format=raw,if=virtio" -snapshot \
+    -append "console=ttyS0 quiet loglevel=3 panic=-1 oops=panic systemd.show_status=0 systemd.firstboot=off" \
+    </dev/null >"$guest_log" 2>&1 || status=$?
+  return "$status"
+}
+
+started_all=$SECONDS
+build_package
+exec 9>"$cache_dir/.lock"
+flock 9 # shares the kernel cache with tests/vm
+prepare_kernel
+prepare_rootfs
+work_dir="$(mktemp -d "$cache_dir/systemd-run.XXXXXX")"
+[ -n "${WEEDSPRAY_VM_KEEP_WORK:-}" ] || trap 'rm -rf "$work_dir"' EXIT
+guest_log="${log_file:-$work_dir/guest.log}"
+disk_started=$SECONDS
+build_disk
+build_stage1
+note "disk image $(du -h --apparent-size "$work_dir/rootfs.ext4" | cut -f1) made in $((SECONDS - disk_started)) s; booting $kernel_release"
+boot_started=$SECONDS
+qemu_status=0
+run_guest || qemu_status=$?
+note "guest ran for $((SECONDS - boot_started)) s (QEMU status $qemu_status); whole run $((SECONDS - started_all)) s"
+sed -i 's/\r$//' "$guest_log" # the serial console ends lines with CR LF
+
+grep -a '^WEEDSPRAY-SD-\(CHECK\|INFO\)' "$guest_log" | sed 's/^WEEDSPRAY-SD-/run-systemd-vm-test: /' >&2 || true
+if grep -qaxE 'WEEDSPRAY-SD-RESULT PASS checks=[0-9]+ failed=0' "$guest_log" &&
+  ! grep -qa '^WEEDSPRAY-SD-CHECK .* FAIL' "$guest_log"; then
+  note "$(grep -a '^WEEDSPRAY-SD-RESULT' "$guest_log")"
+  exit 0
+fi
+echo "===== guest console =====" >&2
+cat -v "$guest_log" >&2
+echo "===== end of guest console =====" >&2
+grep -qa '^WEEDSPRAY-SD-RESULT' "$guest_log" ||
+  note "FAIL: the guest test did not finish (QEMU status $qemu_status, 124 = timeout after $boot_timeout_s s)"
+grep -a '^WEEDSPRAY-SD-CHECK .* FAIL' "$guest_log" | sed 's/^WEEDSPRAY-SD-CHECK /run-systemd-vm-test: FAIL /' >&2 || true
+exit 1

@@ -1,0 +1,225 @@
+# shellcheck shell=bash
+# Shared by tests/vm/run-vm-tests.sh and tests/vm-systemd/run-systemd-vm-test.sh (sourced,
+# never run): Debian's own kernel for the QEMU guests, plus the modules Debian does not ship,
+# built out of tree from linux-source:
+#   gpio-sim (+ irq_sim), counter + interrupt-cnt, interrupt_counter_fixture (test-only),
+#   industrialio-configfs + industrialio-sw-device + iio_dummy (IIO_SIMPLE_DUMMY without its
+#   buffer and event parts: one ADC input in_voltage0_raw and one DAC output out_voltage0_raw).
+#
+# The caller defines die, note, require_tool and cache_dir (absolute), then calls
+#   vm_kernel_init      picks the kernel from the package index, sets kernel_release,
+#                       kernel_dir, vmlinux, module_root
+#   prepare_kernel      downloads + builds once per kernel and module set (cached in kernel_dir;
+#                       hold the cache lock)
+#   vm_module_load_list MODULE...   insmod paths (/lib/modules/...), dependencies first
+#
+# module_root is a self-contained lib/modules/$kernel_release tree (depmod has run) holding
+# only the modules some guest loads (vm_staged_modules), so a guest can copy it whole and use
+# modprobe.
+
+vm_kernel_lib_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+
+# The modules built here, from linux-source (file lists in extract_module_sources).
+built_modules=(gpio-sim counter interrupt-cnt industrialio-configfs industrialio-sw-device iio_dummy)
+# Every module either guest loads (their dependencies come along): the busybox guest's, the
+# systemd guest's block device + root file system, and the IIO dummy. crc32c_generic: ext4
+# wants crc32c and the emulated qemu64 CPU has no SSE4.2 for crc32c-intel.
+vm_staged_modules=(configfs gpio-sim vivid interrupt-cnt
+  virtio_pci virtio_blk ext4 crc32c_generic
+  industrialio industrialio-configfs industrialio-sw-device iio_dummy)
+# Loaded by guest-init.sh after it has made the gpio-sim chips, not from modules.load.
+fixture_source="$vm_kernel_lib_dir/interrupt_counter_fixture.c"
+# Bump when the module build steps change: a new value makes a new kernel_dir (and the old
+# one is removed), so a cache never lacks a module the guest now expects.
+module_build_revision=3
+
+# --- which kernel --------------------------------------------------------------------------
+# The ABI (6.1.0-NN) moves with Debian's point releases, so ask the package index.
+kernel_image_package() {
+  apt-cache depends linux-image-amd64 2>/dev/null |
+    sed -n 's/^ *Depends: \(linux-image-[0-9][^ ]*-amd64\)$/\1/p' | head -n1 || true
+}
+
+vm_kernel_init() {
+  : "${cache_dir:?the sourcing script sets cache_dir}"
+  require_tool apt-get apt
+  require_tool apt-cache apt
+  require_tool dpkg-deb dpkg
+  require_tool xz xz-utils
+  require_tool modprobe kmod
+  require_tool depmod kmod
+  require_tool make make
+  require_tool gcc gcc
+  [ -f "$fixture_source" ] || die "$fixture_source is missing"
+  image_package="$(kernel_image_package)"
+  if [ -z "$image_package" ] && [ "$(id -u)" -eq 0 ]; then
+    note "linux-image-amd64 is not in the package index; running apt-get update"
+    apt-get update -qq || die "apt-get update failed"
+    image_package="$(kernel_image_package)"
+  fi
+  [ -n "$image_package" ] ||
+    die "cannot find what linux-image-amd64 depends on in the package index (run apt-get update)"
+  kernel_release="${image_package#linux-image-}"
+  kernel_version="$(apt-cache show --no-all-versions "$image_package" 2>/dev/null |
+    sed -n 's/^Version: //p' || true)"
+  [ -n "$kernel_version" ] || die "no version of $image_package in the package index"
+  abi="${kernel_release%-amd64}"                    # 6.1.0-56
+  series="$(echo "$kernel_release" | cut -d. -f1,2)" # 6.1: linux-source-6.1
+  gcc_version="$(apt-cache depends "linux-headers-$kernel_release" 2>/dev/null |
+    sed -n 's/^ *Depends: linux-compiler-gcc-\([0-9]*\)-x86$/\1/p' | head -n1 || true)"
+  [ -n "$gcc_version" ] || die "cannot tell which gcc linux-headers-$kernel_release is built with"
+  require_tool "gcc-$gcc_version" "gcc-$gcc_version"
+
+  module_set_key="$( (
+    echo "$module_build_revision ${built_modules[*]} / ${vm_staged_modules[*]}"
+    cat "$fixture_source"
+  ) | sha256sum | cut -c1-12)"
+  kernel_dir="$cache_dir/$kernel_release-$kernel_version-modules-$module_set_key"
+  vmlinux="$kernel_dir/vmlinux"
+  module_root="$kernel_dir/modules" # lib/modules/$kernel_release with only what guests need
+}
+
+fetch_packages() { # -> $kernel_dir/debs
+  local debs="$kernel_dir/debs"
+  mkdir -p "$debs"
+  local packages=("$image_package=$kernel_version" "linux-headers-$kernel_release=$kernel_version"
+    "linux-headers-$abi-common=$kernel_version" "linux-kbuild-$series=$kernel_version"
+    "linux-source-$series=$kernel_version")
+  note "downloading ${packages[*]} from the Debian archive"
+  (cd "$debs" && apt-get download -q "${packages[@]}") >"$kernel_dir/download.log" 2>&1 || {
+    cat "$kernel_dir/download.log" >&2
+    die "apt-get download failed (network? stale index: run apt-get update)"
+  }
+}
+
+extract_vmlinux() { # vmlinuz -> vmlinux: booting the ELF via PVH skips emulated decompression
+  local vmlinuz="$1" offset
+  offset="$(LC_ALL=C grep -m1 -obUaP '\xFD7zXZ\x00' "$vmlinuz" | cut -d: -f1)"
+  [ -n "$offset" ] || die "no xz payload in $vmlinuz (kernel compression changed?)"
+  # xz stops reading at the end of its stream, so tail must not be part of a checked pipe.
+  xz -dc --single-stream <(tail -c +$((offset + 1)) "$vmlinuz" 2>/dev/null || true) >"$vmlinux.tmp"
+  [ "$(head -c4 "$vmlinux.tmp" | od -An -c | tr -d ' ')" = '177ELF' ] ||
+    die "the xz payload of $vmlinuz is not an ELF vmlinux"
+  mv "$vmlinux.tmp" "$vmlinux"
+}
+
+extract_module_sources() { # -> $module_src (the whole 1.3 GB tarball is read: ~10 s)
+  rm -rf "$module_src" && mkdir -p "$module_src"
+  local top="linux-source-$series" counter="linux-source-$series/drivers/counter"
+  local iio="linux-source-$series/drivers/iio"
+  # The Counter core's own headers are private; <linux/counter.h> is in the headers package.
+  dpkg-deb --fsys-tarfile "$kernel_dir/debs/${top}_"*.deb |
+    tar -xO "./usr/src/$top.tar.xz" | xz -dc |
+    tar -x -C "$module_src" --strip-components=1 "$top/drivers/gpio/gpio-sim.c" \
+      "$top/drivers/gpio/gpiolib.h" "$top/kernel/irq/irq_sim.c" \
+      "$counter/counter-core.c" "$counter/counter-sysfs.c" "$counter/counter-chrdev.c" \
+      "$counter/counter-sysfs.h" "$counter/counter-chrdev.h" "$counter/interrupt-cnt.c" \
+      "$iio/industrialio-configfs.c" "$iio/industrialio-sw-device.c" \
+      "$iio/dummy/iio_simple_dummy.c" "$iio/dummy/iio_simple_dummy.h"
+}
+
+# ROOT -> ROOT/lib/modules/$kernel_release/extra/: the modules Debian's kernel lacks
+# (built_modules) and interrupt_counter_fixture.ko (test-only).
+build_modules() {
+  local root="$1" src="$module_src"
+  local headers="$root/usr/src/linux-headers-$kernel_release"
+  mv "$src/drivers/gpio/gpio-sim.c" "$src/gpio-sim-main.c"
+  mv "$src/drivers/gpio/gpiolib.h" "$src/kernel/irq/irq_sim.c" "$src/drivers/counter/"* "$src/"
+  mv "$src/drivers/iio/industrialio-"*.c "$src/drivers/iio/dummy/"* "$src/"
+  cp "$fixture_source" "$src/"
+  # irq_to_desc() is not exported to modules; generic_handle_irq() does the same lookup.
+  grep -q 'handle_simple_irq(irq_to_desc(irqnum));' "$src/irq_sim.c" ||
+    die "irq_sim.c no longer has the line this script patches; update build_modules"
+  sed -i 's/handle_simple_irq(irq_to_desc(irqnum));/generic_handle_irq(irqnum);/' "$src/irq_sim.c"
+  # As drivers/{gpio,counter,iio,iio/dummy}/Makefile build them (CONFIG_GPIO_SIM, COUNTER,
+  # INTERRUPT_CNT, IIO_CONFIGFS, IIO_SW_DEVICE, IIO_SIMPLE_DUMMY; not _BUFFER or _EVENTS, whose
+  # code iio_simple_dummy.h stubs out).
+  cat >"$src/Kbuild" <<'KBUILD'
+obj-m := gpio-sim.o counter.o interrupt-cnt.o interrupt_counter_fixture.o
+obj-m += industrialio-configfs.o industrialio-sw-device.o iio_dummy.o
+gpio-sim-y := gpio-sim-main.o irq_sim.o
+counter-y := counter-core.o counter-sysfs.o counter-chrdev.o
+iio_dummy-y := iio_simple_dummy.o
+KBUILD
+  # The headers' Makefile includes the -common one by absolute /usr/src path.
+  sed -i "s#^include /usr/src/#include $root/usr/src/#" "$headers/Makefile"
+  note "building ${built_modules[*]} and the interrupt-cnt fixture against linux-headers-$kernel_release"
+  make -C "$headers" M="$src" -j2 modules >"$kernel_dir/modules-build.log" 2>&1 || {
+    cat "$kernel_dir/modules-build.log" >&2
+    die "building the out-of-tree modules failed"
+  }
+  mkdir -p "$root/lib/modules/$kernel_release/extra"
+  local module
+  for module in "${built_modules[@]}" interrupt_counter_fixture; do
+    cp "$src/$module.ko" "$root/lib/modules/$kernel_release/extra/"
+  done
+}
+
+# ROOT MODULE... -> the .ko paths (relative to ROOT) modprobe would load, dependencies first,
+# each once; built-in modules are skipped.
+module_paths() {
+  local root="$1" line path seen=" " m
+  shift
+  for m in "$@"; do
+    modprobe -d "$root" -S "$kernel_release" --show-depends "$m" ||
+      die "modprobe cannot resolve module '$m' in $root"
+  done | while read -r line; do
+    case "$line" in
+      insmod\ *) ;;
+      builtin\ *) continue ;;
+      *) die "unexpected modprobe output: $line" ;;
+    esac
+    path="${line#insmod }"
+    path="${path%% *}"
+    path="${path#"$root"}"
+    case "$seen" in *" $path "*) continue ;; esac
+    seen="$seen$path "
+    echo "$path"
+  done
+}
+
+# ROOT -> $module_root: vm_staged_modules and their dependencies, then depmod there.
+stage_modules() {
+  local root="$1" path
+  depmod -b "$root" "$kernel_release"
+  rm -rf "$module_root" && mkdir -p "$module_root/lib/modules/$kernel_release"
+  while read -r path; do
+    mkdir -p "$module_root$(dirname "$path")"
+    cp "$root$path" "$module_root$path"
+  done < <(module_paths "$root" "${vm_staged_modules[@]}")
+  local fixture="lib/modules/$kernel_release/extra/interrupt_counter_fixture.ko"
+  cp "$root/$fixture" "$module_root/$fixture"
+  # modprobe must know which modules are built in (e.g. it would look for a missing .ko).
+  cp "$root/lib/modules/$kernel_release/"modules.{builtin,builtin.modinfo,order} \
+    "$module_root/lib/modules/$kernel_release/"
+  depmod -b "$module_root" "$kernel_release"
+}
+
+vm_module_load_list() { # MODULE... -> insmod paths (/lib/modules/...), dependencies first, once
+  module_paths "$module_root" "$@"
+}
+
+prepare_kernel() {
+  [ -f "$kernel_dir/ready" ] && return 0
+  local started=$SECONDS root="$kernel_dir/root" deb
+  rm -rf "$kernel_dir" && mkdir -p "$kernel_dir"
+  module_src="$kernel_dir/module-src"
+  fetch_packages
+  note "unpacking the kernel packages and the module sources"
+  # Both are single-threaded xz streams: unpack them side by side.
+  extract_module_sources &
+  local sources_job=$!
+  mkdir -p "$root"
+  for deb in "$kernel_dir"/debs/linux-{image,headers,kbuild}-*.deb; do dpkg-deb -x "$deb" "$root"; done
+  extract_vmlinux "$root/boot/vmlinuz-$kernel_release"
+  wait "$sources_job" || die "extracting the module sources from linux-source-$series failed"
+  build_modules "$root"
+  stage_modules "$root"
+  rm -rf "$root" "$module_src" "$kernel_dir/debs" # keep what boots, ~80 MB
+  # Keep only this kernel: older ABIs and module sets are never booted again. Only kernel
+  # directories: the cache also holds other guests' files (e.g. the systemd guest's rootfs).
+  find "$cache_dir" -mindepth 1 -maxdepth 1 -type d -name '*-modules-*' ! -path "$kernel_dir" \
+    -exec rm -rf {} +
+  touch "$kernel_dir/ready"
+  note "kernel $kernel_release ($kernel_version) prepared in $((SECONDS - started)) s"
+}
