@@ -127,6 +127,10 @@ Backends make_hw_backends(const Config& config) {
     v4l2.fps = static_cast<int>(camera.fps);
     v4l2.pixel_format = pixel_format(camera.format);
     if (camera.exposure_us > 0) v4l2.exposure_absolute = (camera.exposure_us + 50) / 100;
+    if (camera.white_balance_k > 0) {
+      v4l2.auto_white_balance = false;
+      v4l2.white_balance_temperature = camera.white_balance_k;
+    }
     b.cameras.push_back(keep(b, std::make_shared<io::hw::V4l2Camera>(v4l2, *b.clock)));
   }
   return b;

@@ -34,8 +34,9 @@ struct CameraSection {
   int width;
   int height;
   double fps;
-  std::string format;  // YUYV|MJPG|RGB3|GREY
-  int exposure_us;     // 0 = automatic
+  std::string format;   // YUYV|MJPG|RGB3|GREY
+  int exposure_us;      // 0 = automatic
+  int white_balance_k;  // 0 = the camera's own setting
   double mount_height_m;
   double tilt_deg;  // optical axis from vertical, looking forward
   double vfov_deg;

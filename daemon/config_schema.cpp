@@ -342,6 +342,10 @@ const std::vector<KeySpec<CameraSection>>& camera_keys() {
     {WS_CAM(format), std::string("YUYV"), 0, 0, "", "pixel format",
      {"YUYV", "MJPG", "RGB3", "GREY"}},
     {WS_CAM(exposure_us), 0, 0, 1000000, "us", "fixed exposure (0 = automatic)"},
+    {WS_CAM(white_balance_k), 0, 0, 15000, "K",
+     "fixed white balance colour temperature, automatic white balance off: vegetation indices "
+     "compare colours, so a fixed balance keeps thresholds steady (0 = leave the camera's own "
+     "setting)"},
     {WS_CAM(mount_height_m), 1.0, 0.1, 10, "m", "lens height above ground"},
     {WS_CAM(tilt_deg), 30.0, 0, 80, "deg", "optical axis from vertical, looking forward"},
     {WS_CAM(vfov_deg), 40.0, 1, 170, "deg", "vertical (along travel) field of view"},

@@ -129,5 +129,26 @@ TEST(CameraErrorTest, SizeTheDeviceCannotDeliverIsAClearError) {
   EXPECT_THAT(camera.last_error(), ::testing::HasSubstr("1234"));
 }
 
+// vivid has no exposure or white-balance controls: asking for them must say which one failed,
+// not stream with a colour balance nobody chose.
+TEST(CameraErrorTest, ControlTheDeviceLacksIsAClearError) {
+  MonotonicClock clock;
+  V4l2CameraConfig config;
+  config.device = vm_test::vivid_video_node();
+  config.width = 640;
+  config.height = 360;
+  config.auto_white_balance = false;
+  config.white_balance_temperature = 5000;
+  V4l2Camera camera(config, clock);
+  EXPECT_FALSE(camera.start());
+  EXPECT_THAT(camera.last_error(), ::testing::HasSubstr("white_balance"));
+  config.auto_white_balance.reset();
+  config.white_balance_temperature.reset();
+  config.exposure_absolute = 100;
+  V4l2Camera exposed(config, clock);
+  EXPECT_FALSE(exposed.start());
+  EXPECT_THAT(exposed.last_error(), ::testing::HasSubstr("exposure"));
+}
+
 }  // namespace
 }  // namespace weedspray::io::hw
