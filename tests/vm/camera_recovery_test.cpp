@@ -61,12 +61,7 @@ TEST(CameraRecoveryTest, ReportsErrorsWhileUnpluggedThenStreamsAgain) {
   constexpr auto kHangSlack = 1s;
 
   MonotonicClock clock;
-  V4l2CameraConfig config;
-  config.device = vm_test::vivid_video_node();
-  config.width = 640;
-  config.height = 360;
-  config.fps = kFps;
-  config.pixel_format = CameraPixelFormat::kYuyv;
+  V4l2CameraConfig config = vm_test::vivid_camera_config(kFps);
   config.reopen_backoff_min = 50ms;
   config.reopen_backoff_max = 400ms;
   // Declared before the camera so that, should an assertion end the test while unplugged, the

@@ -50,11 +50,7 @@ TEST_P(CameraStreamTest, StreamsFramesWithPlausibleTimestamps) {
   constexpr int kFrames = 12;
   constexpr int kFps = 30;
   MonotonicClock clock;
-  V4l2CameraConfig config;
-  config.device = vm_test::vivid_video_node();
-  config.width = 640;
-  config.height = 360;
-  config.fps = kFps;
+  V4l2CameraConfig config = vm_test::vivid_camera_config(kFps);
   config.pixel_format = GetParam().requested;
   V4l2Camera camera(config, clock);
   ASSERT_TRUE(camera.start()) << camera.last_error();
@@ -133,10 +129,7 @@ TEST(CameraErrorTest, SizeTheDeviceCannotDeliverIsAClearError) {
 // not stream with a colour balance nobody chose.
 TEST(CameraErrorTest, ControlTheDeviceLacksIsAClearError) {
   MonotonicClock clock;
-  V4l2CameraConfig config;
-  config.device = vm_test::vivid_video_node();
-  config.width = 640;
-  config.height = 360;
+  V4l2CameraConfig config = vm_test::vivid_camera_config();
   config.auto_white_balance = false;
   config.white_balance_temperature = 5000;
   V4l2Camera camera(config, clock);

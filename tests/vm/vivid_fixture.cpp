@@ -64,4 +64,14 @@ void VividDisconnect::reconnect() noexcept {
   fd_ = -1;
 }
 
+io::hw::V4l2CameraConfig vivid_camera_config(int fps) {
+  io::hw::V4l2CameraConfig config;
+  config.device = vivid_video_node();
+  config.width = 640;
+  config.height = 360;
+  config.fps = fps;
+  config.pixel_format = io::hw::CameraPixelFormat::kYuyv;
+  return config;
+}
+
 }  // namespace weedspray::vm_test

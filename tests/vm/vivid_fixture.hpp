@@ -11,10 +11,15 @@
 
 #include <string>
 
+#include "io/linux/v4l2_camera.hpp"
+
 namespace weedspray::vm_test {
 
 // "/dev/videoN" of the (only) vivid capture node. Throws std::runtime_error when there is none.
 std::string vivid_video_node();
+
+// A camera configuration vivid's webcam input can deliver: its node, 640x360 YUYV at `fps`.
+io::hw::V4l2CameraConfig vivid_camera_config(int fps = 30);
 
 class VividDisconnect {
  public:
