@@ -25,6 +25,9 @@ struct ExperimentOptions {
   bool tune = false;
   std::uint64_t seed = 1;
   std::string images_dir;
+  double control_period_ms = 5.0;
+  double converter_lead_ms = 0.0;
+  double converter_lag_ms = 0.0;
 };
 
 constexpr int kBlue = 0x1f77b4, kOrange = 0xff7f0e, kGreen = 0x2ca02c, kRed = 0xd62728,
@@ -68,6 +71,9 @@ void print_metrics_json(const char* key, const ex::StepRun& run, const control::
 int run_step_command(const ExperimentOptions& o) {
   ex::StepOptions options;
   options.seed = o.seed;
+  options.control_period_s = o.control_period_ms / 1e3;
+  options.converter_lead_s = o.converter_lead_ms / 1e3;
+  options.converter_lag_s = o.converter_lag_ms / 1e3;
   if (o.tune) {
     const auto t0 = std::chrono::steady_clock::now();
     const ex::TuningResult t = ex::tune_step_controllers(options);
@@ -447,6 +453,16 @@ void add_experiment_commands(CLI::App& app) {
                 "synchronous PWM");
   cmd->add_flag("--tune", options->tune, "step: rerun the gain search before the comparison");
   cmd->add_option("--seed", options->seed, "plant seed (nozzle spread, valve delays, noise)");
+  cmd->add_option("--control-period-ms", options->control_period_ms,
+                  "step: pressure loop period (the daemon's default is 10 ms)")
+      ->check(CLI::Range(0.1, 100.0));
+  cmd->add_option("--converter-lead-ms", options->converter_lead_ms,
+                  "step: ADC sampled this long before each tick (the daemon's converters' thread: "
+                  "up to half a period)")
+      ->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--converter-lag-ms", options->converter_lag_ms,
+                  "step: DAC written this long after each tick (the daemon: 1 ms)")
+      ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--images", options->images_dir,
                   "savings: field images directory (default $WEEDSPRAY_DATA_DIR/ews-train/images)");
   cmd->callback([options] {

@@ -49,6 +49,11 @@ ClosedLoopRig::ClosedLoopRig(const RigConfig& config)
     throw std::invalid_argument("RigConfig.control_period_s must be in (0, 0.1]");
   if (config.adc_bits < 8 || config.adc_bits > 24)
     throw std::invalid_argument("RigConfig.adc_bits must be in [8, 24]");
+  for (const double delay : {config.converter_lead_s, config.converter_lag_s}) {
+    if (!(delay >= 0.0 && delay < config.control_period_s))
+      throw std::invalid_argument(
+          "RigConfig.converter_lead_s and converter_lag_s must be in [0, control_period_s)");
+  }
   if (!(config.meter_pulses_per_l > 0.0))
     throw std::invalid_argument("RigConfig.meter_pulses_per_l must be > 0");
   if (!(config.flow_trim_window_s > 0.0))
@@ -133,6 +138,9 @@ void ClosedLoopRig::start() {
   pwm_.start(std::chrono::nanoseconds(0));
   pending_edge_ = pwm_.next_edge();
   next_control_s_ = now;
+  sampled_pressure_mpa_ = measured_pressure_mpa_;
+  next_sample_s_ = now + config_.control_period_s - config_.converter_lead_s;
+  dac_due_s_ = -1.0;
   next_record_s_ = now;
   next_trim_s_ = now + config_.flow_trim_window_s;
   trim_pulses_ = plant_.flow_meter_pulses();
@@ -155,11 +163,17 @@ double ClosedLoopRig::next_edge_time_s() const {
 
 void ClosedLoopRig::control_tick() {
   const double dt = config_.control_period_s;
-  measured_pressure_mpa_ = read_pressure_mpa();
+  measured_pressure_mpa_ =
+      config_.converter_lead_s > 0.0 ? sampled_pressure_mpa_ : read_pressure_mpa();
   const double alpha = 1.0 - std::exp(-dt / config_.compensation_filter_s);
   filtered_pressure_mpa_ += alpha * (measured_pressure_mpa_ - filtered_pressure_mpa_);
   const double u = controller_.update(config_.setpoint_mpa, measured_pressure_mpa_, dt);
-  plant_.set_return_valve_volts(10.0 * (1.0 - u));
+  if (config_.converter_lag_s > 0.0) {
+    dac_pending_volts_ = 10.0 * (1.0 - u);
+    dac_due_s_ = plant_.time_s() + config_.converter_lag_s;
+  } else {
+    plant_.set_return_valve_volts(10.0 * (1.0 - u));
+  }
 
   // FlowTrim decides itself whether a window is usable (pressure off set-point, too little
   // trimmable flow); the rig only measures.
@@ -196,6 +210,8 @@ void ClosedLoopRig::run_for(double duration_s) {
     const double edge_t = next_edge_time_s();
     double next = std::min({end, edge_t, next_control_s_});
     if (config_.record_period_s > 0.0) next = std::min(next, next_record_s_);
+    if (config_.converter_lead_s > 0.0) next = std::min(next, next_sample_s_);
+    if (dac_due_s_ >= 0.0) next = std::min(next, dac_due_s_);
     if (next > plant_.time_s()) plant_.step(next - plant_.time_s());
     const double now = plant_.time_s();
     constexpr double kEps = 1e-9;
@@ -203,6 +219,14 @@ void ClosedLoopRig::run_for(double duration_s) {
       plant_.set_valves(pending_edge_.valve_mask);
       applied_mask_ = pending_edge_.valve_mask;
       pending_edge_ = pwm_.next_edge();
+    }
+    if (dac_due_s_ >= 0.0 && dac_due_s_ <= now + kEps) {
+      plant_.set_return_valve_volts(dac_pending_volts_);
+      dac_due_s_ = -1.0;
+    }
+    if (config_.converter_lead_s > 0.0 && next_sample_s_ <= now + kEps) {
+      sampled_pressure_mpa_ = read_pressure_mpa();
+      next_sample_s_ += config_.control_period_s;
     }
     if (next_control_s_ <= now + kEps) {
       control_tick();

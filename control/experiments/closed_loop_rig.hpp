@@ -44,6 +44,10 @@ struct RigConfig {
   FuzzyPidConfig controller = default_fuzzy_pid_config();
   double setpoint_mpa = 0.2;
   double control_period_s = 0.005;  // pressure loop at 200 Hz
+  // The daemon's converters' thread (io::AnalogIoWorker): the ADC is sampled this long before
+  // each control tick and the DAC written this long after it. 0 = at the tick (ideal I/O).
+  double converter_lead_s = 0.0;
+  double converter_lag_s = 0.0;
   // What the controller believes about its sensor (the label values, not the plant's truth).
   double sensor_full_scale_mpa = 1.0;
   double sensor_shunt_ohms = 165.0;
@@ -125,6 +129,10 @@ class ClosedLoopRig {
   PwmEdge pending_edge_{};
   std::uint32_t applied_mask_ = 0;
   double next_control_s_ = 0.0;
+  double next_sample_s_ = 0.0;  // converter_lead_s > 0: the next ADC sample
+  double sampled_pressure_mpa_ = 0.0;
+  double dac_due_s_ = -1.0;  // converter_lag_s > 0: when the pending DAC write lands (< 0: none)
+  double dac_pending_volts_ = 0.0;
   double next_record_s_ = 0.0;
   double next_trim_s_ = 0.0;
   double pwm_start_s_ = 0.0;

@@ -33,6 +33,11 @@ struct StepOptions {
   double duration_s = 3.0;
   PidGains pid_gains = default_conventional_pid_gains();
   FuzzyPidConfig fuzzy = default_fuzzy_pid_config();
+  // The pressure loop's timing (RigConfig): period, and the converters' thread's ADC lead and
+  // DAC lag around each tick.
+  double control_period_s = 0.005;
+  double converter_lead_s = 0.0;
+  double converter_lag_s = 0.0;
 };
 StepResult run_step(const StepOptions& options);
 StepRun run_step_once(PressureControlMode mode, const FuzzyPidConfig& config,

@@ -48,6 +48,9 @@ StepRun run_step_once(PressureControlMode mode, const FuzzyPidConfig& config,
   rig_config.setpoint_mpa = options.setpoint_mpa;
   rig_config.fixes = {true, false, false};
   rig_config.record_period_s = 0.002;
+  rig_config.control_period_s = options.control_period_s;
+  rig_config.converter_lead_s = options.converter_lead_s;
+  rig_config.converter_lag_s = options.converter_lag_s;
   ClosedLoopRig rig(rig_config);
   // Start-up with the boom spraying: every nozzle open (100 % duty) as in the paper's bench.
   const std::vector<double> full(static_cast<std::size_t>(rig.plant().nozzle_count()), 100.0);
