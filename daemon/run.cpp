@@ -380,6 +380,12 @@ class Daemon final : public CommandHandler {
       const std::string name(alarm_name(id));
       if (is_fault(id)) {
         spdlog::error("alarm raised: {} (fault: valves closed, pump off)", name);
+      } else if (id == AlarmId::kControlOverruns) {
+        spdlog::warn(
+            "alarm raised: {} ({} in the last second; totals: pressure loop {}, control loop {}, "
+            "late valve edges {}, converter slots {})",
+            name, overruns_last_second_, pressure.overruns, control.overruns,
+            sprayer_->pwm().late_edges, sprayer_->analog_io().overruns);
       } else {
         spdlog::warn("alarm raised: {}", name);
       }

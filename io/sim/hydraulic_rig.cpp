@@ -1,6 +1,7 @@
 #include "io/sim/hydraulic_rig.hpp"
 
 #include <algorithm>
+#include <mutex>
 
 namespace weedspray::io::sim {
 

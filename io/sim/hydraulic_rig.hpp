@@ -3,14 +3,14 @@
 // the loops run, or a PacedClock in real time). The device adapters below expose it through the
 // io interfaces, exactly as the Linux backends expose the real machine.
 //
-// Sim only: a mutex serialises the plant between the loops' threads; real-time guarantees are
-// not a goal here.
+// Sim only: a priority-inheriting mutex serialises the plant between the loops' threads and the
+// main thread that drives the world; real-time guarantees are not a goal here, but a loop is
+// never left waiting behind a preempted normal-priority holder.
 #pragma once
 
 #include <chrono>
 #include <cstdint>
 #include <functional>
-#include <mutex>
 
 #include "control/plant/hydraulic_plant.hpp"
 #include "io/analog.hpp"
@@ -18,6 +18,7 @@
 #include "io/digital_output.hpp"
 #include "io/pulse_input.hpp"
 #include "io/signal_conversion.hpp"
+#include "io/sim/priority_inheriting_mutex.hpp"
 #include "io/tank_level.hpp"
 
 namespace weedspray::io::sim {
@@ -59,7 +60,7 @@ class HydraulicRig {
   const Clock& clock_;
   std::chrono::nanoseconds max_chunk_;
   int nozzle_count_;
-  mutable std::mutex mutex_;
+  mutable PriorityInheritingMutex mutex_;
   control::plant::HydraulicPlant plant_;
   std::chrono::nanoseconds start_;
   std::chrono::nanoseconds plant_time_;

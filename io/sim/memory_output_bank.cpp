@@ -1,5 +1,6 @@
 #include "io/sim/memory_output_bank.hpp"
 
+#include <mutex>
 #include <stdexcept>
 #include <string>
 

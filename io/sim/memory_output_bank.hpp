@@ -5,11 +5,11 @@
 
 #include <chrono>
 #include <cstdint>
-#include <mutex>
 #include <vector>
 
 #include "io/clock.hpp"
 #include "io/digital_output.hpp"
+#include "io/sim/priority_inheriting_mutex.hpp"
 
 namespace weedspray::io::sim {
 
@@ -38,7 +38,7 @@ class MemoryOutputBank final : public DigitalOutputBank {
   std::size_t lines_;
   std::uint32_t safe_mask_;
   const Clock& clock_;
-  mutable std::mutex mutex_;  // sim only: tests read while the driver thread writes
+  mutable PriorityInheritingMutex mutex_;  // sim only: tests read while the driver thread writes
   std::uint32_t mask_;
   std::uint64_t force_safe_count_ = 0;
   std::uint64_t writes_ = 0;
