@@ -49,11 +49,8 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
 
   // Nozzle lines: each nozzle alone at each duty, pressure held by the loop.
   for (int nozzle = 0; nozzle < n; ++nozzle) {
-    std::vector<DutyFlowPoint> metered;
-    std::vector<DutyFlowPoint> truth;
-    double full_open = 0.0;
-    double true_full_open = 0.0;
-    for (double duty : options.duties_pct) {
+    // This nozzle alone at `duty`: the flow by the calibrated meter and the plant's true flow.
+    const auto measure = [&](double duty) {
       std::vector<double> duties(static_cast<std::size_t>(n), 0.0);
       duties[static_cast<std::size_t>(nozzle)] = duty;
       rig.command_duties(duties);
@@ -63,22 +60,18 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
       rig.run_for(options.measure_s);
       const double minutes = options.measure_s / 60.0;
       const double pulses = static_cast<double>(rig.plant().flow_meter_pulses() - p0);
-      metered.push_back({duty, pulses / result.meter.pulses_per_litre / minutes});
-      truth.push_back({duty, (rig.plant().nozzle_delivered_l(nozzle) - v0) / minutes});
+      return std::pair{
+          DutyFlowPoint{duty, pulses / result.meter.pulses_per_litre / minutes},
+          DutyFlowPoint{duty, (rig.plant().nozzle_delivered_l(nozzle) - v0) / minutes}};
+    };
+    std::vector<DutyFlowPoint> metered;
+    std::vector<DutyFlowPoint> truth;
+    for (double duty : options.duties_pct) {
+      const auto [by_meter, true_flow] = measure(duty);
+      metered.push_back(by_meter);
+      truth.push_back(true_flow);
     }
-    {
-      std::vector<double> duties(static_cast<std::size_t>(n), 0.0);
-      duties[static_cast<std::size_t>(nozzle)] = 100.0;
-      rig.command_duties(duties);
-      rig.run_for(options.settle_s);
-      const double v0 = rig.plant().nozzle_delivered_l(nozzle);
-      const std::uint64_t p0 = rig.plant().flow_meter_pulses();
-      rig.run_for(options.measure_s);
-      const double minutes = options.measure_s / 60.0;
-      const double pulses = static_cast<double>(rig.plant().flow_meter_pulses() - p0);
-      full_open = pulses / result.meter.pulses_per_litre / minutes;
-      true_full_open = (rig.plant().nozzle_delivered_l(nozzle) - v0) / minutes;
-    }
+    const auto [full_open, true_full_open] = measure(100.0);
     const double lo = options.duties_pct.front();
     const double hi = options.duties_pct.back();
     NozzleCalibration cal;
@@ -86,8 +79,8 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
     cal.fitted = fit.line;
     cal.r_squared = fit.r_squared;
     cal.truth = fit_nozzle_line(truth, options.pressure_mpa, lo, hi).line;
-    cal.full_open_l_per_min = full_open;
-    cal.true_full_open_l_per_min = true_full_open;
+    cal.full_open_l_per_min = full_open.flow_l_per_min;
+    cal.true_full_open_l_per_min = true_full_open.flow_l_per_min;
     result.nozzles.push_back(cal);
   }
   return result;
