@@ -33,7 +33,9 @@ struct ThreadPriority {
   int fifo_priority;      // SCHED_FIFO priority 1..99; 0 = normal (SCHED_OTHER)
 };
 
-// The one table. Above the kernel's threaded IRQ handlers (50) only for the valve edges.
+// The one table. The loops sit above the kernel's threaded IRQ handlers (50) so device
+// interrupts cannot delay a deadline; each only runs briefly and then sleeps (a blocked read,
+// e.g. an I2C conversion, sleeps too, so the IRQ thread that completes it still runs).
 inline constexpr std::array<ThreadPriority, 8> kThreadPriorities{{
     {ThreadRole::kValvePwm, "ws-valve-pwm", 80},
     {ThreadRole::kPulseInput, "ws-pulses", 70},

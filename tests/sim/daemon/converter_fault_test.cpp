@@ -62,6 +62,11 @@ TEST(ConverterFault, HungPressureAdcStopsThePumpAndClosesTheValvesThenRecovers) 
   };
   ASSERT_TRUE(run_until(backends, at_setpoint, 5s)) << "pressure never reached the set-point";
   ASSERT_NE(backends.describe_outputs().find("pump=1"), std::string::npos);
+  // Spraying: wait until some valve is open, so "valves closed" below is a change, not a given.
+  ASSERT_TRUE(run_until(
+      backends,
+      [&] { return backends.describe_outputs().find("valves=0x0 ") == std::string::npos; }, 10s))
+      << "no valve ever opened: " << backends.describe_outputs();
 
   adc.hung = true;
   const auto safe = [&] {
