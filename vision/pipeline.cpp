@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "vision/weed_classifier.hpp"
 #include "vision/zone_counts.hpp"
 
 namespace weedspray::vision {
@@ -75,15 +76,52 @@ void validate(const PipelineConfig& config) {
   require(params.pso_particles >= 1 && params.pso_particles <= 64,
           "pso_particles must lie in [1, 64]");
   require(params.pso_iterations >= 1, "pso_iterations must be >= 1");
+  if (config.weed_source == WeedSource::kInterRow) {
+    if (auto problem = validate_inter_row_rule(config.inter_row_rule)) require(false, *problem);
+  }
+  if (needs_model(config.weed_source)) {
+    if (auto problem = validate_dnn_spec(config.dnn)) require(false, *problem);
+  }
+  require(config.crop_margin_px >= 0 && config.crop_margin_px <= 1000,
+          "crop_margin_px must lie in [0, 1000]");
 }
 
-Pipeline::Pipeline(const PipelineConfig& config) : config_(config) {
+Pipeline::Pipeline(const PipelineConfig& config, std::span<const std::uint8_t> model_onnx_bytes)
+    : config_(config) {
   validate(config_);
+  if (config_.weed_source != WeedSource::kVegetation) {
+    try {
+      weeds_ = std::make_unique<WeedClassifier>(config_, model_onnx_bytes);
+    } catch (const std::invalid_argument& error) {
+      throw std::invalid_argument("vision pipeline config: weed_source " +
+                                  std::string(to_string(config_.weed_source)) + ": " +
+                                  error.what());
+    }
+  }
   if (config_.threshold_params.fixed_threshold == ThresholdParams::kIndexDefault) {
     config_.threshold_params.fixed_threshold = default_fixed_threshold(config_.index);
   }
   result_.rows = config_.rows;
   result_.cols = config_.cols;
+}
+
+Pipeline::~Pipeline() = default;
+
+void Pipeline::reset_tracking() {
+  if (weeds_) weeds_->reset_tracking();
+}
+
+ImageView Pipeline::class_map() {
+  const auto level = static_cast<std::uint8_t>(result_.threshold);
+  if (weeds_) return weeds_->class_map(index_buffer_.data(), level);
+  // vegetation: every vegetation pixel is weed.
+  const std::size_t pixels = static_cast<std::size_t>(region_.width) * region_.height;
+  class_buffer_.resize(pixels);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    class_buffer_[i] = index_buffer_[i] > level ? kClassWeed : kClassSoil;
+  }
+  return {class_buffer_.data(), region_.width, region_.height,
+          static_cast<std::size_t>(region_.width), PixelFormat::kGrey};
 }
 
 ImageView Pipeline::index_image() const {
@@ -97,6 +135,7 @@ const FrameResult& Pipeline::process(const ImageView& frame) {
   result_.cols = config_.cols;
   histogram_.fill(0);
   last_frame_ok_ = false;
+  last_error_.clear();
   if (!frame_is_usable(frame)) return result_;
   region_ = region_of(frame, config_.roi);
   if (region_.width < config_.cols || region_.height < config_.rows) return result_;
@@ -147,6 +186,17 @@ const FrameResult& Pipeline::process(const ImageView& frame) {
     }
     find_inter_row_intervals({columns, static_cast<std::size_t>(region_.width)}, pixels,
                              config_.inter_row_fraction, config_.inter_row_cuts, result_.inter_row);
+  }
+  if (weeds_) {
+    if (!weeds_->classify(frame, region_, index_buffer_.data(), level, result_, last_error_)) {
+      result_ = FrameResult{};
+      result_.rows = config_.rows;
+      result_.cols = config_.cols;
+      return result_;
+    }
+    for (int zone = 0; zone < config_.rows * config_.cols; ++zone) {
+      result_.zone_level[zone] = classify_density(result_.zone_density[zone], config_.level_cuts);
+    }
   }
   last_frame_ok_ = true;
   return result_;

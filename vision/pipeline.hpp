@@ -7,13 +7,16 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "vision/histogram.hpp"
 #include "vision/image_view.hpp"
 #include "vision/threshold.hpp"
 #include "vision/vegetation_index.hpp"
+#include "vision/weed_source.hpp"
 #include "vision/zones.hpp"
 
 namespace weedspray::vision {
@@ -32,6 +35,11 @@ struct PipelineConfig {
   bool inter_row_map = false;             // also compute the 2018 lateral-histogram map
   double inter_row_fraction = 1.0 / 3.0;  // columns <= this fraction of the max are inter-row
   DensityLevelCuts inter_row_cuts{};      // p(n), share of the region's pixels -> level
+  // What zone_density counts (see vision/weed_source.hpp).
+  WeedSource weed_source = WeedSource::kVegetation;
+  InterRowRule inter_row_rule{};  // kInterRow
+  DnnModelSpec dnn{};             // kDnn, kHybrid
+  int crop_margin_px = 0;         // kHybrid: crop mask dilated by this many frame pixels
 };
 
 // The project's default: the index and threshold the daemon uses unless configured otherwise
@@ -49,7 +57,9 @@ struct FrameResult {
   double vegetation_fraction = 0;  // over the region of interest
   int rows = 0;
   int cols = 0;
+  // WEED density per zone, what the rate law uses (for kVegetation: vegetation cover).
   std::array<double, kMaxZones> zone_density{};  // row-major, rows * cols used
+  std::array<double, kMaxZones> crop_density{};  // share of each zone that is crop
   std::array<DensityLevel, kMaxZones> zone_level{};
   InterRowMap inter_row{};  // filled when PipelineConfig::inter_row_map
   std::span<const double> densities() const {
@@ -58,17 +68,34 @@ struct FrameResult {
   double density(int row, int col) const { return zone_density[row * cols + col]; }
 };
 
+class WeedClassifier;
+
 class Pipeline {
  public:
-  // Throws std::invalid_argument on a bad config (see validate).
-  explicit Pipeline(const PipelineConfig& config);
+  // Throws std::invalid_argument on a bad config (see validate). dnn and hybrid need the
+  // ONNX model's bytes (vision reads no files): missing or unloadable bytes, an output that
+  // does not have dnn.classes.size() channels (one forward pass here) and bad class ids are
+  // std::invalid_argument naming the problem.
+  explicit Pipeline(const PipelineConfig& config,
+                    std::span<const std::uint8_t> model_onnx_bytes = {});
+  ~Pipeline();
+  Pipeline(const Pipeline&) = delete;
+  Pipeline& operator=(const Pipeline&) = delete;
 
   // Processes one frame. The result stays valid until the next call. An empty or malformed
   // view (null data, size < 2x2, stride too small) gives an all-zero result with
-  // valid = false in last_frame_ok().
+  // valid = false in last_frame_ok(). A network that fails at run time gives the same, with
+  // last_error() saying why; process() never throws.
   const FrameResult& process(const ImageView& frame);
 
   bool last_frame_ok() const { return last_frame_ok_; }
+  const std::string& last_error() const { return last_error_; }
+  // Forget the tracked crop rows (inter_row): the next frame is not a continuation.
+  void reset_tracking();
+  // The last frame's class of each pixel (kClassSoil/kClassCrop/kClassWeed) over the region
+  // of interest, built on demand for overlays and evaluation: at the region's resolution,
+  // except for dnn, whose map is at the network's output resolution.
+  ImageView class_map();
   const PipelineConfig& config() const { return config_; }
   // The last frame's index image over the region of interest and its pixel rectangle, for
   // overlays and evaluation (mask = index > threshold).
@@ -84,6 +111,9 @@ class Pipeline {
   std::vector<std::uint32_t> column_counts_;
   PixelRect region_{};
   bool last_frame_ok_ = false;
+  std::string last_error_;
+  std::unique_ptr<WeedClassifier> weeds_;   // null for kVegetation
+  std::vector<std::uint8_t> class_buffer_;  // class_map() for kVegetation
 };
 
 }  // namespace weedspray::vision

@@ -1,0 +1,225 @@
+#include "vision/weed_classifier.hpp"
+
+#include <algorithm>
+#include <exception>
+#include <opencv2/imgproc.hpp>
+
+#include "vision/weed_network.hpp"
+#include "vision/zone_counts.hpp"
+
+namespace weedspray::vision {
+
+struct WeedClassifier::Masks {
+  cv::Mat converted;     // the region as BGR when the frame is YUYV or grey
+  cv::Mat vegetation;    // hybrid, region resolution, 0/255
+  cv::Mat crop;          // hybrid: the network's crop, region resolution, 0/255
+  cv::Mat crop_dilated;  // hybrid: crop grown by the margin
+  cv::Mat weed;          // hybrid: vegetation minus crop_dilated
+  cv::Mat margin_kernel;
+  cv::Mat scratch;
+  cv::Mat class_map;
+};
+
+namespace {
+
+struct ZoneRect {
+  int x_begin, x_end, y_begin, y_end;
+  double pixels() const { return static_cast<double>(x_end - x_begin) * (y_end - y_begin); }
+  cv::Rect rect() const { return {x_begin, y_begin, x_end - x_begin, y_end - y_begin}; }
+};
+
+// Zone (row, col) of a rows x cols grid over a width x height image, as Pipeline cuts it.
+ZoneRect zone_rect(int row, int col, int rows, int cols, int width, int height) {
+  return {col * width / cols, (col + 1) * width / cols, row * height / rows,
+          (row + 1) * height / rows};
+}
+
+// The region of the frame as a CV_8UC3 image (no copy for BGR/RGB frames).
+cv::Mat region_image(const ImageView& frame, const PixelRect& region, cv::Mat& converted,
+                     bool& is_rgb) {
+  auto* data = const_cast<std::uint8_t*>(frame.data);  // read only: OpenCV's headers are not const
+  const cv::Rect rect(region.x, region.y, region.width, region.height);
+  is_rgb = frame.format == PixelFormat::kRgb24;
+  switch (frame.format) {
+    case PixelFormat::kBgr24:
+    case PixelFormat::kRgb24:
+      return cv::Mat(frame.height, frame.width, CV_8UC3, data, frame.stride)(rect);
+    case PixelFormat::kYuyv:
+      cv::cvtColor(cv::Mat(frame.height, frame.width, CV_8UC2, data, frame.stride)(rect), converted,
+                   cv::COLOR_YUV2BGR_YUYV);
+      return converted;
+    case PixelFormat::kGrey:
+      cv::cvtColor(cv::Mat(frame.height, frame.width, CV_8UC1, data, frame.stride)(rect), converted,
+                   cv::COLOR_GRAY2BGR);
+      return converted;
+  }
+  return converted;
+}
+
+// Weed and crop shares of each zone of a class map.
+void densities_from_classes(const cv::Mat& classes, FrameResult& result) {
+  for (int row = 0; row < result.rows; ++row) {
+    for (int col = 0; col < result.cols; ++col) {
+      const ZoneRect zone =
+          zone_rect(row, col, result.rows, result.cols, classes.cols, classes.rows);
+      std::uint64_t weed = 0;
+      std::uint64_t crop = 0;
+      for (int y = zone.y_begin; y < zone.y_end; ++y) {
+        const std::uint8_t* line = classes.ptr<std::uint8_t>(y);
+        for (int x = zone.x_begin; x < zone.x_end; ++x) {
+          weed += line[x] == kClassWeed;
+          crop += line[x] == kClassCrop;
+        }
+      }
+      const int i = row * result.cols + col;
+      const double pixels = std::max(1.0, zone.pixels());
+      result.zone_density[i] = static_cast<double>(weed) / pixels;
+      result.crop_density[i] = static_cast<double>(crop) / pixels;
+    }
+  }
+}
+
+}  // namespace
+
+WeedClassifier::WeedClassifier(const PipelineConfig& config,
+                               std::span<const std::uint8_t> model_onnx_bytes)
+    : config_(config), tracker_(config.inter_row_rule), masks_(std::make_unique<Masks>()) {
+  if (needs_model(config_.weed_source)) {
+    network_ = std::make_unique<WeedNetwork>(config_.dnn, model_onnx_bytes);
+  }
+  if (config_.crop_margin_px > 0) {
+    const int side = 2 * config_.crop_margin_px + 1;
+    masks_->margin_kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(side, side));
+  }
+}
+
+WeedClassifier::~WeedClassifier() = default;
+
+bool WeedClassifier::classify(const ImageView& frame, const PixelRect& region,
+                              const std::uint8_t* index, std::uint8_t level, FrameResult& result,
+                              std::string& error) {
+  region_ = region;
+  try {
+    switch (config_.weed_source) {
+      case WeedSource::kVegetation:
+        break;
+      case WeedSource::kInterRow:
+        classify_inter_row(index, level, result);
+        break;
+      case WeedSource::kDnn:
+        classify_dnn(frame, result);
+        break;
+      case WeedSource::kHybrid:
+        classify_dnn(frame, result);
+        classify_hybrid(index, level, result);
+        break;
+    }
+  } catch (const std::exception& failure) {
+    error = std::string("weed source ") + std::string(to_string(config_.weed_source)) +
+            " failed: " + failure.what();
+    return false;
+  }
+  return true;
+}
+
+void WeedClassifier::classify_inter_row(const std::uint8_t* index, std::uint8_t level,
+                                        FrameResult& result) {
+  const int width = region_.width;
+  const auto columns = static_cast<std::size_t>(width);
+  // Grows only when a wider frame arrives; steady state allocates nothing.
+  zone_row_columns_.resize(columns * (result.rows + 1));
+  std::fill(zone_row_columns_.begin(), zone_row_columns_.end(), 0u);
+  std::uint32_t* total = zone_row_columns_.data() + columns * result.rows;
+  for (int row = 0; row < result.rows; ++row) {
+    std::uint32_t* counts = zone_row_columns_.data() + columns * row;
+    const ZoneRect rows = zone_rect(row, 0, result.rows, 1, width, region_.height);
+    for (int y = rows.y_begin; y < rows.y_end; ++y) {
+      accumulate_columns_above(index + static_cast<std::size_t>(y) * width, width, level, counts);
+    }
+    for (std::size_t x = 0; x < columns; ++x) total[x] += counts[x];
+  }
+  tracker_.update({total, columns});
+  in_band_.resize(columns);
+  tracker_.mark_bands(in_band_);
+
+  for (int row = 0; row < result.rows; ++row) {
+    const std::uint32_t* counts = zone_row_columns_.data() + columns * row;
+    for (int col = 0; col < result.cols; ++col) {
+      const ZoneRect zone = zone_rect(row, col, result.rows, result.cols, width, region_.height);
+      std::uint64_t weed = 0;
+      std::uint64_t crop = 0;
+      for (int x = zone.x_begin; x < zone.x_end; ++x) (in_band_[x] ? crop : weed) += counts[x];
+      const int i = row * result.cols + col;
+      result.zone_density[i] = static_cast<double>(weed) / zone.pixels();
+      result.crop_density[i] = static_cast<double>(crop) / zone.pixels();
+    }
+  }
+}
+
+void WeedClassifier::classify_dnn(const ImageView& frame, FrameResult& result) {
+  bool is_rgb = false;
+  const cv::Mat image = region_image(frame, region_, masks_->converted, is_rgb);
+  densities_from_classes(network_->segment(image, is_rgb), result);
+}
+
+void WeedClassifier::classify_hybrid(const std::uint8_t* index, std::uint8_t level,
+                                     FrameResult& result) {
+  Masks& m = *masks_;
+  const cv::Size size(region_.width, region_.height);
+  const cv::Mat index_image(size, CV_8UC1, const_cast<std::uint8_t*>(index));
+  cv::compare(index_image, level, m.vegetation, cv::CMP_GT);
+  // The crop mask comes at the network's resolution; the margin is in frame pixels, so grow
+  // it after bringing it to the region's resolution.
+  cv::compare(network_->segment_result(), kClassCrop, m.scratch, cv::CMP_EQ);
+  cv::resize(m.scratch, m.crop, size, 0, 0, cv::INTER_NEAREST);
+  if (m.margin_kernel.empty()) {
+    m.crop.copyTo(m.crop_dilated);
+  } else {
+    cv::dilate(m.crop, m.crop_dilated, m.margin_kernel);
+  }
+  m.vegetation.copyTo(m.weed);
+  m.weed.setTo(0, m.crop_dilated);
+  // Crop density stays the network's (densities_from_classes); weeds come from colour.
+  for (int row = 0; row < result.rows; ++row) {
+    for (int col = 0; col < result.cols; ++col) {
+      const ZoneRect zone = zone_rect(row, col, result.rows, result.cols, size.width, size.height);
+      result.zone_density[row * result.cols + col] =
+          cv::countNonZero(m.weed(zone.rect())) / zone.pixels();
+    }
+  }
+}
+
+ImageView WeedClassifier::class_map(const std::uint8_t* index, std::uint8_t level) {
+  Masks& m = *masks_;
+  const cv::Size size(region_.width, region_.height);
+  switch (config_.weed_source) {
+    case WeedSource::kVegetation:
+      break;
+    case WeedSource::kInterRow:
+      m.class_map.create(size, CV_8UC1);
+      for (int y = 0; y < size.height; ++y) {
+        const std::uint8_t* values = index + static_cast<std::size_t>(y) * size.width;
+        std::uint8_t* out = m.class_map.ptr<std::uint8_t>(y);
+        for (int x = 0; x < size.width; ++x) {
+          out[x] = values[x] <= level ? kClassSoil : in_band_[x] ? kClassCrop : kClassWeed;
+        }
+      }
+      break;
+    case WeedSource::kDnn:
+      network_->segment_result().copyTo(m.class_map);
+      break;
+    case WeedSource::kHybrid:
+      // Vegetation kept out of the weeds by the margin is attributed to the crop.
+      m.class_map.create(size, CV_8UC1);
+      m.class_map.setTo(kClassSoil);
+      m.class_map.setTo(kClassCrop, m.crop);
+      cv::bitwise_and(m.vegetation, m.crop_dilated, m.scratch);
+      m.class_map.setTo(kClassCrop, m.scratch);
+      m.class_map.setTo(kClassWeed, m.weed);
+      break;
+  }
+  return {m.class_map.data, m.class_map.cols, m.class_map.rows, m.class_map.step[0],
+          PixelFormat::kGrey};
+}
+
+}  // namespace weedspray::vision

@@ -1,0 +1,89 @@
+#include "vision/weed_network.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace weedspray::vision {
+namespace {
+
+[[noreturn]] void reject(const std::string& message) {
+  throw std::invalid_argument("dnn model: " + message);
+}
+
+}  // namespace
+
+WeedNetwork::WeedNetwork(const DnnModelSpec& spec, std::span<const std::uint8_t> onnx_bytes)
+    : spec_(spec) {
+  if (auto problem = validate_dnn_spec(spec_)) reject(*problem);
+  if (onnx_bytes.empty()) reject("no model bytes (the model file is missing or empty)");
+  try {
+    net_ = cv::dnn::readNetFromONNX(reinterpret_cast<const char*>(onnx_bytes.data()),
+                                    onnx_bytes.size());
+  } catch (const cv::Exception& error) {
+    reject("not a loadable ONNX model (" + std::string(error.what()) + ")");
+  }
+  if (net_.empty()) reject("not a loadable ONNX model (OpenCV gave an empty network)");
+  net_.setPreferableBackend(cv::dnn::DNN_BACKEND_OPENCV);
+  net_.setPreferableTarget(cv::dnn::DNN_TARGET_CPU);
+
+  // One forward pass at the configured size: the shapes are known only by running it.
+  const cv::Mat probe(spec_.input_height, spec_.input_width, CV_8UC3, cv::Scalar::all(0));
+  try {
+    segment(probe, false);
+  } catch (const cv::Exception& error) {
+    reject("forward pass at " + std::to_string(spec_.input_width) + "x" +
+           std::to_string(spec_.input_height) + " failed (" + error.what() + ")");
+  }
+  const int classes = static_cast<int>(spec_.classes.size());
+  if (scores_.dims != 4 || scores_.size[0] != 1 || scores_.size[1] != classes) {
+    std::string shape;
+    for (int d = 0; d < scores_.dims; ++d) {
+      if (d > 0) shape += 'x';
+      shape += std::to_string(scores_.size[d]);
+    }
+    reject("output shape " + shape + " is not 1 x " + std::to_string(classes) +
+           " classes x H x W (classes lists " + std::to_string(classes) + " classes)");
+  }
+}
+
+const cv::Mat& WeedNetwork::segment(const cv::Mat& image, bool image_is_rgb) {
+  // blobFromImage subtracts the mean given in the network's channel order (after the swap).
+  const auto& m = spec_.mean_rgb;
+  const cv::Scalar mean = spec_.rgb ? cv::Scalar(m[0], m[1], m[2]) : cv::Scalar(m[2], m[1], m[0]);
+  const bool swap = image_is_rgb != spec_.rgb;
+  cv::dnn::blobFromImage(image, blob_, spec_.scale, cv::Size(spec_.input_width, spec_.input_height),
+                         mean, swap, false);
+  net_.setInput(blob_);
+  scores_ = net_.forward();
+  if (scores_.dims != 4 || scores_.size[0] != 1 ||
+      scores_.size[1] != static_cast<int>(spec_.classes.size())) {
+    return classes_;  // the constructor reports the shape
+  }
+
+  // Argmax at the network's resolution: zone densities need no more, and upsampling the
+  // scores would cost more than the network's last layers.
+  const int channels = scores_.size[1];
+  const int height = scores_.size[2];
+  const int width = scores_.size[3];
+  const int plane = height * width;
+  classes_.create(height, width, CV_8UC1);
+  const float* scores = scores_.ptr<float>();
+  std::uint8_t* out = classes_.ptr<std::uint8_t>();
+  for (int i = 0; i < plane; ++i) {
+    int best = 0;
+    float best_score = scores[i];
+    for (int c = 1; c < channels; ++c) {
+      const float score = scores[c * plane + i];
+      if (score > best_score) {
+        best = c;
+        best_score = score;
+      }
+    }
+    out[i] = best == spec_.crop_class   ? kClassCrop
+             : best == spec_.weed_class ? kClassWeed
+                                        : kClassSoil;
+  }
+  return classes_;
+}
+
+}  // namespace weedspray::vision
