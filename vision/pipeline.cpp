@@ -111,6 +111,11 @@ void Pipeline::reset_tracking() {
   if (weeds_) weeds_->reset_tracking();
 }
 
+std::span<const CropRow> Pipeline::crop_rows() const {
+  if (weeds_) return weeds_->tracker().rows();
+  return {};
+}
+
 ImageView Pipeline::class_map() {
   const auto level = static_cast<std::uint8_t>(result_.threshold);
   if (weeds_) return weeds_->class_map(index_buffer_.data(), level);

@@ -16,6 +16,7 @@
 #include "vision/image_view.hpp"
 #include "vision/threshold.hpp"
 #include "vision/vegetation_index.hpp"
+#include "vision/weed_inter_row.hpp"
 #include "vision/weed_source.hpp"
 #include "vision/zones.hpp"
 
@@ -92,6 +93,8 @@ class Pipeline {
   const std::string& last_error() const { return last_error_; }
   // Forget the tracked crop rows (inter_row): the next frame is not a continuation.
   void reset_tracking();
+  // The crop rows tracked so far (inter_row; empty for the other sources).
+  std::span<const CropRow> crop_rows() const;
   // The last frame's class of each pixel (kClassSoil/kClassCrop/kClassWeed) over the region
   // of interest, built on demand for overlays and evaluation: at the region's resolution,
   // except for dnn, whose map is at the network's output resolution.

@@ -75,10 +75,6 @@ std::size_t find_row_peaks(std::span<const std::uint32_t> column_counts, const I
 
 CropRowTracker::CropRowTracker(const InterRowRule& rule) : rule_(rule) {}
 
-bool CropRowTracker::is_confirmed(const CropRow& row) const {
-  return row.hits >= rule_.confirm_frames;
-}
-
 void CropRowTracker::update(std::span<const std::uint32_t> column_counts) {
   std::array<double, kMaxCropRows> peaks{};
   const std::size_t peak_count = find_row_peaks(column_counts, rule_, smoothed_, peaks);
@@ -104,11 +100,12 @@ void CropRowTracker::update(std::span<const std::uint32_t> column_counts) {
     row.position += rule_.smoothing * (peaks[best] - row.position);
     ++row.hits;
     row.misses = 0;
+    row.confirmed = row.confirmed || row.hits >= rule_.confirm_frames;
   }
 
   // Lost rows go; a tentative row must be seen in consecutive frames.
   const auto lost = [&](const CropRow& row) {
-    return row.misses >= rule_.lost_after_frames || (!is_confirmed(row) && row.misses > 0);
+    return row.misses >= rule_.lost_after_frames || (!row.confirmed && row.misses > 0);
   };
   count_ = static_cast<std::size_t>(std::remove_if(rows_.begin(), rows_.begin() + count_, lost) -
                                     rows_.begin());
@@ -116,14 +113,14 @@ void CropRowTracker::update(std::span<const std::uint32_t> column_counts) {
   // Unclaimed peaks far from every row start rows; with no confirmed row left they count at
   // once (first frame, or the rows were lost: re-acquire rather than wait).
   const bool acquiring = std::none_of(rows_.begin(), rows_.begin() + count_,
-                                      [&](const CropRow& row) { return is_confirmed(row); });
+                                      [&](const CropRow& row) { return row.confirmed; });
   for (std::size_t p = 0; p < peak_count && count_ < kMaxCropRows; ++p) {
     if (used[p]) continue;
     const bool far = std::all_of(rows_.begin(), rows_.begin() + count_, [&](const CropRow& row) {
       return std::abs(row.position - peaks[p]) >= rule_.min_row_spacing;
     });
     if (!far) continue;
-    rows_[count_++] = {peaks[p], acquiring ? rule_.confirm_frames : 1, 0};
+    rows_[count_++] = {peaks[p], 1, 0, acquiring || rule_.confirm_frames <= 1};
   }
   std::sort(rows_.begin(), rows_.begin() + count_,
             [](const CropRow& a, const CropRow& b) { return a.position < b.position; });
@@ -134,7 +131,7 @@ void CropRowTracker::mark_bands(std::span<std::uint8_t> in_band) const {
   const double n = static_cast<double>(in_band.size());
   const double half = rule_.row_band_fraction * n / 2.0;
   for (std::size_t r = 0; r < count_; ++r) {
-    if (!is_confirmed(rows_[r])) continue;
+    if (!rows_[r].confirmed) continue;
     const double centre = rows_[r].position * n;
     const auto first = static_cast<std::ptrdiff_t>(std::max(0.0, std::round(centre - half)));
     const auto last = static_cast<std::ptrdiff_t>(std::min(n, std::round(centre + half)));

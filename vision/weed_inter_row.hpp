@@ -15,9 +15,10 @@ namespace weedspray::vision {
 inline constexpr std::size_t kMaxCropRows = 16;
 
 struct CropRow {
-  double position = 0.0;  // centre, share of the region's width (0..1)
-  int hits = 0;           // frames in which a peak confirmed it
-  int misses = 0;         // frames since it was last seen
+  double position = 0.0;   // centre, share of the region's width (0..1)
+  int hits = 0;            // frames in which a peak confirmed it
+  int misses = 0;          // frames since it was last seen
+  bool confirmed = false;  // takes part in the rule (seen confirm_frames times, or acquired)
 };
 
 // Peaks of the column histogram (smoothed over half a row band): local maxima above
@@ -39,8 +40,7 @@ class CropRowTracker {
   void update(std::span<const std::uint32_t> column_counts);
   void reset() { count_ = 0; }
 
-  // Rows that take part in the rule (confirmed).
-  bool is_confirmed(const CropRow& row) const;
+  // Tracked rows, tentative ones included, left to right.
   std::span<const CropRow> rows() const { return {rows_.data(), count_}; }
   // in_band[x] = 1 when column x of a width-column region lies in a confirmed row's band.
   void mark_bands(std::span<std::uint8_t> in_band) const;

@@ -1,0 +1,225 @@
+// dnn and hybrid weed sources with tests/data/tiny-3class.onnx, a hand-set network whose class
+// k is the strongest of input channels R, G, B (after the spec's mean, scale and order).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "test_images.hpp"
+#include "vision/pipeline.hpp"
+
+namespace weedspray::vision {
+namespace {
+
+using test::BgrFrame;
+
+std::vector<std::uint8_t> tiny_model() {
+  const std::string path = std::string(WEEDSPRAY_SOURCE_DIR) + "/tests/data/tiny-3class.onnx";
+  std::ifstream file(path, std::ios::binary);
+  EXPECT_TRUE(file) << path;
+  return {std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
+}
+
+PipelineConfig dnn_config(WeedSource source = WeedSource::kDnn) {
+  PipelineConfig config = default_pipeline_config();
+  config.weed_source = source;
+  config.rows = 1;
+  config.cols = 4;
+  config.dnn.input_width = 64;
+  config.dnn.input_height = 64;
+  config.dnn.mean_rgb = {0, 0, 0};
+  config.dnn.scale = 1.0 / 255.0;
+  config.dnn.rgb = true;
+  return config;
+}
+
+constexpr test::Bgr kRed{0, 0, 200};
+constexpr test::Bgr kGreen{0, 200, 0};
+constexpr test::Bgr kBlue{200, 0, 0};
+
+// 64x64, one colour per 16-px zone column: green, blue, red, green.
+BgrFrame stripes() {
+  BgrFrame frame(64, 64, kRed);
+  const test::Bgr colours[] = {kGreen, kBlue, kRed, kGreen};
+  for (int y = 0; y < 64; ++y) {
+    for (int x = 0; x < 64; ++x) frame.set(x, y, colours[x / 16]);
+  }
+  return frame;
+}
+
+// The message of the std::invalid_argument that building the pipeline throws ("" if none).
+std::string load_error(const PipelineConfig& config, std::span<const std::uint8_t> bytes) {
+  try {
+    Pipeline pipeline(config, bytes);
+  } catch (const std::invalid_argument& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST(DnnModel, MissingBytesAreAClearError) {
+  const std::string message = load_error(dnn_config(), {});
+  EXPECT_NE(message.find("weed_source dnn"), std::string::npos) << message;
+  EXPECT_NE(message.find("no model bytes"), std::string::npos) << message;
+  EXPECT_NE(load_error(dnn_config(WeedSource::kHybrid), {}).find("weed_source hybrid"),
+            std::string::npos);
+}
+
+TEST(DnnModel, GarbageBytesAreNotALoadableModel) {
+  const std::string text = "this is not an ONNX protobuf";
+  const std::vector<std::uint8_t> garbage(text.begin(), text.end());
+  const std::string message = load_error(dnn_config(), garbage);
+  EXPECT_NE(message.find("not a loadable ONNX model"), std::string::npos) << message;
+  std::vector<std::uint8_t> truncated = tiny_model();
+  truncated.resize(truncated.size() / 2);
+  EXPECT_NE(load_error(dnn_config(), truncated), "");
+}
+
+TEST(DnnModel, OutputChannelsMustMatchTheClassList) {
+  PipelineConfig config = dnn_config();
+  config.dnn.classes = {"soil", "crop", "weed", "stone"};
+  const std::string message = load_error(config, tiny_model());
+  EXPECT_NE(message.find("output shape 1x3x64x64"), std::string::npos) << message;
+  EXPECT_NE(message.find("4 classes"), std::string::npos) << message;
+}
+
+TEST(DnnModel, ClassIdsMustBeInRangeAndDistinct) {
+  PipelineConfig config = dnn_config();
+  config.dnn.weed_class = 3;
+  std::string message = load_error(config, tiny_model());
+  EXPECT_NE(message.find("weed_class = 3"), std::string::npos) << message;
+  config = dnn_config();
+  config.dnn.crop_class = -1;
+  EXPECT_NE(load_error(config, tiny_model()).find("crop_class"), std::string::npos);
+  config = dnn_config();
+  config.dnn.crop_class = 2;
+  message = load_error(config, tiny_model());
+  EXPECT_NE(message.find("different"), std::string::npos) << message;
+  EXPECT_TRUE(validate_dnn_spec(dnn_config().dnn) == std::nullopt);
+  config = dnn_config();
+  config.dnn.scale = 0;
+  EXPECT_NE(load_error(config, tiny_model()).find("scale"), std::string::npos);
+}
+
+TEST(DnnModel, ClassesMapToWeedAndCropDensities) {
+  Pipeline pipeline(dnn_config(), tiny_model());
+  const BgrFrame frame = stripes();
+  const FrameResult& result = pipeline.process(frame.view());
+  ASSERT_TRUE(pipeline.last_frame_ok()) << pipeline.last_error();
+  // R is soil (class 0), G crop (1), B weed (2). Zone borders blur by a pixel or two.
+  EXPECT_GT(result.crop_density[0], 0.9);
+  EXPECT_LT(result.zone_density[0], 0.1);
+  EXPECT_GT(result.zone_density[1], 0.9);
+  EXPECT_LT(result.crop_density[1], 0.1);
+  EXPECT_LT(result.zone_density[2] + result.crop_density[2], 0.1);
+  EXPECT_GT(result.crop_density[3], 0.9);
+  const ImageView classes = pipeline.class_map();
+  ASSERT_EQ(classes.width, 64);  // the network's output resolution
+  EXPECT_EQ(classes.data[32 * classes.stride + 8], kClassCrop);
+  EXPECT_EQ(classes.data[32 * classes.stride + 24], kClassWeed);
+  EXPECT_EQ(classes.data[32 * classes.stride + 40], kClassSoil);
+}
+
+TEST(DnnModel, ClassIdsChooseWhichClassIsWeed) {
+  PipelineConfig config = dnn_config();
+  config.dnn.crop_class = 2;  // blue is crop, green weed
+  config.dnn.weed_class = 1;
+  Pipeline pipeline(config, tiny_model());
+  const FrameResult& result = pipeline.process(stripes().view());
+  EXPECT_GT(result.zone_density[0], 0.9);
+  EXPECT_GT(result.crop_density[1], 0.9);
+}
+
+TEST(DnnModel, ChannelOrderFollowsTheSpec) {
+  PipelineConfig config = dnn_config();
+  config.dnn.rgb = false;  // the network takes B, G, R: a blue pixel reads as its class 0
+  Pipeline pipeline(config, tiny_model());
+  const FrameResult& result = pipeline.process(stripes().view());
+  EXPECT_LT(result.zone_density[1] + result.crop_density[1], 0.1);  // blue -> soil
+  EXPECT_GT(result.zone_density[2], 0.9);                           // red -> weed
+}
+
+TEST(DnnModel, MeanIsSubtractedPerChannel) {
+  PipelineConfig config = dnn_config();
+  config.dnn.mean_rgb = {0, 250, 0};  // green falls below red: the green zones become soil
+  Pipeline pipeline(config, tiny_model());
+  const FrameResult& result = pipeline.process(stripes().view());
+  EXPECT_LT(result.crop_density[0], 0.1);
+}
+
+TEST(DnnModel, FramesOfOtherSizesAndFormatsAreResizedToTheInput) {
+  Pipeline pipeline(dnn_config(), tiny_model());
+  BgrFrame frame(256, 128, kRed);
+  for (int y = 0; y < 128; ++y) {
+    for (int x = 0; x < 64; ++x) frame.set(x, y, kBlue);
+  }
+  const FrameResult& result = pipeline.process(frame.view());
+  ASSERT_TRUE(pipeline.last_frame_ok());
+  EXPECT_GT(result.zone_density[0], 0.9);
+  EXPECT_LT(result.zone_density[1], 0.1);
+  // The same bytes read as RGB: the "blue" column is red to the pipeline.
+  ImageView rgb = frame.view();
+  rgb.format = PixelFormat::kRgb24;
+  EXPECT_LT(pipeline.process(rgb).zone_density[0], 0.1);
+}
+
+// Hybrid: a green crop stripe (bright, the network's crop) and two small weeds of a duller
+// green (vegetation to the colour index, soil to the network), one 5 px from the crop's edge
+// and one 16 px away.
+class HybridMargin : public ::testing::Test {
+ protected:
+  static constexpr test::Bgr kCrop{40, 250, 40};
+  BgrFrame frame{64, 64, test::kSoil};
+  void SetUp() override {
+    for (int y = 0; y < 64; ++y) {
+      for (int x = 20; x < 36; ++x) frame.set(x, y, kCrop);
+    }
+    for (int y = 10; y < 12; ++y) {
+      for (int x : {41, 42, 52, 53}) frame.set(x, y, test::kPlant);
+    }
+  }
+  // Weed pixels the hybrid finds with this margin (one zone over the whole frame).
+  double weed_pixels(int margin_px) {
+    PipelineConfig config = dnn_config(WeedSource::kHybrid);
+    config.cols = 1;
+    // The network scores G - 100 against R and B: kPlant (G 150, R 60) is soil to it.
+    config.dnn.mean_rgb = {0, 100, 0};
+    config.threshold = ThresholdMethod::kFixed;  // both greens are vegetation, soil is not
+    config.threshold_params.fixed_threshold = 150;
+    config.crop_margin_px = margin_px;
+    Pipeline pipeline(config, tiny_model());
+    const FrameResult& result = pipeline.process(frame.view());
+    EXPECT_TRUE(pipeline.last_frame_ok()) << pipeline.last_error();
+    EXPECT_NEAR(result.crop_density[0], 16.0 / 64.0, 0.02);
+    const ImageView classes = pipeline.class_map();
+    near_weed_class = classes.data[10 * classes.stride + 41];
+    return result.zone_density[0] * 64 * 64;
+  }
+  std::uint8_t near_weed_class = 0;
+};
+
+TEST_F(HybridMargin, AWeedNextToTheCropIsRemovedWithinTheMarginAndKeptOutsideIt) {
+  // Without a margin the crop's edge column, which the network's coarse output misses, is
+  // taken for weed: the reason for the margin.
+  EXPECT_GT(weed_pixels(0), 8.0);
+  EXPECT_NEAR(weed_pixels(1), 8.0, 1e-9);
+  EXPECT_EQ(near_weed_class, kClassWeed);
+  EXPECT_NEAR(weed_pixels(3), 8.0, 1e-9);  // 5 px from the crop: outside a 3 px margin
+  EXPECT_NEAR(weed_pixels(8), 4.0, 1e-9);  // inside an 8 px margin; the far weed stays
+  EXPECT_EQ(near_weed_class, kClassCrop);  // protected vegetation is attributed to the crop
+  EXPECT_NEAR(weed_pixels(20), 0.0, 1e-9);
+}
+
+TEST_F(HybridMargin, TheDnnAloneMissesWeedsItDoesNotKnow) {
+  PipelineConfig config = dnn_config(WeedSource::kDnn);
+  config.cols = 1;
+  config.dnn.mean_rgb = {0, 100, 0};
+  Pipeline pipeline(config, tiny_model());
+  EXPECT_DOUBLE_EQ(pipeline.process(frame.view()).zone_density[0], 0.0);
+}
+
+}  // namespace
+}  // namespace weedspray::vision
