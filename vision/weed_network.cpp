@@ -3,6 +3,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <opencv2/imgproc.hpp>
+
 namespace weedspray::vision {
 namespace {
 
@@ -51,8 +53,11 @@ const cv::Mat& WeedNetwork::segment(const cv::Mat& image, bool image_is_rgb) {
   const auto& m = spec_.mean_rgb;
   const cv::Scalar mean = spec_.rgb ? cv::Scalar(m[0], m[1], m[2]) : cv::Scalar(m[2], m[1], m[0]);
   const bool swap = image_is_rgb != spec_.rgb;
-  cv::dnn::blobFromImage(image, blob_, spec_.scale, cv::Size(spec_.input_width, spec_.input_height),
-                         mean, swap, false);
+  // Area averaging, as tools/train feeds the network: blobFromImage's own resize is bilinear,
+  // which aliases fine weeds away when shrinking a frame 3x.
+  const cv::Size size(spec_.input_width, spec_.input_height);
+  cv::resize(image, resized_, size, 0, 0, cv::INTER_AREA);
+  cv::dnn::blobFromImage(resized_, blob_, spec_.scale, size, mean, swap, false);
   net_.setInput(blob_);
   scores_ = net_.forward();
   if (scores_.dims != 4 || scores_.size[0] != 1 ||

@@ -30,6 +30,7 @@ class WeedNetwork {
  private:
   DnnModelSpec spec_;
   cv::dnn::Net net_;
+  cv::Mat resized_;
   cv::Mat blob_;
   cv::Mat scores_;
   cv::Mat classes_;  // CV_8UC1
