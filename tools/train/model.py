@@ -1,0 +1,72 @@
+"""The crop/weed/soil segmentation network: MobileNetV2 (width 0.5) encoder, light U-Net decoder.
+
+Encoder: torchvision mobilenet_v2(weights=None, width_mult=0.5).features[0:18] (down to /32,
+no 1280-channel head), ReLU6 replaced by ReLU (OpenCV 4.6 cannot load the Clip ReLU6 exports as).
+Decoder: at /16, /8, /4, /2 a bilinear x2 upsampling, concatenation with the encoder's skip and
+a depthwise-separable block (3x3 depthwise + 1x1 pointwise, BN, ReLU); a 1x1 classifier and a
+last bilinear x2 give logits at the input size. About 0.5 M parameters, 2 MB as ONNX.
+Input sizes must be multiples of 32.
+"""
+
+import torch
+from torch import nn
+from torchvision.models import mobilenet_v2
+
+# Encoder stages whose outputs feed the decoder: /2, /4, /8, /16 (skips) and /32 (bottom).
+SKIP_ENDS = (2, 4, 7, 14)
+ENCODER_END = 18
+DECODER_CHANNELS = (64, 32, 24, 16)
+
+
+def _relu6_to_relu(module: nn.Module) -> None:
+    for name, child in module.named_children():
+        if isinstance(child, nn.ReLU6):
+            setattr(module, name, nn.ReLU(inplace=True))
+        else:
+            _relu6_to_relu(child)
+
+
+class SeparableBlock(nn.Sequential):
+    def __init__(self, in_channels: int, out_channels: int):
+        super().__init__(
+            nn.Conv2d(in_channels, in_channels, 3, padding=1, groups=in_channels, bias=False),
+            nn.BatchNorm2d(in_channels),
+            nn.ReLU(inplace=True),
+            nn.Conv2d(in_channels, out_channels, 1, bias=False),
+            nn.BatchNorm2d(out_channels),
+            nn.ReLU(inplace=True),
+        )
+
+
+class SegmentationNet(nn.Module):
+    def __init__(self, classes: int, width: float = 0.5):
+        super().__init__()
+        features = mobilenet_v2(weights=None, width_mult=width).features[:ENCODER_END]
+        _relu6_to_relu(features)
+        bounds = (0,) + SKIP_ENDS + (ENCODER_END,)
+        self.stages = nn.ModuleList(features[a:b] for a, b in zip(bounds[:-1], bounds[1:]))
+        with torch.no_grad():
+            probe = torch.zeros(1, 3, 64, 64)
+            channels = []
+            for stage in self.stages:
+                probe = stage(probe)
+                channels.append(probe.shape[1])
+        skip_channels = channels[:-1][::-1]  # /16, /8, /4, /2
+        below = channels[-1]
+        blocks = []
+        for skip, out in zip(skip_channels, DECODER_CHANNELS):
+            blocks.append(SeparableBlock(below + skip, out))
+            below = out
+        self.decoder = nn.ModuleList(blocks)
+        self.classify = nn.Conv2d(below, classes, 1)
+        self.up = nn.Upsample(scale_factor=2, mode="bilinear", align_corners=False)
+
+    def forward(self, x):
+        skips = []
+        for stage in self.stages:
+            x = stage(x)
+            skips.append(x)
+        x = skips.pop()
+        for block in self.decoder:
+            x = block(torch.cat([self.up(x), skips.pop()], dim=1))
+        return self.up(self.classify(x))
