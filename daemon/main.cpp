@@ -27,6 +27,9 @@ int main(int argc, char** argv) {
                  "sim: write the final valve states here on exit");
   app.add_option("--run-seconds", options.run_seconds, "exit by itself after this long")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--timing-report", options.timing_report,
+                 "on exit, write each real-time loop's lateness (p50/p99/max, misses) as JSON "
+                 "to this file (- = standard output)");
   app.add_option("--sim-fault", options.sim_faults,
                  "sim: inject NAME@SECONDS (sensor_open, sensor_short, filter_blocked, "
                  "tank_empty, nozzleN_blocked)")

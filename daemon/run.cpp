@@ -20,11 +20,13 @@
 #include "daemon/config.hpp"
 #include "daemon/dbus_service.hpp"
 #include "daemon/logging.hpp"
+#include "daemon/loop_timing.hpp"
 #include "daemon/sim_faults.hpp"
 #include "daemon/sprayer.hpp"
 #include "daemon/state_machine.hpp"
 #include "daemon/status.hpp"
 #include "daemon/totals.hpp"
+#include "io/linux/cpu_latency_qos.hpp"
 
 namespace weedspray::daemon {
 namespace {
@@ -101,11 +103,13 @@ class Daemon final : public CommandHandler {
 
     sprayer_ = std::make_unique<Sprayer>(config_, backends_);
     if (backends_.drive_world) backends_.drive_world(0.0);
+    request_cpu_wakeup_latency();
     sprayer_->start();
     for (const auto& warning : sprayer_->realtime_warnings()) {
       spdlog::warn("real-time priority not granted ({}); running at normal priority", warning);
     }
     start_time_ = backends_.clock->now();
+    last_tick_time_ = start_time_;
     log_thread_ = std::jthread([this](std::stop_token stop) { log_writer(stop); });
 
     uint64_t watchdog_usec = 0;
@@ -129,6 +133,8 @@ class Daemon final : public CommandHandler {
     if (sprayer_) sprayer_->stop();
     backends_.force_safe();
     spdlog::info("outputs safe: valves closed, pump off, return valve open");
+    report_timing();
+    cpu_latency_ = {};
     if (!options_.valve_state_file.empty() && backends_.describe_outputs) {
       std::ofstream(options_.valve_state_file) << backends_.describe_outputs();
     }
@@ -365,10 +371,18 @@ class Daemon final : public CommandHandler {
     coverage_gaps_seen_ = control.coverage_gaps;
     in.vision_latency_s = control.last_latency_ms / 1e3;
     in.lead_distance_m = lead_m;
-    const std::uint64_t overruns = total_overruns(pressure, control);
+    // Only misses while spraying count: a late wake in Idle moves no liquid.
+    const std::uint64_t misses = total_misses(pressure, control);
+    const bool spraying = state_.state() == SprayerState::kSpraying;
+    if (spraying) {
+      misses_while_spraying_ += misses - misses_seen_;
+      spraying_seconds_ += seconds(now - last_tick_time_);
+    }
+    misses_seen_ = misses;
+    last_tick_time_ = now;
     if (seconds(now - overrun_window_start_) >= 1.0) {
-      overruns_last_second_ = overruns - overruns_at_window_start_;
-      overruns_at_window_start_ = overruns;
+      overruns_last_second_ = misses_while_spraying_ - overruns_at_window_start_;
+      overruns_at_window_start_ = misses_while_spraying_;
       overrun_window_start_ = now;
     }
     in.overruns_last_second = overruns_last_second_;
@@ -381,11 +395,9 @@ class Daemon final : public CommandHandler {
       if (is_fault(id)) {
         spdlog::error("alarm raised: {} (fault: valves closed, pump off)", name);
       } else if (id == AlarmId::kControlOverruns) {
-        spdlog::warn(
-            "alarm raised: {} ({} in the last second; totals: pressure loop {}, control loop {}, "
-            "late valve edges {}, converter slots {})",
-            name, overruns_last_second_, pressure.overruns, control.overruns,
-            sprayer_->pwm().late_edges, sprayer_->analog_io().overruns);
+        spdlog::warn("alarm raised: {} ({} deadline misses while spraying in the last second; {})",
+                     name, overruns_last_second_,
+                     timing_report_line(timing_input(pressure, control)));
       } else {
         spdlog::warn("alarm raised: {}", name);
       }
@@ -408,6 +420,67 @@ class Daemon final : public CommandHandler {
   std::uint64_t total_overruns(const PressureStatus& pressure, const ControlStatus& control) const {
     return pressure.overruns + control.overruns + sprayer_->pwm().late_edges +
            sprayer_->analog_io().overruns;
+  }
+
+  // Lateness that affects spraying (alarms.timing_tolerance_ms), in any loop.
+  std::uint64_t total_misses(const PressureStatus& pressure, const ControlStatus& control) const {
+    return pressure.misses + control.misses + sprayer_->pwm().missed_edges;
+  }
+
+  // A PM QoS request keeps the CPUs out of slow idle states while the loops run (see
+  // io/linux/cpu_latency_qos.hpp for what it fixes).
+  void request_cpu_wakeup_latency() {
+    const int us = config_.daemon.cpu_wakeup_latency_us;
+    if (us < 0) {
+      cpu_latency_state_ = "none (daemon.cpu_wakeup_latency_us = -1)";
+      return;
+    }
+    cpu_latency_ = io::hw::CpuLatencyRequest(us);
+    if (cpu_latency_.active()) {
+      cpu_latency_state_ = std::to_string(us) + " us";
+      spdlog::info("CPU wake-up latency held at {} us while running (PM QoS)", us);
+    } else {
+      cpu_latency_state_ = "not held: " + cpu_latency_.error();
+      spdlog::warn(
+          "CPU wake-up latency request not held ({}): real-time loops may wake late from idle "
+          "(give the service user write access to /dev/cpu_dma_latency; see README)",
+          cpu_latency_.error());
+    }
+  }
+
+  TimingReportInput timing_input(const PressureStatus& pressure,
+                                 const ControlStatus& control) const {
+    TimingReportInput in;
+    in.timing = &sprayer_->timing();
+    const io::ValvePwmStats pwm = sprayer_->pwm();
+    in.valve_edges = {pwm.skipped_edges, pwm.missed_edges};
+    in.pressure_loop = {pressure.overruns, pressure.misses};
+    in.control_loop = {control.overruns, control.misses};
+    in.converter_overruns = sprayer_->analog_io().overruns;
+    in.misses_while_spraying = misses_while_spraying_;
+    in.seconds = seconds(backends_.clock->now() - start_time_);
+    in.spraying_seconds = spraying_seconds_;
+    in.realtime = sprayer_->realtime_warnings().empty();
+    in.cpu_latency_request = cpu_latency_state_;
+    return in;
+  }
+
+  void report_timing() noexcept {
+    if (!sprayer_ || !backends_.clock) return;
+    try {
+      const TimingReportInput in = timing_input(sprayer_->pressure(), sprayer_->control());
+      spdlog::info("real-time timing: {}", timing_report_line(in));
+      if (options_.timing_report.empty()) return;
+      const std::string json = timing_report_json(in);
+      if (options_.timing_report == "-") {
+        std::printf("%s\n", json.c_str());
+        std::fflush(stdout);
+      } else if (!(std::ofstream(options_.timing_report) << json << '\n')) {
+        spdlog::error("timing report: cannot write {}", options_.timing_report);
+      }
+    } catch (const std::exception& error) {
+      spdlog::error("timing report: {}", error.what());
+    }
   }
 
   // The watchdog is fed only while the real-time loops make progress.
@@ -536,6 +609,12 @@ class Daemon final : public CommandHandler {
   Nanos overrun_window_start_{};
   std::uint64_t overruns_at_window_start_ = 0;
   std::uint64_t overruns_last_second_ = 0;
+  std::uint64_t misses_seen_ = 0;
+  std::uint64_t misses_while_spraying_ = 0;
+  double spraying_seconds_ = 0;
+  Nanos last_tick_time_{};
+  io::hw::CpuLatencyRequest cpu_latency_;
+  std::string cpu_latency_state_ = "none";
   Nanos watchdog_interval_{0};
   Nanos last_watchdog_{};
   std::uint64_t heartbeat_pressure_ = 0;

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "io/clock.hpp"
+#include "io/lateness_histogram.hpp"
 
 namespace weedspray::io {
 
@@ -90,11 +91,19 @@ class RealtimeThread {
 
 // Periodic loop on absolute deadlines: deadline k = start + k * period. A wake-up later than
 // the next deadline counts as an overrun and skips the missed deadlines (no burst catch-up).
+// Every wake's lateness goes into an optional histogram (owned by the caller, so other threads
+// can read it), and a wake later than `miss_tolerance` counts as a miss: the figure the daemon's
+// control_overruns alarm is built on (a lateness that affects spraying, not any late wake).
 class PeriodicLoop {
  public:
-  PeriodicLoop(Clock& clock, std::chrono::nanoseconds period,
-               std::chrono::nanoseconds start) noexcept
-      : clock_(clock), period_(period), next_(start) {}
+  PeriodicLoop(Clock& clock, std::chrono::nanoseconds period, std::chrono::nanoseconds start,
+               LatenessHistogram* lateness = nullptr,
+               std::chrono::nanoseconds miss_tolerance = std::chrono::nanoseconds::max()) noexcept
+      : clock_(clock),
+        period_(period),
+        next_(start),
+        lateness_(lateness),
+        miss_tolerance_(miss_tolerance) {}
 
   // Sleeps until the next deadline; returns the deadline that was due.
   std::chrono::nanoseconds wait_next() noexcept {
@@ -103,6 +112,8 @@ class PeriodicLoop {
     const std::chrono::nanoseconds now = clock_.now();
     const std::chrono::nanoseconds late = now - due;
     if (late > max_lateness_) max_lateness_ = late;
+    if (lateness_ != nullptr) lateness_->record(late);
+    if (late > miss_tolerance_) ++misses_;
     next_ += period_;
     if (now >= next_) {
       const auto missed = (now - next_) / period_ + 1;
@@ -115,6 +126,7 @@ class PeriodicLoop {
 
   std::uint64_t cycles() const noexcept { return cycles_; }
   std::uint64_t overruns() const noexcept { return overruns_; }
+  std::uint64_t misses() const noexcept { return misses_; }
   std::chrono::nanoseconds max_lateness() const noexcept { return max_lateness_; }
   std::chrono::nanoseconds period() const noexcept { return period_; }
 
@@ -122,8 +134,11 @@ class PeriodicLoop {
   Clock& clock_;
   std::chrono::nanoseconds period_;
   std::chrono::nanoseconds next_;
+  LatenessHistogram* lateness_;
+  std::chrono::nanoseconds miss_tolerance_;
   std::uint64_t cycles_ = 0;
   std::uint64_t overruns_ = 0;
+  std::uint64_t misses_ = 0;
   std::chrono::nanoseconds max_lateness_{0};
 };
 

@@ -26,6 +26,7 @@
 
 #include "io/clock.hpp"
 #include "io/digital_output.hpp"
+#include "io/lateness_histogram.hpp"
 #include "io/latest_value.hpp"
 
 namespace weedspray::io {
@@ -45,11 +46,17 @@ struct ValvePwmDriverConfig {
   std::chrono::nanoseconds max_sleep = std::chrono::milliseconds(20);
   // An edge written later than this after its time counts as late.
   std::chrono::nanoseconds late_threshold = std::chrono::microseconds(500);
+  // An edge later than this misplaces the spray (the daemon's control_overruns alarm counts
+  // these while spraying): 5 ms is 12.5 mm of travel at 2.5 m/s, 2.5 % of a 5 Hz period.
+  std::chrono::nanoseconds miss_tolerance = std::chrono::milliseconds(5);
+  // Every edge's lateness, if set (owned by the caller so other threads can summarise it).
+  LatenessHistogram* lateness = nullptr;
 };
 
 struct ValvePwmStats {
   std::uint64_t edges_written = 0;
   std::uint64_t late_edges = 0;     // written > late_threshold after their time
+  std::uint64_t missed_edges = 0;   // written > miss_tolerance after their time
   std::uint64_t skipped_edges = 0;  // already a whole edge behind: state applied at once
   std::uint64_t write_errors = 0;
   std::uint64_t commands_applied = 0;
@@ -138,6 +145,8 @@ class ValvePwmDriver {
       const std::chrono::nanoseconds lateness = now - edge.time;
       if (lateness > stats_.max_lateness) stats_.max_lateness = lateness;
       if (lateness > config_.late_threshold) ++stats_.late_edges;
+      if (lateness > config_.miss_tolerance) ++stats_.missed_edges;
+      if (config_.lateness != nullptr) config_.lateness->record(lateness);
       ++stats_.edges_written;
       publish_stats();
     }
