@@ -4,8 +4,17 @@ namespace weedspray::daemon {
 namespace {
 
 constexpr std::array<std::string_view, kAlarmCount> kNames = {
-    "over_pressure", "pressure_sensor_fault", "line_blocked", "no_flow",         "tank_low",
-    "tank_empty",    "modbus_silent",         "camera_lost",  "vision_too_slow", "control_overruns",
+    "over_pressure",
+    "pressure_sensor_fault",
+    "line_blocked",
+    "no_flow",
+    "tank_low",
+    "tank_empty",
+    "modbus_silent",
+    "camera_lost",
+    "vision_too_slow",
+    "control_overruns",
+    "vision_model_failed",
 };
 
 double seconds(std::chrono::nanoseconds t) {
@@ -88,6 +97,8 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
   set(AlarmId::kVisionTooSlow,
       moving && (in.coverage_gap || in.vision_latency_s * in.speed_m_per_s > in.lead_distance_m),
       false);
+  // A warning, not a fault: only the failing camera's nozzles close (in the control loop).
+  set(AlarmId::kVisionModelFailed, in.vision_model_failed, false);
   set(AlarmId::kControlOverruns,
       in.overruns_last_second >= static_cast<std::uint64_t>(t.control_overrun_limit), false);
 

@@ -20,12 +20,13 @@ enum class AlarmId : std::uint8_t {
   kNoFlow,               // valves open, pressure normal, no flow (pump, meter or tank)
   kTankLow,
   kTankEmpty,
-  kModbusSilent,     // the tank sensor stopped answering
-  kCameraLost,       // no frame for alarms.camera_stall_s
-  kVisionTooSlow,    // frames do not cover the ground at this speed, or arrive too late
-  kControlOverruns,  // control loops missing their deadlines
+  kModbusSilent,       // the tank sensor stopped answering
+  kCameraLost,         // no frame for alarms.camera_stall_s
+  kVisionTooSlow,      // frames do not cover the ground at this speed, or arrive too late
+  kControlOverruns,    // control loops missing their deadlines
+  kVisionModelFailed,  // a camera's weed model fails at run time: that camera's nozzles closed
 };
-inline constexpr std::size_t kAlarmCount = 10;
+inline constexpr std::size_t kAlarmCount = 11;
 
 using AlarmMask = std::uint32_t;
 constexpr AlarmMask alarm_bit(AlarmId id) noexcept {
@@ -58,6 +59,7 @@ struct AlarmInputs {
   double vision_latency_s = 0;  // frame capture to scheduled
   double lead_distance_m = 0;   // from the near edge of the footprint to the nozzles
   std::uint64_t overruns_last_second = 0;
+  bool vision_model_failed = false;  // some camera's latest frame failed in its weed model
 };
 
 class AlarmEvaluator {

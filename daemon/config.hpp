@@ -20,6 +20,7 @@ struct DaemonSection {
   std::string state_dir;
   double status_max_rate_hz;     // PropertiesChanged at most this often
   double input_stale_timeout_s;  // any live input older than this -> valves off
+  int cpu_wakeup_latency_us;     // PM QoS request while running; -1 = none
 };
 
 struct BoomSection {
@@ -50,6 +51,26 @@ struct VisionSection {
   std::string threshold;
   int fixed_threshold;
   int grid_rows;
+  std::string weed_source;  // vegetation|inter_row|dnn|hybrid
+  double row_band_cm;       // inter_row: width of a crop-row band on the ground
+  double crop_margin_cm;    // hybrid: the network's crop mask grown by this much
+  std::string model;        // ONNX file (dnn, hybrid); relative: see resolve_model_path()
+  int model_input_width;
+  int model_input_height;
+  std::vector<double> model_mean;  // R, G, B on the 0..255 scale
+  double model_scale;
+  bool model_rgb;
+  std::vector<std::string> model_classes;
+  int soil_class;
+  int crop_class;
+  int weed_class;
+};
+
+// The weed model a configuration uses (dnn, hybrid), read once at load: the file found and its
+// bytes, which every camera's vision pipeline is built from.
+struct LoadedModel {
+  std::filesystem::path path;
+  std::vector<std::uint8_t> onnx;
 };
 
 struct SpraySection {
@@ -182,7 +203,8 @@ struct AlarmsSection {
   double modbus_silent_s;
   double camera_stall_s;
   double debounce_s;
-  int control_overrun_limit;
+  double timing_tolerance_ms;  // lateness that affects spraying
+  int control_overrun_limit;   // such misses per second that raise control_overruns
 };
 
 struct LogSection {
@@ -224,6 +246,8 @@ struct Config {
   AlarmsSection alarms;
   LogSection log;
   SimSection sim;
+
+  std::shared_ptr<const LoadedModel> model;  // null unless vision.weed_source needs one
 
   std::vector<std::string> files;            // files read, in order
   std::map<std::string, KeySource> sources;  // "pressure.setpoint_mpa" -> where it was set

@@ -8,6 +8,16 @@
 namespace weedspray::daemon {
 namespace {
 
+// Shortest text that reads back to the same double (3.3, not 3.2999999999999998), always with
+// a '.' or exponent so TOML reads it as a float.
+std::string format_double(double value) {
+  char text[32];
+  const auto end = std::to_chars(text, text + sizeof text, value).ptr;
+  std::string number(text, end);
+  if (number.find_first_of(".en") == std::string::npos) number += ".0";
+  return number;
+}
+
 std::string format_value(const DefaultValue& value) {
   std::ostringstream out;
   std::visit(
@@ -18,16 +28,14 @@ std::string format_value(const DefaultValue& value) {
           toml::array array;
           for (const auto& element : v) array.push_back(element);
           out << array;
+        } else if constexpr (std::is_same_v<V, std::vector<double>>) {
+          out << "[";
+          for (std::size_t i = 0; i < v.size(); ++i) out << (i ? ", " : " ") << format_double(v[i]);
+          out << (v.empty() ? "]" : " ]");
         } else if constexpr (std::is_same_v<V, int>) {
           out << toml::value<std::int64_t>(v);
         } else if constexpr (std::is_same_v<V, double>) {
-          // Shortest text that reads back to the same double (3.3, not 3.2999999999999998),
-          // always with a '.' or exponent so TOML reads it as a float.
-          char text[32];
-          const auto end = std::to_chars(text, text + sizeof text, v).ptr;
-          std::string number(text, end);
-          if (number.find_first_of(".en") == std::string::npos) number += ".0";
-          out << number;
+          out << format_double(v);
         } else {
           out << toml::value<V>(v);
         }
@@ -41,7 +49,8 @@ void document_key(std::ostringstream& out, const KeySpec<Root>& spec) {
   out << "# " << spec.doc << "\n# " << key_type_name(spec.type());
   if (!spec.unit.empty()) out << ", " << spec.unit;
   const auto type = spec.type();
-  if (type == KeyType::kInt || type == KeyType::kDouble || type == KeyType::kIntList) {
+  if (type == KeyType::kInt || type == KeyType::kDouble || type == KeyType::kIntList ||
+      type == KeyType::kDoubleList) {
     out << ", range " << spec.min << ".." << spec.max;
   }
   if (!spec.choices.empty()) {

@@ -7,9 +7,11 @@
 #include <set>
 #include <sstream>
 #include <tuple>
+#include <type_traits>
 
 #include "daemon/config.hpp"
 #include "daemon/config_schema.hpp"
+#include "daemon/vision_config.hpp"
 
 namespace weedspray::daemon {
 
@@ -52,6 +54,12 @@ std::string_view node_type_name(const toml::node& node) {
   }
 }
 
+// An integer or floating-point node's value.
+double number_of(const toml::node& node) {
+  return node.is_integer() ? static_cast<double>(node.as_integer()->get())
+                           : node.as_floating_point()->get();
+}
+
 int line_of(const toml::node& node) {
   return static_cast<int>(node.source().begin.line);
 }
@@ -87,6 +95,21 @@ void set_from_node(const KeySpec<Root>& spec, Root& root, const toml::node& node
            format_number(spec.max) + (spec.unit.empty() ? "" : " " + std::string(spec.unit)));
     }
   };
+  // An array key: every element must pass `accepts`; `convert` reads (and range-checks) it.
+  const auto set_list = [&]<class T>(std::type_identity<T>, const std::string& wanted,
+                                     bool (toml::node::*accepts)() const noexcept, auto convert) {
+    if (!node.is_array()) expect("array of " + wanted);
+    std::vector<T> values;
+    for (const auto& element : *node.as_array()) {
+      if (!(element.*accepts)()) {
+        throw ConfigError(
+            where.file, line_of(element), where.key,
+            "expected " + wanted + " in the array, got " + std::string(node_type_name(element)));
+      }
+      values.push_back(convert(element));
+    }
+    std::get<std::vector<T>& (*)(Root&)>(spec.field)(root) = std::move(values);
+  };
   switch (spec.type()) {
     case KeyType::kBool:
       if (!node.is_boolean()) expect("boolean");
@@ -101,8 +124,7 @@ void set_from_node(const KeySpec<Root>& spec, Root& root, const toml::node& node
     }
     case KeyType::kDouble: {
       if (!node.is_number()) expect("number");
-      const double value = node.is_integer() ? static_cast<double>(node.as_integer()->get())
-                                             : node.as_floating_point()->get();
+      const double value = number_of(node);
       check_range(value);
       std::get<double& (*)(Root&)>(spec.field)(root) = value;
       break;
@@ -122,36 +144,26 @@ void set_from_node(const KeySpec<Root>& spec, Root& root, const toml::node& node
       std::get<std::string& (*)(Root&)>(spec.field)(root) = value;
       break;
     }
-    case KeyType::kIntList: {
-      if (!node.is_array()) expect("array of integers");
-      std::vector<int> values;
-      for (const auto& element : *node.as_array()) {
-        if (!element.is_integer()) {
-          throw ConfigError(
-              where.file, line_of(element), where.key,
-              "expected integers in the array, got " + std::string(node_type_name(element)));
-        }
-        const auto value = element.as_integer()->get();
-        check_range(static_cast<double>(value));
-        values.push_back(static_cast<int>(value));
-      }
-      std::get<std::vector<int>& (*)(Root&)>(spec.field)(root) = std::move(values);
+    case KeyType::kIntList:
+      set_list(std::type_identity<int>{}, "integers", &toml::node::is_integer,
+               [&](const toml::node& element) {
+                 const auto value = element.as_integer()->get();
+                 check_range(static_cast<double>(value));
+                 return static_cast<int>(value);
+               });
       break;
-    }
-    case KeyType::kStringList: {
-      if (!node.is_array()) expect("array of strings");
-      std::vector<std::string> values;
-      for (const auto& element : *node.as_array()) {
-        if (!element.is_string()) {
-          throw ConfigError(
-              where.file, line_of(element), where.key,
-              "expected strings in the array, got " + std::string(node_type_name(element)));
-        }
-        values.push_back(element.as_string()->get());
-      }
-      std::get<std::vector<std::string>& (*)(Root&)>(spec.field)(root) = std::move(values);
+    case KeyType::kDoubleList:
+      set_list(std::type_identity<double>{}, "numbers", &toml::node::is_number,
+               [&](const toml::node& element) {
+                 const double value = number_of(element);
+                 check_range(value);
+                 return value;
+               });
       break;
-    }
+    case KeyType::kStringList:
+      set_list(std::type_identity<std::string>{}, "strings", &toml::node::is_string,
+               [](const toml::node& element) { return element.as_string()->get(); });
+      break;
   }
 }
 
@@ -198,6 +210,12 @@ class Loader {
   Config finish() {
     if (!cameras_given_) config_.cameras.front().nozzle_count = config_.boom.nozzles;
     validate();
+    try {
+      config_.model = check_weed_source(config_);
+    } catch (const VisionKeyError& error) {
+      // A key left at its default is reported where the weed source was chosen.
+      fail(error.key(), error.what(), "vision.weed_source");
+    }
     return std::move(config_);
   }
 
@@ -241,10 +259,14 @@ class Loader {
     }
   }
 
-  [[noreturn]] void fail(const std::string& key, const std::string& message) const {
+  [[noreturn]] void fail(const std::string& key, const std::string& message,
+                         const std::string& located_by = "") const {
     auto source = config_.sources.find(key);
     if (source == config_.sources.end()) {
       source = config_.sources.find(key.substr(0, key.find('.')));  // "camera[1]"
+    }
+    if (source == config_.sources.end() && !located_by.empty()) {
+      source = config_.sources.find(located_by);
     }
     if (source == config_.sources.end()) {
       throw ConfigError(config_.files.empty() ? "<defaults>" : config_.files.back(), 0, key,
@@ -433,7 +455,8 @@ void insert_value(toml::table& table, const KeySpec<Root>& spec, Root& root) {
         const auto& value = access(root);
         using Value = std::remove_cvref_t<decltype(value)>;
         if constexpr (std::is_same_v<Value, std::vector<int>> ||
-                      std::is_same_v<Value, std::vector<std::string>>) {
+                      std::is_same_v<Value, std::vector<std::string>> ||
+                      std::is_same_v<Value, std::vector<double>>) {
           toml::array array;
           for (const auto& element : value) array.push_back(element);
           table.insert_or_assign(spec.name, std::move(array));

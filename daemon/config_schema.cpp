@@ -30,8 +30,10 @@ KeyType KeySpec<Root>::type() const {
       return choices.empty() ? KeyType::kString : KeyType::kEnum;
     case 4:
       return KeyType::kIntList;
-    default:
+    case 5:
       return KeyType::kStringList;
+    default:
+      return KeyType::kDoubleList;
   }
 }
 
@@ -59,6 +61,8 @@ std::string_view key_type_name(KeyType type) {
       return "array of integers";
     case KeyType::kStringList:
       return "array of strings";
+    case KeyType::kDoubleList:
+      return "array of numbers";
   }
   return "?";
 }
@@ -78,6 +82,9 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "D-Bus PropertiesChanged are emitted at most this often"},
     {WS_KEY(daemon, input_stale_timeout_s), 0.5, 0.05, 10, "s",
      "a live input (pressure, vision, wheel) older than this closes the valves"},
+    {WS_KEY(daemon, cpu_wakeup_latency_us), 0, -1, 100000, "us",
+     "PM QoS request held while the loops run (/dev/cpu_dma_latency): CPUs stay out of idle "
+     "states slower to wake than this, so real-time loops wake on time; -1 = no request"},
     // [boom]
     {WS_KEY(boom, nozzles), 4, 1, 32, "",
      "number of nozzles (solenoid valves) along the boom"},
@@ -101,6 +108,46 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "is not bimodal; -1 = the library's level for the index"},
     {WS_KEY(vision, grid_rows), 1, 1, 4, "",
      "zone rows along travel per frame (columns = the camera's nozzles)"},
+    {WS_KEY(vision, weed_source), std::string("vegetation"), 0, 0, "",
+     "what counts as weed. vegetation: every green pixel (bare soil: fallow, pre-plant); "
+     "inter_row: vegetation between the crop rows, rows found as peaks of the column histogram "
+     "and tracked from frame to frame (row crops; see row_band_cm); dnn: the weed class of the "
+     "segmentation network in model; hybrid: colour vegetation minus the network's crop class "
+     "grown by crop_margin_cm. The rate law uses each zone's weed density",
+     {"vegetation", "inter_row", "dnn", "hybrid"}},
+    {WS_KEY(vision, row_band_cm), 30.0, 1, 500, "cm",
+     "inter_row: width on the ground of the band around each crop row that counts as crop "
+     "(converted to a share of the image width, which spans the camera's nozzle_count x "
+     "boom.nozzle_width_m)"},
+    {WS_KEY(vision, crop_margin_cm), 2.0, 0, 50, "cm",
+     "hybrid: the network's crop mask is grown by this much on the ground before it is removed "
+     "from the vegetation (converted to pixels of the camera's configured width, which spans "
+     "its nozzle_count x boom.nozzle_width_m)"},
+    {WS_KEY(vision, model), std::string("weed-peanut.onnx"), 0, 0, "path",
+     "dnn, hybrid: the segmentation network, an ONNX file OpenCV DNN loads (checked with one "
+     "forward pass at load). A relative path is looked up beside the configuration file that "
+     "sets it, then among the installed models (/usr/share/weedspray/models from the package; "
+     "a build tree also looks in its checkout's models/). The default is "
+     "the shipped crop/weed/soil model trained on peanut fields; the model_* keys below are its "
+     "spec (models/weed-peanut.json); retrain for another crop with tools/train"},
+    {WS_KEY(vision, model_input_width), 320, 32, 4096, "px",
+     "dnn, hybrid: the frame is resized to this network input width (a multiple of 32)"},
+    {WS_KEY(vision, model_input_height), 256, 32, 4096, "px",
+     "dnn, hybrid: network input height (a multiple of 32)"},
+    {WS_KEY(vision, model_mean), std::vector<double>{123.675, 116.28, 103.53}, 0, 255, "",
+     "dnn, hybrid: per-channel mean subtracted from the 0..255 R, G, B values (3 numbers)"},
+    {WS_KEY(vision, model_scale), 1.0 / 58.0, 1e-6, 1000, "",
+     "dnn, hybrid: network input = (value - mean) x this"},
+    {WS_KEY(vision, model_rgb), true, 0, 1, "",
+     "dnn, hybrid: the network takes R, G, B channel order (false: B, G, R)"},
+    {WS_KEY(vision, model_classes), std::vector<std::string>{"soil", "crop", "weed"}, 0, 0, "",
+     "dnn, hybrid: the network's output classes in channel order; its output must have one "
+     "channel per class"},
+    {WS_KEY(vision, soil_class), 0, 0, 255, "",
+     "dnn, hybrid: index in model_classes of soil (classes other than crop and weed count as "
+     "soil)"},
+    {WS_KEY(vision, crop_class), 1, 0, 255, "", "dnn, hybrid: index in model_classes of the crop"},
+    {WS_KEY(vision, weed_class), 2, 0, 255, "", "dnn, hybrid: index in model_classes of weeds"},
     // [spray]
     {WS_KEY(spray, nominal_flow_l_per_min), 0.615, 0.01, 20, "L/min",
      "q_nom: nozzle flow that gives the nominal dose at the nominal speed"},
@@ -306,8 +353,12 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "no frame for this long raises camera_lost"},
     {WS_KEY(alarms, debounce_s), 1.0, 0, 60, "s",
      "a flow/pressure condition must hold this long before it raises an alarm"},
-    {WS_KEY(alarms, control_overrun_limit), 10, 1, 1000000, "",
-     "control-loop overruns within one second that raise control_overruns"},
+    {WS_KEY(alarms, timing_tolerance_ms), 5.0, 0.5, 100, "ms",
+     "while spraying, a valve edge or control-loop cycle later than this, or a missed "
+     "pressure-loop period, is a deadline miss that affects spraying"},
+    {WS_KEY(alarms, control_overrun_limit), 3, 1, 1000000, "",
+     "deadline misses that affect spraying (see timing_tolerance_ms) within one second that "
+     "raise control_overruns"},
     // [log]
     {WS_KEY(log, dir), std::string(""), 0, 0, "path",
      "as-applied CSV folder (empty = <daemon.state_dir>/as-applied)"},

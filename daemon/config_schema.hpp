@@ -12,15 +12,16 @@
 
 namespace weedspray::daemon {
 
-enum class KeyType { kBool, kInt, kDouble, kString, kEnum, kIntList, kStringList };
+enum class KeyType { kBool, kInt, kDouble, kString, kEnum, kIntList, kStringList, kDoubleList };
 
 template <class Root>
 using FieldAccess =
     std::variant<bool& (*)(Root&), int& (*)(Root&), double& (*)(Root&), std::string& (*)(Root&),
-                 std::vector<int>& (*)(Root&), std::vector<std::string>& (*)(Root&)>;
+                 std::vector<int>& (*)(Root&), std::vector<std::string>& (*)(Root&),
+                 std::vector<double>& (*)(Root&)>;
 
-using DefaultValue =
-    std::variant<bool, int, double, std::string, std::vector<int>, std::vector<std::string>>;
+using DefaultValue = std::variant<bool, int, double, std::string, std::vector<int>,
+                                  std::vector<std::string>, std::vector<double>>;
 
 template <class Root>
 struct KeySpec {
@@ -41,7 +42,7 @@ struct KeySpec {
   std::string_view name;     // "setpoint_mpa"
   FieldAccess<Root> field;
   DefaultValue default_value;
-  double min;  // numeric range (ints, doubles, every element of int lists)
+  double min;  // numeric range (ints, doubles, every element of number lists)
   double max;
   std::string_view unit;
   std::string_view doc;

@@ -38,6 +38,7 @@ struct PressureStatus {
   bool tripped = false;  // over-pressure trip latched (pump off) until trip_reset
   std::uint64_t cycles = 0;
   std::uint64_t overruns = 0;
+  std::uint64_t misses = 0;  // lateness that affects spraying (alarms.timing_tolerance_ms)
   std::uint64_t adc_errors = 0;
   std::uint64_t stale_samples = 0;  // cycles whose newest ADC sample was too old to use
 };
@@ -48,7 +49,9 @@ struct FrameDensities {
   Nanos ready_time{};  // vision done
   int rows = 0;
   int cols = 0;
-  std::array<double, vision::kMaxZones> density{};
+  std::array<double, vision::kMaxZones> density{};       // weed density: the rate law's input
+  std::array<double, vision::kMaxZones> crop_density{};  // share of each zone that is crop
+  bool vision_failed = false;  // the weed model failed on this frame: densities are zero
 };
 
 // Camera worker -> main thread.
@@ -59,6 +62,13 @@ struct CameraStatus {
   double frame_rate_hz = 0;
   double vision_ms = 0;  // processing time of the last frame
   bool started = false;
+  // Frames captured while the previous one was processed, dropped so latency stays one
+  // processing time (a weed model slower than the camera's frame interval).
+  std::uint64_t frames_skipped = 0;
+  double gate_wait_ms = 0;               // last frame's wait for the shared inference gate
+  std::uint64_t vision_failures = 0;     // frames the weed model failed on
+  bool vision_failed = false;            // the latest frame failed: this camera's nozzles closed
+  std::array<char, 200> vision_error{};  // why it failed (NUL-terminated)
 };
 
 // Control loop -> main thread.
@@ -78,6 +88,7 @@ struct ControlStatus {
   std::uint64_t coverage_gaps = 0;  // frames whose ground did not reach the previous frame's
   std::uint64_t cycles = 0;
   std::uint64_t overruns = 0;
+  std::uint64_t misses = 0;  // lateness that affects spraying (alarms.timing_tolerance_ms)
   double open_fraction = 0;
   bool inputs_stale = false;  // valves held closed because an input is stale
 };

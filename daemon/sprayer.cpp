@@ -4,10 +4,13 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <cstring>
+#include <mutex>
+#include <opencv2/core.hpp>
+
 #include "daemon/geometry.hpp"
+#include "daemon/vision_config.hpp"
 #include "io/signal_conversion.hpp"
-#include "vision/threshold.hpp"
-#include "vision/vegetation_index.hpp"
 
 namespace weedspray::daemon {
 namespace {
@@ -58,19 +61,6 @@ control::FuzzyPidConfig controller_config(const Config& config) {
   return c;
 }
 
-vision::PipelineConfig pipeline_config(const Config& config, int cols) {
-  vision::PipelineConfig c = vision::default_pipeline_config();
-  // "default" keeps the library's measured choice; other names are validated by the config.
-  if (auto index = vision::parse_vegetation_index(config.vision.index)) c.index = *index;
-  if (auto method = vision::parse_threshold_method(config.vision.threshold)) c.threshold = *method;
-  if (config.vision.fixed_threshold >= 0) {
-    c.threshold_params.fixed_threshold = config.vision.fixed_threshold;
-  }
-  c.rows = config.vision.grid_rows;
-  c.cols = cols;
-  return c;
-}
-
 }  // namespace
 
 LiveParams live_params_from(const Config& config) {
@@ -110,6 +100,8 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
   driver.command_expiry = from_seconds(config.pwm.dead_man_s);
   // The driver notices a new command only when it wakes: at most 2 ms late (5 mm at 2.5 m/s).
   driver.max_sleep = std::chrono::milliseconds(2);
+  driver.miss_tolerance = from_seconds(config.alarms.timing_tolerance_ms / 1e3);
+  driver.lateness = &timing_.valve_edges;
   pwm_driver_ = std::make_unique<io::ValvePwmDriver<control::PwmSchedule>>(*io_.clock, *io_.valves,
                                                                            *schedule_, driver);
   io::AnalogIoTiming analog_timing;
@@ -139,13 +131,24 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
   }
   nozzle_owner_.assign(nozzles, -1);
   camera_count_ = config.cameras.size();
+  // A configuration built in code (tests) has not been through the loader's model check.
+  const std::shared_ptr<const LoadedModel> model =
+      config.model ? config.model : check_weed_source(config);
+  // The camera workers' OpenCV calls (the weed model above all) run on their own thread only:
+  // OpenCV's worker pool would take the cores the real-time loops need.
+  static std::once_flag single_threaded_opencv;
+  std::call_once(single_threaded_opencv, [] { cv::setNumThreads(1); });
   for (std::size_t i = 0; i < camera_count_; ++i) {
     const auto& c = config.cameras[i];
     auto& worker = cameras_[i];
     worker.camera = io_.cameras[i];
     worker.first_nozzle = c.first_nozzle;
     worker.nozzle_count = c.nozzle_count;
-    worker.pipeline = std::make_unique<vision::Pipeline>(pipeline_config(config, c.nozzle_count));
+    const vision::PipelineConfig vision = pipeline_config(config, c);
+    worker.uses_model = vision::needs_model(vision.weed_source);
+    worker.pipeline = std::make_unique<vision::Pipeline>(
+        vision,
+        model ? std::span<const std::uint8_t>(model->onnx) : std::span<const std::uint8_t>{});
     control::NozzleSchedulerConfig scheduler;
     scheduler.geometry = camera_geometry(c);
     scheduler.nozzles = static_cast<std::size_t>(c.nozzle_count);
@@ -169,6 +172,17 @@ Sprayer::~Sprayer() {
 
 control::GroundInterval Sprayer::footprint(std::size_t i) const noexcept {
   return control::ground_footprint(cameras_[i].scheduler->config().geometry);
+}
+
+std::string Sprayer::vision_failures() const {
+  std::string failures;
+  for (std::size_t i = 0; i < camera_count_; ++i) {
+    const CameraStatus status = cameras_[i].status.read();
+    if (!status.vision_failed) continue;
+    failures += (failures.empty() ? "camera " : "; camera ") + std::to_string(i) + ": " +
+                std::string(status.vision_error.data());
+  }
+  return failures;
 }
 
 void Sprayer::start() {
@@ -228,7 +242,8 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
   // Two missed converter reads are tolerated; a third (a hung I2C read, a silent Modbus
   // module) makes the sample stale: sensor fault, pump off, return valve open.
   const Nanos max_sample_age = 3 * period;
-  io::PeriodicLoop loop(*io_.clock, period, first_deadline);
+  // A miss here is a whole period lost: the controller skipped a sample.
+  io::PeriodicLoop loop(*io_.clock, period, first_deadline, &timing_.pressure_loop, period);
   io::AnalogSample sample;  // the newest copy obtained; kept when the slot is busy
   LiveParams params = params_.read();
   std::uint64_t params_version = params_.version();
@@ -278,6 +293,7 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
     }
     status.cycles = loop.cycles();
     status.overruns = loop.overruns();
+    status.misses = loop.misses();
     pressure_.publish(status);
   }
   if (io_.pump != nullptr) io_.pump->force_safe();
@@ -289,7 +305,8 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   // 5 mm per cycle.
   constexpr Nanos kPeriod = 2ms;
   constexpr Nanos kFlowWindow = 250ms;
-  io::PeriodicLoop loop(*io_.clock, kPeriod, io_.clock->now());
+  io::PeriodicLoop loop(*io_.clock, kPeriod, io_.clock->now(), &timing_.control_loop,
+                        from_seconds(config_.alarms.timing_tolerance_ms / 1e3));
   const std::size_t nozzles = nozzle_owner_.size();
   const double boom_width_m = config_.boom.nozzle_width_m * static_cast<double>(nozzles);
   const double flow_ppl = config_.flow.pulses_per_litre;
@@ -348,6 +365,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
           ++status.coverage_gaps;
         }
         worker.last_frame_distance_m = frame_distance;
+        worker.vision_failed = frame->vision_failed;
         worker.scheduler->add_frame(frame_distance,
                                     std::span<const double>(frame->density.data(), zones));
         const Nanos scheduled = io_.clock->now();
@@ -384,8 +402,10 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
                                              status.distance_m, status.speed_m_per_s, sprays);
       }
       status.density[n] = density;
+      // A camera whose weed model fails closes its own nozzles until it processes frames again.
+      const bool blind = owner >= 0 && cameras_[static_cast<std::size_t>(owner)].vision_failed;
       double duty = 0;
-      if (spray) {
+      if (spray && !blind) {
         const control::SprayDecision decision = control::spray_decision(
             params.law, params.line, density, status.speed_m_per_s, compensation_pressure);
         duty = decision.duty_pct;
@@ -444,6 +464,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
     status.time = now;
     status.cycles = loop.cycles();
     status.overruns = loop.overruns();
+    status.misses = loop.misses();
     control_.publish(status);
   }
 }
@@ -459,6 +480,7 @@ void Sprayer::camera_loop(std::stop_token stop, CameraWorker& worker) noexcept {
     }
   }
   Nanos previous_frame{};
+  Nanos busy_until{};  // when the previous frame's processing ended
   io::Frame frame;
   while (!stop.stop_requested()) {
     const io::FrameStatus got = worker.camera->next_frame(frame, 100ms);
@@ -467,16 +489,42 @@ void Sprayer::camera_loop(std::stop_token stop, CameraWorker& worker) noexcept {
       if (got == io::FrameStatus::kError) ++status.errors;
       continue;
     }
+    // A frame captured while the previous one was processed is already old: skip it for the
+    // next, fresh one, so a model slower than the frame interval costs frames, not latency.
+    if (frame.timestamp < busy_until) {
+      ++status.frames_skipped;
+      worker.status.publish(status);
+      continue;
+    }
+    const Nanos asked = io_.clock->now();
+    std::optional<InferenceGate::Turn> turn;
+    if (worker.uses_model) turn.emplace(inference_gate_.acquire());
     const Nanos t0 = io_.clock->now();
     const vision::FrameResult& result = worker.pipeline->process(frame.view);
+    turn.reset();
     FrameDensities densities;
     densities.capture_time = frame.timestamp;
     densities.ready_time = io_.clock->now();
+    busy_until = densities.ready_time;
     densities.rows = result.rows;
     densities.cols = result.cols;
     std::copy(result.zone_density.begin(), result.zone_density.end(), densities.density.begin());
+    std::copy(result.crop_density.begin(), result.crop_density.end(),
+              densities.crop_density.begin());
+    // The weed model failed (an empty error is a malformed frame: zero densities, no alarm).
+    densities.vision_failed =
+        !worker.pipeline->last_frame_ok() && !worker.pipeline->last_error().empty();
+    status.vision_failed = densities.vision_failed;
+    if (densities.vision_failed) {
+      ++status.vision_failures;
+      const std::string& error = worker.pipeline->last_error();
+      const std::size_t n = std::min(error.size(), status.vision_error.size() - 1);
+      std::memcpy(status.vision_error.data(), error.data(), n);
+      status.vision_error[n] = '\0';
+    }
     worker.frames.try_push(densities);
     ++status.frames;
+    status.gate_wait_ms = seconds(t0 - asked) * 1e3;
     status.vision_ms = seconds(densities.ready_time - t0) * 1e3;
     if (previous_frame.count() > 0) {
       const double interval = seconds(frame.timestamp - previous_frame);

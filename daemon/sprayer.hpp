@@ -3,7 +3,8 @@
 //   ws-analog     io::AnalogIoWorker: the pressure ADC reads and return-valve DAC writes
 //   ws-pressure   ADC sample -> fuzzy PID / PID -> DAC command, pump relay, over-pressure trip
 //   ws-control    wheel odometry, flow, frames -> NozzleScheduler -> spray-rate law -> duties
-//   ws-camera     one per camera: frame -> vision::Pipeline -> zone densities
+//   ws-camera     one per camera: frame -> vision::Pipeline -> zone densities (normal
+//                 priority; weed-model inferences one at a time through a ticket gate)
 //   ws-modbus     tank level
 // Threads exchange trivially copyable values through LatestValue slots and SPSC queues; the
 // loops allocate nothing, lock nothing and log nothing after start().
@@ -22,6 +23,8 @@
 #include "control/spray_rate_law.hpp"
 #include "daemon/backends.hpp"
 #include "daemon/config.hpp"
+#include "daemon/inference_gate.hpp"
+#include "daemon/loop_timing.hpp"
 #include "daemon/runtime_types.hpp"
 #include "io/analog_io_worker.hpp"
 #include "io/latest_value.hpp"
@@ -63,6 +66,8 @@ class Sprayer {
   io::TankLevelSample tank() const noexcept { return tank_.read(); }
   io::ValvePwmStats pwm() const noexcept { return pwm_driver_->stats(); }
   io::AnalogIoStats analog_io() const noexcept { return analog_io_->stats(); }
+  // Lateness histograms of the real-time loops (readable from any thread).
+  const LoopTiming& timing() const noexcept { return timing_; }
   // Threads that asked for SCHED_FIFO but did not get it.
   std::vector<std::string> realtime_warnings() const;
 
@@ -71,6 +76,9 @@ class Sprayer {
 
   // Ground geometry of camera i (footprint relative to its nadir, for alarms and tests).
   control::GroundInterval footprint(std::size_t i) const noexcept;
+  // Cameras whose weed model failed on their latest frame, with why ("camera 1: ..."; empty
+  // when none): the vision_model_failed alarm. Their nozzles are held closed meanwhile.
+  std::string vision_failures() const;
 
  private:
   struct CameraWorker {
@@ -83,6 +91,8 @@ class Sprayer {
     int nozzle_count = 0;
     double footprint_length_m = 0;
     double last_frame_distance_m = -1e9;
+    bool uses_model = false;     // dnn/hybrid: inference goes through inference_gate_
+    bool vision_failed = false;  // control loop: the latest frame failed, nozzles held closed
   };
 
   Nanos pressure_period() const noexcept;
@@ -105,6 +115,7 @@ class Sprayer {
   control::FlowTrim flow_trim_;
   std::vector<control::DutyQuantiser> quantisers_;
   std::array<CameraWorker, kMaxCameras> cameras_;
+  InferenceGate inference_gate_;  // one weed-model inference at a time, in arrival order
   std::size_t camera_count_ = 0;
   std::vector<int> nozzle_owner_;  // camera index per nozzle, -1 = none
   LatencyQueue latencies_;
@@ -112,6 +123,7 @@ class Sprayer {
   std::vector<io::RealtimeThread> threads_;
   std::vector<std::string> thread_names_;
   std::atomic<bool> stopped_{true};
+  LoopTiming timing_;
 };
 
 }  // namespace weedspray::daemon

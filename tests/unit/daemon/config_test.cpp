@@ -72,6 +72,10 @@ std::pair<std::string, DefaultValue> other_value(const KeySpec<Root>& spec) {
       std::vector<std::string> v{"v0", "v1", "v2", "v3"};
       return {"[\"v0\", \"v1\", \"v2\", \"v3\"]", v};
     }
+    case KeyType::kDoubleList: {
+      std::vector<double> v{1.5, 2.5, 3.5};
+      return {"[1.5, 2.5, 3.5]", v};
+    }
   }
   return {};
 }

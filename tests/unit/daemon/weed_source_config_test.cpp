@@ -1,0 +1,203 @@
+// [vision] weed source keys: the model is found, read and run once at load, and every
+// problem with it is a ConfigError naming the file, line and key.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "daemon/config.hpp"
+#include "daemon/config_schema.hpp"
+#include "daemon/vision_config.hpp"
+#include "vision/weed_source.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Hand-set 3-class net (tools/train/make_tiny_onnx.py): with mean 0 and scale 1/255 in R, G, B
+// order a red pixel is class 0, green class 1, blue class 2.
+const fs::path kTinyModel = fs::path(WEEDSPRAY_SOURCE_DIR) / "tests/data/tiny-3class.onnx";
+
+std::string tiny_dnn(const std::string& extra = "") {
+  return "[vision]\nweed_source = \"dnn\"\nmodel = \"" + kTinyModel.string() +
+         "\"\nmodel_mean = [0, 0, 0]\nmodel_scale = 0.00392156862745098\n" + extra;
+}
+
+Config parse(const std::string& text) {
+  return load_config_from_strings({{"main.toml", text}});
+}
+
+ConfigError parse_error(const std::string& text) {
+  try {
+    (void)parse(text);
+  } catch (const ConfigError& error) {
+    return error;
+  }
+  ADD_FAILURE() << "no ConfigError for:\n" << text;
+  return ConfigError("", 0, "", "");
+}
+
+TEST(WeedSourceConfig, DefaultIsVegetationAndLoadsNoModel) {
+  const Config config = parse("");
+  EXPECT_EQ(config.vision.weed_source, "vegetation");
+  EXPECT_EQ(config.model, nullptr);
+  // Model keys are not checked while no source uses them.
+  EXPECT_NO_THROW(
+      (void)parse("[vision]\nmodel = \"/nonexistent.onnx\"\nmodel_input_width = 100\n"
+                  "weed_class = 7\n"));
+  EXPECT_EQ(parse("[vision]\nweed_source = \"inter_row\"\n").model, nullptr);
+}
+
+TEST(WeedSourceConfig, ChoicesAreTheVisionLibrarysNames) {
+  for (const auto& spec : config_keys()) {
+    if (spec.full_name() != "vision.weed_source") continue;
+    ASSERT_EQ(spec.choices.size(), vision::weed_source_names().size());
+    for (auto choice : spec.choices) EXPECT_TRUE(vision::parse_weed_source(choice)) << choice;
+    return;
+  }
+  FAIL() << "no vision.weed_source key";
+}
+
+TEST(WeedSourceConfig, DnnReadsTheModelOnce) {
+  const Config config = parse(tiny_dnn());
+  ASSERT_NE(config.model, nullptr);
+  EXPECT_EQ(config.model->path, kTinyModel);
+  EXPECT_EQ(config.model->onnx.size(), fs::file_size(kTinyModel));
+  EXPECT_NE(parse(tiny_dnn()).model, nullptr);
+}
+
+TEST(WeedSourceConfig, PipelineGetsTheSpecAndGroundDistancesInPixels) {
+  // 4 nozzles x 0.5 m across 1280 px: 1.5625 mm per pixel.
+  const Config config =
+      parse(tiny_dnn("model_rgb = false\nmodel_classes = [\"bg\", \"weed\", \"crop\"]\n"
+                     "soil_class = 0\nweed_class = 1\ncrop_class = 2\n"
+                     "crop_margin_cm = 2.0\nrow_band_cm = 30.0\n"));
+  ASSERT_EQ(config.cameras.size(), 1U);
+  EXPECT_DOUBLE_EQ(ground_m_per_px(config, config.cameras[0]), 2.0 / 1280);
+  const vision::PipelineConfig c = pipeline_config(config, config.cameras[0]);
+  EXPECT_EQ(c.weed_source, vision::WeedSource::kDnn);
+  EXPECT_EQ(c.cols, 4);
+  EXPECT_EQ(c.crop_margin_px, 13);  // 20 mm / 1.5625 mm = 12.8
+  EXPECT_DOUBLE_EQ(c.inter_row_rule.row_band_fraction, 0.15);
+  EXPECT_FALSE(c.dnn.rgb);
+  EXPECT_EQ(c.dnn.weed_class, 1);
+  EXPECT_EQ(c.dnn.crop_class, 2);
+  EXPECT_DOUBLE_EQ(c.dnn.mean_rgb[1], 0.0);
+  EXPECT_EQ(c.dnn.classes[2], "crop");
+}
+
+TEST(WeedSourceConfig, MissingModelNamesKeyFileAndLine) {
+  const auto e = parse_error("[vision]\nweed_source = \"dnn\"\nmodel = \"/nonexistent/m.onnx\"\n");
+  EXPECT_EQ(e.file(), "main.toml");
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_EQ(e.key(), "vision.model");
+  EXPECT_NE(std::string(e.what()).find("/nonexistent/m.onnx does not exist"), std::string::npos)
+      << e.what();
+  // A relative path names every place it was looked for.
+  const auto relative = parse_error("[vision]\nweed_source = \"hybrid\"\nmodel = \"nope.onnx\"\n");
+  EXPECT_EQ(relative.key(), "vision.model");
+  EXPECT_NE(std::string(relative.what()).find("nope.onnx not found (looked for ./nope.onnx"),
+            std::string::npos)
+      << relative.what();
+}
+
+TEST(WeedSourceConfig, UnloadableModelIsNamed) {
+  const fs::path junk = fs::temp_directory_path() / ("weedspray-junk-" + std::to_string(getpid()));
+  std::ofstream(junk) << "not an ONNX model";
+  const auto e =
+      parse_error("[vision]\nweed_source = \"dnn\"\n\nmodel = \"" + junk.string() + "\"\n");
+  fs::remove(junk);
+  EXPECT_EQ(e.key(), "vision.model");
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_NE(std::string(e.what()).find("not a loadable ONNX model"), std::string::npos) << e.what();
+  const auto folder = parse_error("[vision]\nweed_source = \"dnn\"\nmodel = \"/tmp\"\n");
+  EXPECT_EQ(folder.key(), "vision.model");
+}
+
+TEST(WeedSourceConfig, OutputChannelsMustMatchTheClassList) {
+  const auto e =
+      parse_error(tiny_dnn("model_classes = [\"soil\", \"crop\", \"weed\", \"rock\"]\n"));
+  EXPECT_EQ(e.key(), "vision.model_classes");
+  EXPECT_EQ(e.line(), 6);
+  EXPECT_NE(std::string(e.what()).find("4 classes"), std::string::npos) << e.what();
+}
+
+TEST(WeedSourceConfig, ClassIdsMustBeClassesAndDistinct) {
+  const auto out = parse_error(tiny_dnn("weed_class = 3\n"));
+  EXPECT_EQ(out.key(), "vision.weed_class");
+  EXPECT_EQ(out.line(), 6);
+  EXPECT_NE(std::string(out.what()).find("not a class of model_classes (0..2)"), std::string::npos)
+      << out.what();
+  // The key the file set is named, not the one left at its default.
+  const auto same = parse_error(tiny_dnn("crop_class = 2\n"));
+  EXPECT_EQ(same.key(), "vision.crop_class");
+  EXPECT_EQ(same.line(), 6);
+  EXPECT_NE(std::string(same.what()).find("already vision.weed_class"), std::string::npos)
+      << same.what();
+  const auto too_few = parse_error(tiny_dnn("model_classes = [\"weed\"]\n"));
+  EXPECT_EQ(too_few.key(), "vision.model_classes");
+}
+
+TEST(WeedSourceConfig, InputSizeIsAMultipleOf32) {
+  const auto e = parse_error(tiny_dnn("model_input_height = 250\n"));
+  EXPECT_EQ(e.key(), "vision.model_input_height");
+  EXPECT_EQ(e.line(), 6);
+  EXPECT_NE(std::string(e.what()).find("not a multiple of 32"), std::string::npos) << e.what();
+  EXPECT_NO_THROW((void)parse(tiny_dnn("model_input_width = 384\nmodel_input_height = 288\n")));
+}
+
+TEST(WeedSourceConfig, MeanIsThreeNumbers) {
+  const auto e = parse_error("[vision]\nweed_source = \"dnn\"\nmodel = \"" + kTinyModel.string() +
+                             "\"\nmodel_mean = [1.0, 2.0]\n");
+  EXPECT_EQ(e.key(), "vision.model_mean");
+  EXPECT_EQ(e.line(), 4);
+  EXPECT_EQ(parse_error("[vision]\nmodel_mean = [1, \"x\", 3]\n").key(), "vision.model_mean");
+  EXPECT_EQ(parse_error("[vision]\nmodel_mean = [1, 300, 3]\n").key(), "vision.model_mean");
+}
+
+TEST(WeedSourceConfig, RowBandMustBeNarrowerThanTheView) {
+  const auto e = parse_error("[vision]\nweed_source = \"inter_row\"\nrow_band_cm = 250\n");
+  EXPECT_EQ(e.key(), "vision.row_band_cm");
+  EXPECT_EQ(e.line(), 3);
+  EXPECT_NE(std::string(e.what()).find("camera[0]"), std::string::npos) << e.what();
+}
+
+class WeedModelFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("weedspray-model-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_ / "conf.d");
+    fs::create_directories(dir_ / "models");
+    fs::copy_file(kTinyModel, dir_ / "models" / "tiny.onnx");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  void write(const fs::path& relative, const std::string& text) {
+    std::ofstream(dir_ / relative) << text;
+  }
+  fs::path dir_;
+};
+
+TEST_F(WeedModelFiles, RelativeModelIsFoundBesideTheFileThatSetsIt) {
+  const std::string spec = "model_mean = [0, 0, 0]\nmodel_scale = 0.00392156862745098\n";
+  write("weedspray.toml", "[vision]\nweed_source = \"dnn\"\nmodel = \"models/tiny.onnx\"\n" + spec);
+  EXPECT_EQ(load_config(dir_ / "weedspray.toml").model->path, dir_ / "models" / "tiny.onnx");
+  // A drop-in's path is relative to conf.d/.
+  write("conf.d/50-model.toml", "[vision]\nmodel = \"../models/tiny.onnx\"\n");
+  EXPECT_EQ(load_config(dir_ / "weedspray.toml").model->path,
+            dir_ / "conf.d" / ".." / "models" / "tiny.onnx");
+  write("conf.d/50-model.toml", "[vision]\nmodel = \"models/tiny.onnx\"\n");
+  try {
+    (void)load_config(dir_ / "weedspray.toml");
+    FAIL() << "conf.d/models/tiny.onnx does not exist";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(e.file().find("50-model.toml"), std::string::npos);
+    EXPECT_EQ(e.key(), "vision.model");
+  }
+}
+
+}  // namespace
+}  // namespace weedspray::daemon
