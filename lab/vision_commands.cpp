@@ -1,4 +1,5 @@
-// weedspray-lab vision subcommands: vision-eval, segment, bench-vision.
+// weedspray-lab vision subcommands: vision-eval (index x threshold, or the weed sources with
+// --classes / --weed-sources), segment, bench-vision.
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -7,23 +8,27 @@
 #include "lab/commands.hpp"
 #include "lab/vision_eval.hpp"
 #include "lab/vision_tools.hpp"
+#include "lab/weed_eval_command.hpp"
 
 namespace weedspray::lab {
 namespace {
 
 struct EvalOptions {
-  std::string images_dir;
-  std::string masks_dir;
-  bool json = false;
+  WeedEvalOptions weeds;  // images, masks, list and json live here
+  bool weed_sources = false;
   bool bounds = false;
   bool keep_split = false;
 };
 
-int run_vision_eval(const EvalOptions& options) {
+int run_vision_eval(const EvalOptions& all) {
+  if (all.weeds.class_masks || all.weed_sources) return run_weed_eval(all.weeds);
+  const WeedEvalOptions& options = all.weeds;
+  const std::vector<std::string> stems =
+      options.list.empty() ? std::vector<std::string>{} : read_stem_list(options.list);
   const std::vector<LabelledImage> images =
-      load_labelled_images(options.images_dir, options.masks_dir);
+      load_labelled_images(options.images_dir, options.masks_dir, stems);
   vision::PipelineConfig base = vision::default_pipeline_config();
-  if (options.keep_split) base.threshold_params.unimodal = vision::UnimodalPolicy::kKeepSplit;
+  if (all.keep_split) base.threshold_params.unimodal = vision::UnimodalPolicy::kKeepSplit;
   const std::vector<EvalRow> rows = evaluate_combinations(images, vision::all_vegetation_indices(),
                                                           vision::all_threshold_methods(), base);
   const vision::PipelineConfig defaults = vision::default_pipeline_config();
@@ -44,7 +49,7 @@ int run_vision_eval(const EvalOptions& options) {
     return 0;
   }
   std::printf("%zu images from %s (unimodal policy: %s)\n\n", images.size(),
-              options.images_dir.c_str(), options.keep_split ? "keep split" : "fixed scale");
+              options.images_dir.c_str(), all.keep_split ? "keep split" : "fixed scale");
   std::printf("%-11s %-9s %8s %9s %9s %10s %9s\n", "index", "threshold", "mean_IoU", "mean_T",
               "eps_otsu", "rho_otsu_%", "ms/image");
   for (const EvalRow& row : rows) {
@@ -54,7 +59,7 @@ int run_vision_eval(const EvalOptions& options) {
         std::string(to_string(row.threshold)).c_str(), row.mean_iou, row.mean_threshold,
         row.threshold_error, row.precision_pct, row.ms_per_image, is_default ? "  <- default" : "");
   }
-  if (options.bounds) {
+  if (all.bounds) {
     std::printf("\nupper bounds per index: best threshold per image / best shared threshold\n");
     for (const vision::VegetationIndex index : vision::all_vegetation_indices()) {
       const IndexBounds bounds = index_bounds(images, index);
@@ -83,16 +88,50 @@ void run_reporting_errors(Function&& function) {
 
 void add_vision_commands(CLI::App& app) {
   auto eval_options = std::make_shared<EvalOptions>();
+  WeedEvalOptions& weeds = eval_options->weeds;
   CLI::App* eval = app.add_subcommand(
-      "vision-eval", "Every vegetation index x threshold against hand-labelled masks");
-  eval->add_option("--images", eval_options->images_dir, "Folder of field images")
+      "vision-eval",
+      "Every vegetation index x threshold against hand-labelled masks; with --classes or "
+      "--weed-sources, the weed sources (vegetation, inter_row, dnn, hybrid)");
+  eval->add_option("--images", weeds.images_dir, "Folder of field images")
       ->required()
       ->check(CLI::ExistingDirectory);
-  eval->add_option("--masks", eval_options->masks_dir,
-                   "Folder of masks (PNG, same stem as the image, non-zero = plant)")
+  eval->add_option("--masks", weeds.masks_dir,
+                   "Folder of masks (PNG, same stem as the image, non-zero = plant; with "
+                   "--classes, class ids 0 soil, 1 crop, 2 weed)")
       ->required()
       ->check(CLI::ExistingDirectory);
-  eval->add_flag("--json", eval_options->json, "Print one JSON object");
+  eval->add_option("--list", weeds.list,
+                   "Evaluate only the image stems listed in this file (one per line), e.g. "
+                   "tools/train/splits/peanut-val.txt")
+      ->check(CLI::ExistingFile);
+  eval->add_flag("--json", weeds.json, "Print one JSON object");
+  eval->add_flag("--classes", weeds.class_masks,
+                 "Masks hold class ids: evaluate the weed sources (IoU per class, MIoU, MPA, "
+                 "zone recall and clean zones left dry)");
+  eval->add_flag("--weed-sources", eval_options->weed_sources,
+                 "Evaluate the weed sources' vegetation (crop or weed) against plant masks");
+  eval->add_option("--model", weeds.model,
+                   "ONNX weed model (spec from FILE.json): adds dnn and hybrid")
+      ->check(CLI::ExistingFile);
+  eval->add_option("--weed-source", weeds.weed_source,
+                   "Evaluate only this source: vegetation, inter_row, dnn, hybrid");
+  eval->add_option("--config", weeds.config,
+                   "weedsprayd configuration: [vision] keys of the first camera, its model and "
+                   "spray.decision_threshold")
+      ->check(CLI::ExistingFile);
+  eval->add_option("--grid", weeds.grid, "Zone grid ROWSxCOLS (default: the daemon's 2x4)");
+  eval->add_option("--decision-threshold", weeds.decision_threshold,
+                   "Weed density at which a zone is sprayed (default: the daemon's "
+                   "spray.decision_threshold)");
+  eval->add_option("--weedy-share", weeds.weedy_share,
+                   "A zone is weedy when at least this share of it is weed")
+      ->capture_default_str();
+  eval->add_option("--crop-margin-px", weeds.crop_margin_px,
+                   "hybrid: crop mask grown by this many pixels (default " +
+                       std::to_string(kDefaultCropMarginPx) + ", or the configuration's)");
+  eval->add_option("--row-band", weeds.row_band_fraction,
+                   "inter_row: crop-row band width as a share of the frame width");
   eval->add_flag("--bounds", eval_options->bounds,
                  "Also print per-index IoU upper bounds (best threshold per image / shared)");
   eval->add_flag("--keep-split", eval_options->keep_split,

@@ -1,0 +1,61 @@
+// Crop / weed / soil metrics of class maps against class-id masks: per-class IoU, MIoU and MPA
+// as the wheat paper defines them (over the whole confusion matrix of a set of images), and
+// the sprayer's zone trade-off (weedy zones sprayed, weed-free zones left dry).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+
+#include <opencv2/core.hpp>
+
+namespace weedspray::lab {
+
+inline constexpr int kClassCount = 3;  // 0 soil, 1 crop, 2 weed
+
+struct ConfusionMatrix {
+  std::array<std::array<std::uint64_t, kClassCount>, kClassCount> counts{};  // [truth][predicted]
+  // truth and predicted: CV_8UC1 of the same size holding class ids < kClassCount.
+  void add(const cv::Mat& truth, const cv::Mat& predicted);
+};
+
+struct ClassScores {
+  std::array<double, kClassCount> iou{};  // TP / (TP + FP + FN), 1 if the class is absent
+  std::array<double, kClassCount> pixel_accuracy{};  // TP / truth pixels, 1 if the class is absent
+  double miou = 0;                                   // mean of iou over the classes
+  double mpa = 0;                                    // mean of pixel_accuracy over the classes
+};
+ClassScores class_scores(const ConfusionMatrix& confusion);
+
+// Zones of a rows x cols grid: weedy when at least weedy_share of the zone is weed in the
+// truth, clean (weed-free for the sprayer) otherwise; sprayed when the pipeline's weed density
+// reaches the decision threshold (the rate law's rule: density > 0 and density >= threshold).
+struct ZoneRule {
+  int rows = 2;
+  int cols = 4;
+  double weedy_share = 0.005;
+  double decision_threshold = 0.01;
+};
+
+struct ZoneTally {
+  int weedy = 0;
+  int weedy_sprayed = 0;
+  int clean = 0;
+  int clean_dry = 0;
+  double recall() const { return weedy == 0 ? 1.0 : static_cast<double>(weedy_sprayed) / weedy; }
+  double clean_left_dry() const {
+    return clean == 0 ? 1.0 : static_cast<double>(clean_dry) / clean;
+  }
+};
+
+bool would_spray(double weed_density, double decision_threshold);
+
+// One image: truth (class ids over the zones' region) and the pipeline's weed density per
+// zone (row-major, rows * cols).
+void tally_zones(const cv::Mat& truth, std::span<const double> weed_density, const ZoneRule& rule,
+                 ZoneTally& tally);
+
+// Zone (row, col) of a rows x cols grid over a size image, cut as vision::Pipeline cuts it.
+cv::Rect zone_rect(int row, int col, int rows, int cols, cv::Size size);
+
+}  // namespace weedspray::lab

@@ -1,0 +1,75 @@
+#include "lab/weed_eval.hpp"
+
+#include <chrono>
+#include <stdexcept>
+#include <string>
+
+#include <opencv2/imgproc.hpp>
+
+namespace weedspray::lab {
+
+cv::Mat class_map_at_region_size(vision::Pipeline& pipeline) {
+  const vision::ImageView map = pipeline.class_map();
+  const cv::Mat classes(map.height, map.width, CV_8UC1, const_cast<std::uint8_t*>(map.data),
+                        map.stride);
+  const cv::Size region(pipeline.region().width, pipeline.region().height);
+  cv::Mat out;
+  if (classes.size() == region) {
+    classes.copyTo(out);
+  } else {  // dnn: the network's resolution
+    cv::resize(classes, out, region, 0, 0, cv::INTER_NEAREST);
+  }
+  return out;
+}
+
+WeedEvalRow evaluate_weed_source(const std::vector<LabelledImage>& images,
+                                 vision::PipelineConfig config,
+                                 std::span<const std::uint8_t> model_onnx, const ZoneRule& rule,
+                                 bool class_masks) {
+  config.rows = rule.rows;
+  config.cols = rule.cols;
+  vision::Pipeline pipeline(config, model_onnx);
+  WeedEvalRow row;
+  row.source = config.weed_source;
+  ConfusionMatrix confusion;
+  for (const LabelledImage& image : images) {
+    pipeline.reset_tracking();
+    const vision::ImageView view{image.bgr.data, image.bgr.cols, image.bgr.rows, image.bgr.step[0],
+                                 vision::PixelFormat::kBgr24};
+    const auto start = std::chrono::steady_clock::now();
+    const vision::FrameResult& result = pipeline.process(view);
+    const auto stop = std::chrono::steady_clock::now();
+    row.ms_per_image += std::chrono::duration<double, std::milli>(stop - start).count();
+    if (!pipeline.last_frame_ok()) {
+      throw std::runtime_error(image.name + ": " + std::string(to_string(config.weed_source)) +
+                               " failed: " + pipeline.last_error());
+    }
+    const vision::PixelRect r = pipeline.region();
+    const cv::Rect region(r.x, r.y, r.width, r.height);
+    const cv::Mat predicted = class_map_at_region_size(pipeline);
+
+    const cv::Mat predicted_plant = predicted != vision::kClassSoil;
+    const cv::Mat plant = image.plant(region);
+    const double union_count = cv::countNonZero(predicted_plant | plant);
+    row.vegetation_iou +=
+        union_count == 0 ? 1.0 : cv::countNonZero(predicted_plant & plant) / union_count;
+
+    if (class_masks) {
+      const cv::Mat truth = image.mask(region);
+      try {
+        confusion.add(truth, predicted);
+      } catch (const std::invalid_argument& error) {
+        throw std::runtime_error(image.name + ": mask is not class ids 0 soil, 1 crop, 2 weed (" +
+                                 error.what() + ")");
+      }
+      tally_zones(truth, result.densities(), rule, row.zones);
+    }
+  }
+  const double n = static_cast<double>(images.size());
+  row.ms_per_image /= n;
+  row.vegetation_iou /= n;
+  if (class_masks) row.scores = class_scores(confusion);
+  return row;
+}
+
+}  // namespace weedspray::lab

@@ -1,0 +1,35 @@
+// Evaluation of the weed sources (vegetation, inter_row, dnn, hybrid) against labelled images:
+// class metrics and the zone trade-off against class-id masks, vegetation IoU against any.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "lab/class_metrics.hpp"
+#include "lab/vision_dataset.hpp"
+#include "vision/pipeline.hpp"
+
+namespace weedspray::lab {
+
+struct WeedEvalRow {
+  vision::WeedSource source{};
+  ClassScores scores;         // with class masks
+  ZoneTally zones;            // with class masks
+  double vegetation_iou = 0;  // mean over images of (crop or weed) against plant (non-zero)
+  double ms_per_image = 0;    // Pipeline::process, index to zone densities
+};
+
+// Runs `config` (its weed_source, with the rule's zone grid) over every image, each one a
+// fresh start for the row tracker (the photos are not a sequence). With class_masks, the
+// masks hold class ids (0 soil, 1 crop, 2 weed) and give scores and zones; a mask with other
+// ids is a std::runtime_error naming the image.
+WeedEvalRow evaluate_weed_source(const std::vector<LabelledImage>& images,
+                                 vision::PipelineConfig config,
+                                 std::span<const std::uint8_t> model_onnx, const ZoneRule& rule,
+                                 bool class_masks);
+
+// The pipeline's class map (kClassSoil / kClassCrop / kClassWeed) at the region's size.
+cv::Mat class_map_at_region_size(vision::Pipeline& pipeline);
+
+}  // namespace weedspray::lab

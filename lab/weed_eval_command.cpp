@@ -1,0 +1,147 @@
+#include "lab/weed_eval_command.hpp"
+
+#include <cstdio>
+#include <stdexcept>
+#include <vector>
+
+#include "lab/weed_eval.hpp"
+#include "lab/weed_model.hpp"
+
+namespace weedspray::lab {
+namespace {
+
+struct Setup {
+  vision::PipelineConfig base = vision::default_pipeline_config();
+  std::vector<std::uint8_t> onnx;
+  std::vector<vision::WeedSource> sources;
+  ZoneRule zones;
+};
+
+Setup setup_from(const WeedEvalOptions& options) {
+  Setup setup;
+  setup.zones.decision_threshold = default_decision_threshold();
+  setup.base.crop_margin_px = kDefaultCropMarginPx;
+  if (!options.config.empty()) {
+    DaemonVisionSetup daemon = read_daemon_vision_setup(options.config);
+    setup.base = daemon.pipeline;
+    setup.onnx = std::move(daemon.onnx);
+    setup.zones.decision_threshold = daemon.decision_threshold;
+    setup.zones.rows = setup.base.rows;
+    setup.zones.cols = setup.base.cols;
+  }
+  if (!options.model.empty()) {
+    WeedModel model = read_weed_model(options.model);
+    setup.base.dnn = model.spec;
+    setup.onnx = std::move(model.onnx);
+  }
+  if (!options.grid.empty()) {
+    parse_grid_option("--grid", options.grid, setup.zones.rows, setup.zones.cols);
+  }
+  if (options.decision_threshold >= 0) setup.zones.decision_threshold = options.decision_threshold;
+  if (!(options.weedy_share > 0 && options.weedy_share <= 1)) {
+    throw std::runtime_error("--weedy-share must lie in (0, 1]");
+  }
+  setup.zones.weedy_share = options.weedy_share;
+  if (options.crop_margin_px >= 0) setup.base.crop_margin_px = options.crop_margin_px;
+  if (options.row_band_fraction >= 0) {
+    setup.base.inter_row_rule.row_band_fraction = options.row_band_fraction;
+  }
+
+  if (!options.weed_source.empty()) {
+    setup.sources = {parse_weed_source_option("--weed-source", options.weed_source)};
+  } else if (!options.config.empty() && options.model.empty()) {
+    setup.sources = {setup.base.weed_source};
+  } else {
+    setup.sources = {vision::WeedSource::kVegetation, vision::WeedSource::kInterRow};
+    if (!setup.onnx.empty()) {
+      setup.sources.push_back(vision::WeedSource::kDnn);
+      setup.sources.push_back(vision::WeedSource::kHybrid);
+    }
+  }
+  for (const vision::WeedSource source : setup.sources) {
+    if (vision::needs_model(source) && setup.onnx.empty()) {
+      throw std::runtime_error("weed source " + std::string(to_string(source)) +
+                               " needs a model: give --model FILE (or a --config whose "
+                               "vision.weed_source loads one)");
+    }
+  }
+  return setup;
+}
+
+void print_json(std::size_t images, const std::vector<WeedEvalRow>& rows, const ZoneRule& zones,
+                bool class_masks) {
+  std::printf("{\"images\": %zu, \"pipelines\": [", images);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const WeedEvalRow& row = rows[i];
+    std::printf("%s{\"weed_source\": \"%s\", ", i == 0 ? "" : ", ",
+                std::string(to_string(row.source)).c_str());
+    if (class_masks) {
+      std::printf(
+          "\"iou\": {\"soil\": %.4f, \"crop\": %.4f, \"weed\": %.4f}, \"miou\": %.4f, "
+          "\"mpa\": %.4f, \"zones\": {\"grid\": \"%dx%d\", \"weedy\": %d, \"recall\": %.4f, "
+          "\"clean_left_dry\": %.4f}, ",
+          row.scores.iou[0], row.scores.iou[1], row.scores.iou[2], row.scores.miou, row.scores.mpa,
+          zones.rows, zones.cols, row.zones.weedy, row.zones.recall(), row.zones.clean_left_dry());
+    } else {
+      std::printf("\"vegetation_iou\": %.4f, ", row.vegetation_iou);
+    }
+    std::printf("\"ms_per_image\": %.3f}", row.ms_per_image);
+  }
+  std::printf("]}\n");
+}
+
+void print_table(const WeedEvalOptions& options, std::size_t images,
+                 const std::vector<WeedEvalRow>& rows, const Setup& setup) {
+  const ZoneRule& zones = setup.zones;
+  std::printf("%zu images from %s%s%s\n", images, options.images_dir.c_str(),
+              options.list.empty() ? "" : ", list ", options.list.c_str());
+  if (options.class_masks) {
+    std::printf(
+        "zones %dx%d: weedy when >= %.2f %% of the zone is weed; sprayed when the weed density "
+        ">= %.4f (decision threshold); hybrid margin %d px\n\n",
+        zones.rows, zones.cols, 100.0 * zones.weedy_share, zones.decision_threshold,
+        setup.base.crop_margin_px);
+    std::printf("%-11s %7s %7s %7s %7s %7s %8s %6s %7s %10s %9s\n", "weed_source", "IoU_soil",
+                "crop", "weed", "MIoU", "MPA", "veg_IoU", "weedy", "recall", "clean_dry",
+                "ms/image");
+    for (const WeedEvalRow& row : rows) {
+      std::printf("%-11s %7.4f %7.4f %7.4f %7.4f %7.4f %8.4f %6d %7.4f %10.4f %9.2f\n",
+                  std::string(to_string(row.source)).c_str(), row.scores.iou[0], row.scores.iou[1],
+                  row.scores.iou[2], row.scores.miou, row.scores.mpa, row.vegetation_iou,
+                  row.zones.weedy, row.zones.recall(), row.zones.clean_left_dry(),
+                  row.ms_per_image);
+    }
+    return;
+  }
+  std::printf("plant masks: vegetation (crop or weed) IoU per image, averaged\n\n");
+  std::printf("%-11s %8s %9s\n", "weed_source", "veg_IoU", "ms/image");
+  for (const WeedEvalRow& row : rows) {
+    std::printf("%-11s %8.4f %9.2f\n", std::string(to_string(row.source)).c_str(),
+                row.vegetation_iou, row.ms_per_image);
+  }
+}
+
+}  // namespace
+
+int run_weed_eval(const WeedEvalOptions& options) {
+  const Setup setup = setup_from(options);
+  const std::vector<std::string> stems =
+      options.list.empty() ? std::vector<std::string>{} : read_stem_list(options.list);
+  const std::vector<LabelledImage> images =
+      load_labelled_images(options.images_dir, options.masks_dir, stems);
+  std::vector<WeedEvalRow> rows;
+  for (const vision::WeedSource source : setup.sources) {
+    vision::PipelineConfig config = setup.base;
+    config.weed_source = source;
+    rows.push_back(
+        evaluate_weed_source(images, config, setup.onnx, setup.zones, options.class_masks));
+  }
+  if (options.json) {
+    print_json(images.size(), rows, setup.zones, options.class_masks);
+  } else {
+    print_table(options, images.size(), rows, setup);
+  }
+  return 0;
+}
+
+}  // namespace weedspray::lab

@@ -1,0 +1,29 @@
+// vision-eval --classes / --weed-sources: the weed sources against labelled images.
+#pragma once
+
+#include <string>
+
+namespace weedspray::lab {
+
+struct WeedEvalOptions {
+  std::string images_dir;
+  std::string masks_dir;
+  std::string list;                // image stems to evaluate (empty: all)
+  bool class_masks = false;        // --classes: masks hold 0 soil, 1 crop, 2 weed
+  std::string model;               // ONNX file (its .json sibling gives the spec)
+  std::string weed_source;         // only this source (empty: every source that can run)
+  std::string config;              // daemon configuration file ([vision], [spray], first camera)
+  std::string grid;                // ROWSxCOLS (empty: the configuration's, else 2x4)
+  double decision_threshold = -1;  // < 0: the configuration's, else the daemon default
+  double weedy_share = 0.005;
+  int crop_margin_px = -1;        // < 0: the configuration's, else kDefaultCropMarginPx
+  double row_band_fraction = -1;  // < 0: the configuration's, else InterRowRule's default
+  bool json = false;
+};
+
+// Hybrid's margin on the 960x720 peanut photos when no configuration gives one.
+inline constexpr int kDefaultCropMarginPx = 3;
+
+int run_weed_eval(const WeedEvalOptions& options);
+
+}  // namespace weedspray::lab
