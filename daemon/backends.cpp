@@ -10,6 +10,20 @@ void Backends::force_safe() noexcept {
   if (led != nullptr) led->force_safe();
 }
 
+std::size_t Backends::register_emergency_writes() const noexcept {
+  io::EmergencyOutputs::clear();
+  std::size_t registered = 0;
+  io::EmergencyWrite write;
+  for (const io::DigitalOutputBank* bank : {valves, pump, buzzer, led}) {
+    if (bank != nullptr && bank->emergency_write(write) && io::EmergencyOutputs::add(write))
+      ++registered;
+  }
+  if (return_valve != nullptr && return_valve->emergency_write(write) &&
+      io::EmergencyOutputs::add(write))
+    ++registered;
+  return registered;
+}
+
 io::CurrentLoopSensorConfig pressure_sensor_config(const Config& config) {
   io::CurrentLoopSensorConfig sensor;
   sensor.shunt_ohms = config.adc.shunt_ohms;

@@ -53,6 +53,9 @@ struct Backends {
 
   // Every output to its safe value: valves closed, pump off, return valve open, buzzer/LED off.
   void force_safe() noexcept;
+  // Registers each output's one-syscall safe write for the fatal-exit handlers
+  // (io/emergency_outputs.hpp); returns how many outputs have one (the simulation has none).
+  std::size_t register_emergency_writes() const noexcept;
 };
 
 // The 4-20 mA pressure sensor and the return-valve drive chain as configured (both backends).
@@ -60,6 +63,12 @@ io::CurrentLoopSensorConfig pressure_sensor_config(const Config& config);
 io::ValveDriveConfig valve_drive_config(const Config& config);
 
 // Throws std::runtime_error naming the device that could not be opened.
+// For ExecStopPost (weedsprayd --safe-outputs), after the daemon has gone however it went
+// (kill -9 included): requests every output line at its safe value and releases it (a Pi keeps
+// driving a released line's last value), and writes the return-valve DAC's safe value. Each
+// output is tried on its own; returns the failures, each described in `errors`.
+int write_hw_safe_outputs(const Config& config, std::vector<std::string>& errors);
+
 Backends make_hw_backends(const Config& config);
 
 // The board's pressure converters from [adc], [dac] and [analog_modbus]: IIO devices or Modbus

@@ -53,6 +53,47 @@ io::PulseInput* pulse_line(Backends& b, const GpioSection& gpio, const std::stri
 
 }  // namespace
 
+int write_hw_safe_outputs(const Config& config, std::vector<std::string>& errors) {
+  const auto& gpio = config.gpio;
+  const auto attempt = [&](const char* what, auto&& make) {
+    try {
+      Backends b;
+      make(b);  // requested with the safe values as defaults; released when b goes
+      b.force_safe();
+    } catch (const std::exception& error) {
+      errors.push_back(std::string(what) + ": " + error.what());
+    }
+  };
+  attempt("valves", [&](Backends& b) {
+    io::hw::GpioOutputBankConfig valves;
+    valves.chip = gpio.chip;
+    valves.consumer = "weedsprayd-safe";
+    for (int offset : gpio.valve_offsets)
+      valves.lines.push_back(
+          {.name = {}, .offset = offset, .active_low = gpio.valve_active_low, .safe_value = false});
+    for (const auto& name : gpio.valve_names)
+      valves.lines.push_back(
+          {.name = name, .offset = -1, .active_low = gpio.valve_active_low, .safe_value = false});
+    if (!valves.lines.empty()) b.valves = keep(b, std::make_shared<io::hw::GpioOutputBank>(valves));
+  });
+  attempt("pump", [&](Backends& b) {
+    b.pump = single_line(b, gpio, gpio.pump_name, gpio.pump_offset, gpio.pump_active_low);
+  });
+  attempt("buzzer", [&](Backends& b) {
+    b.buzzer = single_line(b, gpio, gpio.buzzer_name, gpio.buzzer_offset, false);
+  });
+  attempt("led", [&](Backends& b) {
+    b.led = single_line(b, gpio, gpio.led_name, gpio.led_offset, false);
+  });
+  attempt("return valve", [&](Backends& b) {
+    b.clock = keep(b, std::make_shared<io::hw::MonotonicClock>());
+    PressureConverters converters = make_hw_pressure_converters(config, *b.clock);
+    b.return_valve = keep(b, converters.dac);  // writes the safe value when it is made
+    keep(b, converters.adc);
+  });
+  return static_cast<int>(errors.size());
+}
+
 Backends make_hw_backends(const Config& config) {
   Backends b;
   b.mode = "hw";

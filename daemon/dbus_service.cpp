@@ -170,6 +170,18 @@ int DbusService::get_property(sd_bus*, const char*, const char*, const char* pro
 }
 
 int DbusService::method(sd_bus_message* message, void* userdata, sd_bus_error* error) {
+  // An exception must not cross sd-bus's C frames: it becomes the caller's error reply.
+  try {
+    return dispatch(message, userdata, error);
+  } catch (const std::exception& e) {
+    return sd_bus_error_setf(error, SD_BUS_ERROR_FAILED, "%s failed: %s",
+                             sd_bus_message_get_member(message), e.what());
+  } catch (...) {
+    return sd_bus_error_set(error, SD_BUS_ERROR_FAILED, "unknown error");
+  }
+}
+
+int DbusService::dispatch(sd_bus_message* message, void* userdata, sd_bus_error* error) {
   auto& self = *static_cast<DbusService*>(userdata);
   const std::string_view member(sd_bus_message_get_member(message));
   CommandResult result;

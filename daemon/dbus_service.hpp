@@ -37,6 +37,7 @@ class DbusService {
                           const char* property, sd_bus_message* reply, void* userdata,
                           sd_bus_error* error);
   static int method(sd_bus_message* message, void* userdata, sd_bus_error* error);
+  static int dispatch(sd_bus_message* message, void* userdata, sd_bus_error* error);
 
  private:
   sd_bus* bus_ = nullptr;

@@ -21,6 +21,9 @@ int main(int argc, char** argv) {
   app.add_flag("--sim", options.sim, "simulated hydraulics, pulses and camera");
   app.add_flag("--user", options.user_bus, "use the session bus instead of the system bus");
   app.add_flag("--no-bus", options.no_bus, "run without D-Bus");
+  app.add_flag("--safe-outputs", options.safe_outputs,
+               "write every configured output's safe value and exit (the unit's ExecStopPost: "
+               "covers kill -9 and crashes)");
   app.add_option("--sim-images", options.sim_images, "field image folder for --sim");
   app.add_option("--state-dir", options.state_dir, "overrides daemon.state_dir");
   app.add_option("--valve-state-file", options.valve_state_file,
@@ -43,6 +46,7 @@ int main(int argc, char** argv) {
     return 1;
   }
 
+  if (options.safe_outputs) return write_safe_outputs(options);
   if (options.print_default_config) {
     std::cout << documented_config();
     return 0;

@@ -26,6 +26,7 @@
 #include "daemon/state_machine.hpp"
 #include "daemon/status.hpp"
 #include "daemon/totals.hpp"
+#include "io/emergency_outputs.hpp"
 #include "io/linux/cpu_latency_qos.hpp"
 
 namespace weedspray::daemon {
@@ -65,6 +66,9 @@ class Daemon final : public CommandHandler {
         setpoint_mpa_(config_.pressure.setpoint_mpa) {}
 
   ~Daemon() override {
+    // The outputs' descriptors close with the backends: a later fatal signal must not write to
+    // whatever reuses those numbers.
+    io::EmergencyOutputs::clear();
     if (tick_source_ != nullptr) sd_event_source_unref(tick_source_);
     for (auto* source : signal_sources_) sd_event_source_unref(source);
     dbus_.reset();
@@ -74,6 +78,8 @@ class Daemon final : public CommandHandler {
   int run() {
     backends_ = options_.sim ? make_sim_backends(config_, options_) : make_hw_backends(config_);
     spdlog::info("backends: {}", backends_.mode);
+    const std::size_t emergency = backends_.register_emergency_writes();
+    if (!options_.sim) spdlog::info("fatal-exit safe writes armed for {} outputs", emergency);
     totals_file_ = std::filesystem::path(config_.daemon.state_dir) / "totals.toml";
     std::filesystem::create_directories(config_.daemon.state_dir);
     std::string totals_error;
@@ -169,6 +175,9 @@ class Daemon final : public CommandHandler {
     } catch (const ConfigError& error) {
       spdlog::error("reload refused, running configuration kept: {}", error.what());
       return {kErrorConfig, error.what()};
+    } catch (const std::exception& error) {  // e.g. a conf.d entry that cannot be listed
+      spdlog::error("reload refused, running configuration kept: {}", error.what());
+      return {kErrorConfig, error.what()};
     }
     const Config comparable = with_live_sections_of(fresh, config_);
     if (dump_config(comparable) != dump_config(config_)) {
@@ -209,7 +218,11 @@ class Daemon final : public CommandHandler {
   static int on_signal(sd_event_source*, const struct signalfd_siginfo* info, void* userdata) {
     auto& self = *static_cast<Daemon*>(userdata);
     if (info->ssi_signo == SIGHUP) {
-      self.reload_config();
+      try {
+        self.reload_config();
+      } catch (const std::exception& error) {  // never through sd-event's C frames
+        spdlog::error("reload: {}", error.what());
+      }
       return 0;
     }
     spdlog::info("signal {}: stopping", info->ssi_signo);
@@ -571,16 +584,26 @@ class Daemon final : public CommandHandler {
         }
       }
     };
+    // An exception must not end the process through std::terminate from this thread: log it
+    // and keep draining (the control loop drops records only when the queue is full).
+    const auto guarded = [&](auto&& step) {
+      try {
+        step();
+      } catch (const std::exception& error) {
+        if (!reported) spdlog::error("as-applied log: {}", error.what());
+        reported = true;
+      }
+    };
     while (!stop.stop_requested()) {
-      drain();
+      guarded(drain);
       if (std::chrono::steady_clock::now() - last_flush >= 1s) {
-        log_->flush();
+        guarded([&] { log_->flush(); });
         last_flush = std::chrono::steady_clock::now();
       }
       std::this_thread::sleep_for(100ms);
     }
-    drain();
-    log_->flush();
+    guarded(drain);
+    guarded([&] { log_->flush(); });
   }
 
   Options options_;
@@ -629,7 +652,26 @@ class Daemon final : public CommandHandler {
 
 }  // namespace
 
+int write_safe_outputs(const Options& options) {
+  Config config;
+  try {
+    config = load_with_overrides(options);
+  } catch (const ConfigError& error) {
+    std::fprintf(stderr, "weedsprayd --safe-outputs: %s\n", error.what());
+    return 1;
+  }
+  std::vector<std::string> errors;
+  write_hw_safe_outputs(config, errors);
+  for (const auto& error : errors)
+    std::fprintf(stderr, "weedsprayd --safe-outputs: %s\n", error.c_str());
+  if (errors.empty()) std::printf("weedsprayd: outputs written safe\n");
+  return errors.empty() ? 0 : 1;
+}
+
 int run_daemon(const Options& options) {
+  // Before any thread or output exists: a fatal signal or std::terminate from here on writes
+  // the registered outputs safe (io/emergency_outputs.hpp).
+  io::install_fatal_exit_handlers();
   Config config;
   try {
     config = load_with_overrides(options);

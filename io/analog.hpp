@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cstdint>
 
+#include "io/emergency_outputs.hpp"
+
 namespace weedspray::io {
 
 struct AnalogSample {
@@ -32,6 +34,8 @@ class AnalogOutput {
   virtual void force_safe() noexcept = 0;
   virtual double full_scale_volts() const noexcept = 0;
   virtual std::uint64_t error_count() const noexcept = 0;
+  // See DigitalOutputBank::emergency_write.
+  virtual bool emergency_write(EmergencyWrite& /*out*/) const noexcept { return false; }
 };
 
 }  // namespace weedspray::io

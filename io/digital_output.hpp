@@ -6,6 +6,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "io/emergency_outputs.hpp"
+
 namespace weedspray::io {
 
 class DigitalOutputBank {
@@ -20,6 +22,9 @@ class DigitalOutputBank {
   virtual void force_safe() noexcept = 0;
   // The logical mask force_safe() writes.
   virtual std::uint32_t safe_mask() const noexcept = 0;
+  // The one syscall that writes the safe values on a descriptor held open, for the fatal-exit
+  // handlers (io/emergency_outputs.hpp). False when the backend has none (simulation).
+  virtual bool emergency_write(EmergencyWrite& /*out*/) const noexcept { return false; }
 };
 
 }  // namespace weedspray::io

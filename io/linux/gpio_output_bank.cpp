@@ -1,6 +1,12 @@
 #include "io/linux/gpio_output_bank.hpp"
 
+#include <linux/gpio.h>
+#include <unistd.h>
+
+#include <cstring>
+#include <filesystem>
 #include <gpiod.hpp>
+#include <set>
 #include <stdexcept>
 #include <system_error>
 
@@ -14,7 +20,29 @@ struct GpioOutputBank::Impl {
   std::uint32_t invert_mask = 0;  // active-low lines: logical 1 = physical 0
   std::uint32_t safe_mask = 0;    // logical
   std::vector<int> values;        // reused by write(): no allocation at run time
+  int handle_fd = -1;             // the kernel line handle (for the fatal-exit handler)
 };
+
+namespace {
+
+// The process's GPIO line-handle descriptors (uAPI v1, which libgpiod 1.6 uses). libgpiod 1.6
+// has no accessor for an output request's descriptor, and the fatal-signal handler needs one
+// to write the safe values without the library: the bank's handle is the one that appears
+// across its request (requests happen one at a time, at start-up).
+std::set<int> line_handle_fds() {
+  std::set<int> fds;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd", ec)) {
+    std::error_code link_ec;
+    const auto target = std::filesystem::read_symlink(entry.path(), link_ec);
+    if (!link_ec && target.string() == "anon_inode:gpio-linehandle") {
+      fds.insert(std::stoi(entry.path().filename().string()));
+    }
+  }
+  return fds;
+}
+
+}  // namespace
 
 GpioOutputBank::GpioOutputBank(const GpioOutputBankConfig& config)
     : impl_(std::make_unique<Impl>()) {
@@ -42,6 +70,7 @@ GpioOutputBank::GpioOutputBank(const GpioOutputBankConfig& config)
   impl_->bulk = detail::open_chip(impl_->chip_name).get_lines(offsets);
   // Active-low is applied here, per line, because a bulk request shares one flag set.
   // The request's default values are the safe values: no glitch at start-up.
+  const std::set<int> handles_before = line_handle_fds();
   try {
     impl_->bulk.request({config.consumer, gpiod::line_request::DIRECTION_OUTPUT, 0}, defaults);
   } catch (const std::system_error& e) {
@@ -50,6 +79,11 @@ GpioOutputBank::GpioOutputBank(const GpioOutputBankConfig& config)
                              (e.code().value() == EBUSY ? ": line busy" : "") + ")");
   }
   impl_->values.resize(config.lines.size());
+  const std::set<int> handles_after = line_handle_fds();
+  std::vector<int> added;
+  for (int fd : handles_after)
+    if (!handles_before.contains(fd)) added.push_back(fd);
+  if (added.size() == 1) impl_->handle_fd = added.front();
 }
 
 GpioOutputBank::~GpioOutputBank() {
@@ -84,6 +118,21 @@ void GpioOutputBank::force_safe() noexcept {
 
 std::uint32_t GpioOutputBank::safe_mask() const noexcept {
   return impl_->safe_mask;
+}
+
+bool GpioOutputBank::emergency_write(EmergencyWrite& out) const noexcept {
+  if (impl_->handle_fd < 0) return false;
+  out = EmergencyWrite{};
+  out.kind = EmergencyWrite::Kind::kIoctl;
+  out.fd = impl_->handle_fd;
+  out.request = GPIOHANDLE_SET_LINE_VALUES_IOCTL;
+  static_assert(sizeof(gpiohandle_data) <= sizeof(out.payload));
+  gpiohandle_data data{};
+  const std::uint32_t physical = impl_->safe_mask ^ impl_->invert_mask;
+  for (std::size_t i = 0; i < impl_->values.size(); ++i) data.values[i] = (physical >> i) & 1U;
+  std::memcpy(out.payload.data(), &data, sizeof data);
+  out.length = sizeof data;
+  return true;
 }
 
 std::string GpioOutputBank::chip_name() const {

@@ -34,6 +34,8 @@ class GpioOutputBank final : public DigitalOutputBank {
   int write(std::uint32_t mask) noexcept override;
   void force_safe() noexcept override;
   std::uint32_t safe_mask() const noexcept override;
+  // GPIOHANDLE_SET_LINE_VALUES on the line handle libgpiod holds, with the safe values.
+  bool emergency_write(EmergencyWrite& out) const noexcept override;
 
   // The chip the lines were found on (e.g. "gpiochip1") and their offsets, for diagnostics.
   std::string chip_name() const;

@@ -135,4 +135,18 @@ void IioAnalogOutput::force_safe() noexcept {
   write(config_.safe_volts);
 }
 
+bool IioAnalogOutput::emergency_write(EmergencyWrite& out) const noexcept {
+  const long raw =
+      std::clamp(std::lround(config_.safe_volts * 1000.0 / scale_mv_), 0L, config_.max_raw);
+  char buffer[32];
+  const int len = std::snprintf(buffer, sizeof(buffer), "%ld\n", raw);
+  if (raw_fd_ < 0 || len <= 0) return false;
+  out = EmergencyWrite{};
+  out.kind = EmergencyWrite::Kind::kPwrite;
+  out.fd = raw_fd_;
+  std::copy(buffer, buffer + len, out.payload.begin());
+  out.length = static_cast<std::size_t>(len);
+  return true;
+}
+
 }  // namespace weedspray::io::hw

@@ -62,6 +62,7 @@ class IioAnalogOutput final : public AnalogOutput {
   int write(double volts) noexcept override;
   void force_safe() noexcept override;
   double full_scale_volts() const noexcept override { return config_.full_scale_volts; }
+  bool emergency_write(EmergencyWrite& out) const noexcept override;
   std::uint64_t error_count() const noexcept override { return errors_; }
 
  private:

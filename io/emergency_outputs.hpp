@@ -1,0 +1,45 @@
+// Fail-safe writes for the exits that run no normal code: a fatal signal (the systemd
+// watchdog's SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL) or std::terminate (an exception that
+// escaped a thread or a C callback). Each output device registers, at start-up, one write that
+// puts it in its safe state as a single syscall on a file descriptor it already holds (a GPIO
+// line handle's SET_LINE_VALUES ioctl, a pwrite of a sysfs attribute): the handler then runs
+// only async-signal-safe calls - no allocation, no locks, no library - and re-raises the signal
+// so the process still dies of it (core dump, systemd's Restart=on-failure, the exit status).
+// kill -9 and power loss run nothing in the process: ExecStopPost (weedsprayd --safe-outputs)
+// and the optional heartbeat relay cover those.
+// Hand-written because it must run inside a signal handler: fixed storage, no allocation.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+namespace weedspray::io {
+
+struct EmergencyWrite {
+  enum class Kind : std::uint8_t { kIoctl, kPwrite };
+  Kind kind = Kind::kPwrite;
+  int fd = -1;
+  unsigned long request = 0;  // kIoctl: the request number; the payload is its argument
+  std::array<unsigned char, 64> payload{};
+  std::size_t length = 0;  // kPwrite: bytes written at offset 0
+};
+
+class EmergencyOutputs {
+ public:
+  static constexpr std::size_t kCapacity = 16;
+  // Start-up only (not thread-safe against trigger()). False when full.
+  static bool add(const EmergencyWrite& write) noexcept;
+  // Forgets every write (their descriptors are about to close).
+  static void clear() noexcept;
+  static std::size_t size() noexcept;
+  // Performs every write, each retried once on failure; returns how many still failed.
+  // Async-signal-safe.
+  static int trigger() noexcept;
+};
+
+// Installs the handlers (SA_ONSTACK on an alternate stack, so a stack overflow's SIGSEGV is
+// handled too) and a std::terminate handler that triggers, logs nothing and aborts.
+void install_fatal_exit_handlers() noexcept;
+
+}  // namespace weedspray::io

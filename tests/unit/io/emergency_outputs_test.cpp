@@ -1,0 +1,119 @@
+// The fatal-exit path: a child process registers a file-backed safe write (the same pwrite a
+// sysfs DAC attribute gets), "opens a valve" by writing another value, then dies of a fatal
+// signal or std::terminate. The file must hold the safe value afterwards, and the child must
+// still die of the signal (re-raised), so systemd sees the crash.
+#include "io/emergency_outputs.hpp"
+
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+namespace weedspray::io {
+namespace {
+
+std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+enum class Death { kSignal, kEscapedException, kNullDereference };
+
+// Runs `die` in a child with the handlers installed; returns the child's wait status.
+int run_child(const std::filesystem::path& file, Death how, int signal, bool armed) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (::pwrite(fd, "OPEN\n", 5, 0) != 5) ::_exit(90);
+    if (armed) {
+      EmergencyWrite safe;
+      safe.kind = EmergencyWrite::Kind::kPwrite;
+      safe.fd = fd;
+      std::memcpy(safe.payload.data(), "SAFE\n", 5);
+      safe.length = 5;
+      EmergencyOutputs::add(safe);
+    }
+    install_fatal_exit_handlers();
+    switch (how) {
+      case Death::kSignal:
+        ::raise(signal);
+        break;
+      case Death::kEscapedException:
+        // An exception leaving a thread's function calls std::terminate.
+        std::thread([] { throw std::runtime_error("escaped"); }).join();
+        break;
+      case Death::kNullDereference: {
+        volatile int* volatile nowhere = nullptr;
+        *nowhere = 1;
+        break;
+      }
+    }
+    ::_exit(91);  // not reached when the death came
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return status;
+}
+
+class FatalExit : public ::testing::TestWithParam<int> {};
+
+TEST_P(FatalExit, WritesTheSafeValueAndDiesOfTheSameSignal) {
+  const auto file = std::filesystem::temp_directory_path() /
+                    ("weedspray_emergency_" + std::to_string(GetParam()));
+  const int status = run_child(file, Death::kSignal, GetParam(), true);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "status " << status;
+  EXPECT_EQ(WTERMSIG(status), GetParam());
+  EXPECT_EQ(read_file(file), "SAFE\n");
+  // Without the registered write the "valve" stays as it was: the check above can fail.
+  const int unarmed = run_child(file, Death::kSignal, GetParam(), false);
+  EXPECT_TRUE(WIFSIGNALED(unarmed));
+  EXPECT_EQ(read_file(file), "OPEN\n");
+  std::filesystem::remove(file);
+}
+
+INSTANTIATE_TEST_SUITE_P(EverySignal, FatalExit,
+                         ::testing::Values(SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL));
+
+TEST(FatalExit, AnExceptionEscapingAThreadWritesSafeAndAborts) {
+  const auto file = std::filesystem::temp_directory_path() / "weedspray_emergency_terminate";
+  const int status = run_child(file, Death::kEscapedException, 0, true);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  EXPECT_EQ(WTERMSIG(status), SIGABRT);
+  EXPECT_EQ(read_file(file), "SAFE\n");
+  std::filesystem::remove(file);
+}
+
+TEST(FatalExit, ARealSegfaultWritesSafe) {
+  const auto file = std::filesystem::temp_directory_path() / "weedspray_emergency_segv";
+  const int status = run_child(file, Death::kNullDereference, 0, true);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  EXPECT_EQ(WTERMSIG(status), SIGSEGV);
+  EXPECT_EQ(read_file(file), "SAFE\n");
+  std::filesystem::remove(file);
+}
+
+TEST(EmergencyOutputs, CapacityIsBoundedAndClearForgets) {
+  EmergencyOutputs::clear();
+  EmergencyWrite w;
+  for (std::size_t i = 0; i < EmergencyOutputs::kCapacity; ++i)
+    EXPECT_TRUE(EmergencyOutputs::add(w));
+  EXPECT_FALSE(EmergencyOutputs::add(w));
+  EXPECT_EQ(EmergencyOutputs::trigger(), static_cast<int>(EmergencyOutputs::kCapacity))
+      << "fd -1 writes fail and are counted";
+  EmergencyOutputs::clear();
+  EXPECT_EQ(EmergencyOutputs::size(), 0U);
+}
+
+}  // namespace
+}  // namespace weedspray::io
