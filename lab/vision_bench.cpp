@@ -1,6 +1,6 @@
 // bench-vision: time per 1280x800 BGR frame of the default pipeline, against a straightforward
 // OpenCV-primitives version of the same pipeline (cv::transform, cv::threshold with Otsu,
-// cv::countNonZero per zone).
+// cv::countNonZero per zone); with --pipeline, of a weed source (inter_row, dnn, hybrid).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -17,6 +17,8 @@
 
 #include "lab/vision_dataset.hpp"
 #include "lab/vision_tools.hpp"
+#include "lab/weed_eval_command.hpp"
+#include "lab/weed_model.hpp"
 #include "vision/pipeline.hpp"
 
 namespace weedspray::lab {
@@ -27,6 +29,9 @@ constexpr int kFrameHeight = 800;
 
 struct BenchOptions {
   std::string image;
+  std::string pipeline = "vegetation";
+  std::string model;
+  int crop_margin_px = kDefaultCropMarginPx;
   int frames = 500;
   int warmup = 20;
   bool json = false;
@@ -146,32 +151,60 @@ int run_bench(const BenchOptions& options) {
   vision::PipelineConfig config = vision::default_pipeline_config();
   config.rows = 2;  // the wheat paper's 2 x 4 zone grid
   config.cols = 4;
-  vision::Pipeline pipeline(config);
+  config.weed_source = parse_weed_source_option("--pipeline", options.pipeline);
+  config.crop_margin_px = options.crop_margin_px;
+  WeedModel model;
+  if (!options.model.empty()) {
+    model = read_weed_model(options.model);
+    config.dnn = model.spec;
+  } else if (vision::needs_model(config.weed_source)) {
+    throw std::runtime_error("--pipeline " + options.pipeline + " needs --model FILE");
+  }
+  vision::Pipeline pipeline(config, model.onnx);
   const vision::ImageView view{frame.data, frame.cols, frame.rows, frame.step[0],
                                vision::PixelFormat::kBgr24};
   const Timing ours = time_frames(options.warmup, options.frames, [&] { pipeline.process(view); });
+  // The OpenCV baseline is the vegetation pipeline's; the weed sources have none.
+  const bool vegetation = config.weed_source == vision::WeedSource::kVegetation;
   OpenCvBaseline baseline{config, {}, {}, {}};
-  const Timing opencv = time_frames(options.warmup, options.frames, [&] { baseline.run(frame); });
+  const Timing opencv =
+      vegetation ? time_frames(options.warmup, options.frames, [&] { baseline.run(frame); })
+                 : Timing{};
   const vision::FrameResult& result = pipeline.process(view);
+  if (!pipeline.last_frame_ok()) throw std::runtime_error(pipeline.last_error());
+  const std::string name(to_string(config.weed_source));
   if (options.json) {
     std::printf(
-        "{\"frame\": \"%dx%d\", \"pipeline_ms_median\": %.4f, \"pipeline_ms_p99\": %.4f, "
-        "\"opencv_baseline_ms_median\": %.4f}\n",
-        kFrameWidth, kFrameHeight, ours.median_ms, ours.p99_ms, opencv.median_ms);
+        "{\"frame\": \"%dx%d\", \"pipeline\": \"%s\", \"threads\": 1, "
+        "\"pipeline_ms_median\": %.4f, \"pipeline_ms_p99\": %.4f",
+        kFrameWidth, kFrameHeight, name.c_str(), ours.median_ms, ours.p99_ms);
+    if (vision::needs_model(config.weed_source)) {
+      std::printf(", \"model_input\": \"%dx%d\"", config.dnn.input_width, config.dnn.input_height);
+    }
+    if (vegetation) std::printf(", \"opencv_baseline_ms_median\": %.4f", opencv.median_ms);
+    std::printf("}\n");
     return 0;
   }
   std::printf(
-      "frame %dx%d BGR from %s\nindex %s, threshold %s, %dx%d zones, %d frames after %d warm-up\n",
+      "frame %dx%d BGR from %s\nindex %s, threshold %s, %dx%d zones, weed source %s, %d frames "
+      "after %d warm-up, one thread\n",
       kFrameWidth, kFrameHeight, source.c_str(), std::string(to_string(config.index)).c_str(),
-      std::string(to_string(config.threshold)).c_str(), config.rows, config.cols, options.frames,
-      options.warmup);
+      std::string(to_string(config.threshold)).c_str(), config.rows, config.cols, name.c_str(),
+      options.frames, options.warmup);
+  if (vision::needs_model(config.weed_source)) {
+    std::printf("model %s at %dx%d%s\n", options.model.c_str(), config.dnn.input_width,
+                config.dnn.input_height,
+                model.spec_from_json ? "" : " (no .json beside it: default spec)");
+  }
   std::printf(
       "weedspray pipeline: median %.3f ms, p99 %.3f ms, thread CPU median %.3f ms "
       "(threshold %d, vegetation %.1f%%)\n",
       ours.median_ms, ours.p99_ms, ours.cpu_median_ms, result.threshold,
       100.0 * result.vegetation_fraction);
-  std::printf("OpenCV baseline:    median %.3f ms, p99 %.3f ms, thread CPU median %.3f ms\n",
-              opencv.median_ms, opencv.p99_ms, opencv.cpu_median_ms);
+  if (vegetation) {
+    std::printf("OpenCV baseline:    median %.3f ms, p99 %.3f ms, thread CPU median %.3f ms\n",
+                opencv.median_ms, opencv.p99_ms, opencv.cpu_median_ms);
+  }
   return 0;
 }
 
@@ -180,7 +213,19 @@ int run_bench(const BenchOptions& options) {
 void add_bench_vision_command(CLI::App& app) {
   auto options = std::make_shared<BenchOptions>();
   CLI::App* bench = app.add_subcommand(
-      "bench-vision", "Time the default vision pipeline on 1280x800 frames vs an OpenCV baseline");
+      "bench-vision",
+      "Time a vision pipeline on 1280x800 frames, one thread (the default one vs an OpenCV "
+      "baseline, or a weed source)");
+  bench
+      ->add_option("--pipeline", options->pipeline,
+                   "Weed source: vegetation (the default pipeline), inter_row, dnn, hybrid")
+      ->capture_default_str();
+  bench
+      ->add_option("--model", options->model,
+                   "ONNX weed model for dnn and hybrid (spec from FILE.json)")
+      ->check(CLI::ExistingFile);
+  bench->add_option("--crop-margin-px", options->crop_margin_px, "hybrid: crop margin in pixels")
+      ->capture_default_str();
   bench
       ->add_option("--image", options->image,
                    "Field image scaled to 1280x800 (default: the first image of "

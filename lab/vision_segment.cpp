@@ -1,5 +1,5 @@
-// segment: threshold, zone densities and density levels of field images, with an optional
-// overlay PNG showing the mask, the zone grid and each zone's density.
+// segment: threshold, zone weed (and crop) densities and density levels of field images, with
+// an optional overlay PNG showing crop and weed, the zone grid and each zone's weed density.
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -12,6 +12,9 @@
 
 #include "lab/vision_dataset.hpp"
 #include "lab/vision_tools.hpp"
+#include "lab/weed_eval.hpp"
+#include "lab/weed_eval_command.hpp"
+#include "lab/weed_model.hpp"
 #include "vision/pipeline.hpp"
 
 namespace weedspray::lab {
@@ -23,6 +26,9 @@ struct SegmentOptions {
   std::string threshold;
   std::string grid = "1x4";
   std::string overlay;
+  std::string weed_source = "vegetation";
+  std::string model;
+  int crop_margin_px = kDefaultCropMarginPx;
   bool json = false;
 };
 
@@ -32,8 +38,16 @@ std::string join_names(std::span<const std::string_view> names) {
   return joined;
 }
 
-vision::PipelineConfig config_from(const SegmentOptions& options) {
+vision::PipelineConfig config_from(const SegmentOptions& options, WeedModel& model) {
   vision::PipelineConfig config = vision::default_pipeline_config();
+  config.weed_source = parse_weed_source_option("--weed-source", options.weed_source);
+  config.crop_margin_px = options.crop_margin_px;
+  if (!options.model.empty()) {
+    model = read_weed_model(options.model);
+    config.dnn = model.spec;
+  } else if (vision::needs_model(config.weed_source)) {
+    throw std::runtime_error("--weed-source " + options.weed_source + " needs --model FILE");
+  }
   if (!options.index.empty()) {
     const auto index = vision::parse_vegetation_index(options.index);
     if (!index) {
@@ -50,14 +64,7 @@ vision::PipelineConfig config_from(const SegmentOptions& options) {
     }
     config.threshold = *method;
   }
-  int rows = 0, cols = 0;
-  char separator = 0, extra = 0;
-  if (std::sscanf(options.grid.c_str(), "%d%c%d%c", &rows, &separator, &cols, &extra) != 3 ||
-      (separator != 'x' && separator != 'X')) {
-    throw std::runtime_error("--grid " + options.grid + ": expected ROWSxCOLS, e.g. 2x4");
-  }
-  config.rows = rows;
-  config.cols = cols;
+  parse_grid_option("--grid", options.grid, config.rows, config.cols);
   config.inter_row_map = true;
   try {
     vision::validate(config);
@@ -77,18 +84,17 @@ std::filesystem::path overlay_path(const std::string& out, const std::filesystem
   return path;
 }
 
-void write_overlay(const cv::Mat& bgr, const vision::Pipeline& pipeline,
+void write_overlay(const cv::Mat& bgr, vision::Pipeline& pipeline,
                    const vision::FrameResult& result, const std::filesystem::path& path) {
   cv::Mat overlay = bgr.clone();
   const vision::PixelRect region = pipeline.region();
-  const vision::ImageView index = pipeline.index_image();
-  const cv::Mat index_mat(index.height, index.width, CV_8UC1, const_cast<std::uint8_t*>(index.data),
-                          index.stride);
-  const cv::Mat plant = index_mat > result.threshold;
+  const cv::Mat classes = class_map_at_region_size(pipeline);
   cv::Mat roi = overlay(cv::Rect(region.x, region.y, region.width, region.height));
-  // Plants in magenta (never seen in a field), soil dimmed so the mask reads at a glance.
+  // Crop in blue, weed in red (colours never seen in a field), soil dimmed so the classes
+  // read at a glance; with the vegetation source every plant is weed.
   roi = roi * 0.6;
-  roi.setTo(cv::Scalar(255, 0, 255), plant);
+  roi.setTo(cv::Scalar(255, 0, 0), classes == vision::kClassCrop);
+  roi.setTo(cv::Scalar(0, 0, 255), classes == vision::kClassWeed);
   const double font_scale = std::max(0.4, region.width / 900.0);
   const int thickness = std::max(1, region.width / 500);
   for (int row = 0; row < result.rows; ++row) {
@@ -114,8 +120,9 @@ void write_overlay(const cv::Mat& bgr, const vision::Pipeline& pipeline,
 }
 
 int run_segment(const SegmentOptions& options) {
-  const vision::PipelineConfig config = config_from(options);
-  vision::Pipeline pipeline(config);
+  WeedModel model;
+  const vision::PipelineConfig config = config_from(options, model);
+  vision::Pipeline pipeline(config, model.onnx);
   const bool several = options.images.size() > 1;
   if (options.json) std::printf("{\"images\": [");
   for (std::size_t i = 0; i < options.images.size(); ++i) {
@@ -124,7 +131,10 @@ int run_segment(const SegmentOptions& options) {
     const vision::FrameResult& result =
         pipeline.process({bgr.data, bgr.cols, bgr.rows, bgr.step[0], vision::PixelFormat::kBgr24});
     if (!pipeline.last_frame_ok()) {
-      throw std::runtime_error(path.string() + ": image too small for a " + options.grid + " grid");
+      throw std::runtime_error(path.string() + ": " +
+                               (pipeline.last_error().empty()
+                                    ? "image too small for a " + options.grid + " grid"
+                                    : pipeline.last_error()));
     }
     std::string overlay;
     if (!options.overlay.empty()) {
@@ -133,17 +143,22 @@ int run_segment(const SegmentOptions& options) {
     }
     if (options.json) {
       std::printf(
-          "%s{\"file\": \"%s\", \"index\": \"%s\", \"threshold_method\": \"%s\", "
+          "%s{\"file\": \"%s\", \"weed_source\": \"%s\", \"index\": \"%s\", "
+          "\"threshold_method\": \"%s\", "
           "\"threshold\": %d, \"bimodal\": %s, \"vegetation_fraction\": %.5f, "
           "\"rows\": %d, \"cols\": %d, \"zones\": [",
-          i == 0 ? "" : ", ", path.string().c_str(), std::string(to_string(config.index)).c_str(),
+          i == 0 ? "" : ", ", path.string().c_str(),
+          std::string(to_string(config.weed_source)).c_str(),
+          std::string(to_string(config.index)).c_str(),
           std::string(to_string(config.threshold)).c_str(), result.threshold,
           result.bimodal ? "true" : "false", result.vegetation_fraction, result.rows, result.cols);
       for (int zone = 0; zone < result.rows * result.cols; ++zone) {
-        std::printf("%s{\"row\": %d, \"col\": %d, \"density\": %.5f, \"level\": \"%s\"}",
-                    zone == 0 ? "" : ", ", zone / result.cols, zone % result.cols,
-                    result.zone_density[zone],
-                    std::string(to_string(result.zone_level[zone])).c_str());
+        std::printf(
+            "%s{\"row\": %d, \"col\": %d, \"density\": %.5f, \"crop_density\": %.5f, "
+            "\"level\": \"%s\"}",
+            zone == 0 ? "" : ", ", zone / result.cols, zone % result.cols,
+            result.zone_density[zone], result.crop_density[zone],
+            std::string(to_string(result.zone_level[zone])).c_str());
       }
       std::printf("], \"inter_row\": [");
       const auto intervals = result.inter_row.view();
@@ -158,7 +173,8 @@ int run_segment(const SegmentOptions& options) {
                   overlay.empty() ? "" : "\"");
       continue;
     }
-    std::printf("%s: index %s, threshold %s = %d (%s), vegetation %.2f%%\n", path.string().c_str(),
+    std::printf("%s: weed source %s, index %s, threshold %s = %d (%s), vegetation %.2f%%\n",
+                path.string().c_str(), std::string(to_string(config.weed_source)).c_str(),
                 std::string(to_string(config.index)).c_str(),
                 std::string(to_string(config.threshold)).c_str(), result.threshold,
                 result.bimodal ? "bimodal" : "not bimodal: fixed level",
@@ -169,6 +185,9 @@ int run_segment(const SegmentOptions& options) {
         const int zone = row * result.cols + col;
         std::printf("  %6.2f%% %-11s", 100.0 * result.zone_density[zone],
                     std::string(to_string(result.zone_level[zone])).c_str());
+        if (config.weed_source != vision::WeedSource::kVegetation) {
+          std::printf("(crop %5.2f%%)", 100.0 * result.crop_density[zone]);
+        }
       }
       std::printf("\n");
     }
@@ -201,8 +220,18 @@ void add_segment_command(CLI::App& app) {
                           " (default: the pipeline default)");
   segment->add_option("--grid", options->grid, "Zone grid ROWSxCOLS")->capture_default_str();
   segment->add_option("--overlay", options->overlay,
-                      "Write the mask, grid and densities to this PNG (OUT_<stem>.png for "
-                      "several images)");
+                      "Write crop (blue), weed (red), the grid and weed densities to this PNG "
+                      "(OUT_<stem>.png for several images)");
+  segment
+      ->add_option("--weed-source", options->weed_source,
+                   "What counts as weed: vegetation, inter_row, dnn, hybrid")
+      ->capture_default_str();
+  segment
+      ->add_option("--model", options->model,
+                   "ONNX weed model for dnn and hybrid (spec from FILE.json)")
+      ->check(CLI::ExistingFile);
+  segment->add_option("--crop-margin-px", options->crop_margin_px, "hybrid: crop margin in pixels")
+      ->capture_default_str();
   segment->add_flag("--json", options->json, "Print one JSON object");
   segment->callback([options] {
     try {
