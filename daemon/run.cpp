@@ -499,12 +499,15 @@ class Daemon final : public CommandHandler {
   // The watchdog is fed only while the real-time loops make progress.
   void heartbeat(Nanos now, const PressureStatus& pressure, const ControlStatus& control) {
     if (watchdog_interval_.count() == 0 || now - last_watchdog_ < watchdog_interval_) return;
-    if (pressure.cycles == heartbeat_pressure_ || control.cycles == heartbeat_control_) {
+    const std::uint64_t valve_wakes = sprayer_->pwm().wakes;
+    if (pressure.cycles == heartbeat_pressure_ || control.cycles == heartbeat_control_ ||
+        valve_wakes == heartbeat_valves_) {
       spdlog::error("real-time loops stalled: watchdog not fed");
       return;
     }
     heartbeat_pressure_ = pressure.cycles;
     heartbeat_control_ = control.cycles;
+    heartbeat_valves_ = valve_wakes;
     last_watchdog_ = now;
     sd_notify(0, "WATCHDOG=1");
   }
@@ -642,6 +645,7 @@ class Daemon final : public CommandHandler {
   Nanos last_watchdog_{};
   std::uint64_t heartbeat_pressure_ = 0;
   std::uint64_t heartbeat_control_ = 0;
+  std::uint64_t heartbeat_valves_ = 0;
   std::vector<float> latencies_;
   std::size_t latency_next_ = 0;
   double last_status_s_ = -1e9;

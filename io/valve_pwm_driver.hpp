@@ -54,6 +54,7 @@ struct ValvePwmDriverConfig {
 };
 
 struct ValvePwmStats {
+  std::uint64_t wakes = 0;  // loop iterations: advances at least every max_sleep while alive
   std::uint64_t edges_written = 0;
   std::uint64_t late_edges = 0;     // written > late_threshold after their time
   std::uint64_t missed_edges = 0;   // written > miss_tolerance after their time
@@ -89,6 +90,7 @@ class ValvePwmDriver {
     bool have_command = false;
 
     while (!stop.stop_requested()) {
+      ++stats_.wakes;
       std::chrono::nanoseconds now = clock_.now();
       const std::uint64_t version = commands_.version();
       if (version != seen_version) {
@@ -129,6 +131,7 @@ class ValvePwmDriver {
       const std::chrono::nanoseconds wake =
           std::min({upcoming.time, expires_at, now + config_.max_sleep});
       if (wake > now) {
+        publish_stats();  // wakes advance even when no edge is due (the watchdog reads them)
         clock_.sleep_until(wake);
         continue;  // re-check stop, commands and expiry before the edge
       }
