@@ -17,4 +17,8 @@ std::uint64_t histogram_total(const Histogram& histogram) {
   return histogram_range(histogram, 0, 255).count;
 }
 
+int histogram_peak(const Histogram& histogram) {
+  return static_cast<int>(std::max_element(histogram.begin(), histogram.end()) - histogram.begin());
+}
+
 }  // namespace weedspray::vision

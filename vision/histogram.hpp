@@ -19,4 +19,7 @@ struct HistogramRange {
 HistogramRange histogram_range(const Histogram& histogram, int first, int last);
 std::uint64_t histogram_total(const Histogram& histogram);
 
+// The most populated level (the lowest one on a tie); 0 for an empty histogram.
+int histogram_peak(const Histogram& histogram);
+
 }  // namespace weedspray::vision

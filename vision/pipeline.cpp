@@ -49,6 +49,9 @@ PixelRect region_of(const ImageView& frame, const RegionOfInterest& roi) {
 PipelineConfig default_pipeline_config() {
   // Measured on data/ews-train (weedspray-lab vision-eval): CIVE beats the UGV paper's
   // normalised ExG, whose best possible per-image threshold reaches only about 0.57 IoU there.
+  // Frames that do not look bimodal keep Otsu's split unless it cuts the soil peak
+  // (UnimodalPolicy::kClearOfPeak, CIVE's index default): chosen on ews-train and checked on
+  // the peanut photos, where CIVE's fixed level sits inside some frames' soil peak.
   return PipelineConfig{};
 }
 
@@ -73,6 +76,7 @@ void validate(const PipelineConfig& config) {
   require(params.fixed_threshold == ThresholdParams::kIndexDefault ||
               (params.fixed_threshold >= 0 && params.fixed_threshold <= 255),
           "fixed_threshold must lie in [0, 255] (or be kIndexDefault)");
+  require(params.peak_margin >= 0 && params.peak_margin <= 255, "peak_margin must lie in [0, 255]");
   require(params.pso_particles >= 1 && params.pso_particles <= 64,
           "pso_particles must lie in [1, 64]");
   require(params.pso_iterations >= 1, "pso_iterations must be >= 1");
@@ -100,6 +104,9 @@ Pipeline::Pipeline(const PipelineConfig& config, std::span<const std::uint8_t> m
   }
   if (config_.threshold_params.fixed_threshold == ThresholdParams::kIndexDefault) {
     config_.threshold_params.fixed_threshold = default_fixed_threshold(config_.index);
+  }
+  if (config_.threshold_params.unimodal == UnimodalPolicy::kIndexDefault) {
+    config_.threshold_params.unimodal = default_unimodal_policy(config_.index);
   }
   result_.rows = config_.rows;
   result_.cols = config_.cols;

@@ -45,8 +45,9 @@ struct PipelineConfig {
 
 // The project's default: the index and threshold the daemon uses unless configured otherwise
 // (chosen by measured IoU on data/ews-train; see weedspray-lab vision-eval). CIVE with Otsu
-// where the histogram is bimodal and CIVE's fixed level where it is not; the UGV paper's
-// choice is index = kExgNormalized, threshold = kFit.
+// where the histogram is bimodal; where it is not, Otsu's split unless it cuts the soil peak
+// (UnimodalPolicy::kClearOfPeak, checked on data/peanut too); the UGV paper's choice is
+// index = kExgNormalized, threshold = kFit.
 PipelineConfig default_pipeline_config();
 
 // Throws std::invalid_argument naming the offending field (start-up only).

@@ -223,6 +223,13 @@ int ipso_threshold(const Histogram& histogram, Extent extent, const ThresholdPar
   return best;
 }
 
+// UnimodalPolicy::kClearOfPeak (see threshold.hpp).
+int clear_of_peak(const Histogram& histogram, int otsu, int fixed, int margin) {
+  const int peak = histogram_peak(histogram);
+  if (peak > fixed + margin) return fixed;  // the dominant colour is green: mostly plants
+  return std::max(otsu, std::min(peak + margin, 255));
+}
+
 }  // namespace
 
 std::string_view to_string(ThresholdMethod method) {
@@ -241,6 +248,16 @@ std::span<const ThresholdMethod> all_threshold_methods() {
 }
 std::span<const std::string_view> threshold_method_names() {
   return kMethodNames;
+}
+
+UnimodalPolicy default_unimodal_policy(VegetationIndex index) {
+  switch (index) {
+    case VegetationIndex::kCive:
+    case VegetationIndex::kExgRaw:
+      return UnimodalPolicy::kClearOfPeak;
+    default:
+      return UnimodalPolicy::kFixedScale;
+  }
 }
 
 double between_class_variance(const Histogram& histogram, int t) {
@@ -310,7 +327,19 @@ ThresholdResult compute_threshold(const Histogram& histogram, ThresholdMethod me
   }
   const bool bimodal = split.has_value() && looks_bimodal(histogram, *split, params);
   if (bimodal) return {*split, true};
-  if (params.unimodal == UnimodalPolicy::kKeepSplit && split.has_value()) return {*split, false};
+  switch (params.unimodal) {
+    case UnimodalPolicy::kClearOfPeak: {
+      // Only Otsu's split is judged: other methods' splits of a unimodal histogram are not
+      // comparable (HBT's valley can lie in the far tail, above every plant).
+      const int otsu = method == ThresholdMethod::kOtsu ? *split : otsu_threshold(histogram);
+      return {clear_of_peak(histogram, otsu, fixed, params.peak_margin), false};
+    }
+    case UnimodalPolicy::kKeepSplit:
+      return {split.value_or(fixed), false};
+    case UnimodalPolicy::kIndexDefault:
+    case UnimodalPolicy::kFixedScale:
+      break;
+  }
   return {fixed, false};
 }
 

@@ -90,6 +90,33 @@ TEST(Pipeline, RegionOfInterestRestrictsTheZones) {
   EXPECT_DOUBLE_EQ(result.density(0, 1), 0.0);
 }
 
+// A soil greener than CIVE's fixed level (131), as another camera may see it: the default
+// pipeline judges the frame by its own soil peak and finds no plant; the fixed scale would
+// call most of the soil plant.
+TEST(Pipeline, DefaultJudgesAUnimodalFrameByItsOwnSoilPeak) {
+  constexpr test::Bgr kSoil131{60, 91, 100};  // CIVE levels 131, 132, 133
+  constexpr test::Bgr kSoil132{60, 93, 100};
+  constexpr test::Bgr kSoil133{60, 95, 100};
+  BgrFrame frame(40, 20, kSoil132);
+  for (int y = 0; y < 20; ++y) {
+    for (int x = 0; x < 40; x += 4) frame.set(x, y, y % 2 ? kSoil131 : kSoil133);
+  }
+  PipelineConfig config = default_pipeline_config();
+  config.cols = 1;
+  Pipeline pipeline(config);
+  const FrameResult& result = pipeline.process(frame.view());
+  ASSERT_TRUE(pipeline.last_frame_ok());
+  EXPECT_FALSE(result.bimodal);
+  EXPECT_EQ(histogram_peak(pipeline.histogram()), 132);
+  EXPECT_EQ(result.threshold, 132 + config.threshold_params.peak_margin);
+  EXPECT_DOUBLE_EQ(result.vegetation_fraction, 0.0);
+
+  config.threshold_params.unimodal = UnimodalPolicy::kFixedScale;
+  Pipeline fixed_scale(config);
+  EXPECT_EQ(fixed_scale.process(frame.view()).threshold, 131);
+  EXPECT_DOUBLE_EQ(fixed_scale.process(frame.view()).vegetation_fraction, 0.875);  // all but 131
+}
+
 // Degenerate frames through the whole pipeline, with every index and threshold method.
 TEST(Pipeline, DegenerateFramesGiveSaneDensities) {
   struct Case {

@@ -175,6 +175,102 @@ TEST(LooksBimodal, SparsePlantsOnSoilAreBimodal) {
   EXPECT_LT(result.threshold, 150);
 }
 
+// --- UnimodalPolicy::kClearOfPeak (CIVE's default) on histograms shaped like the field sets'
+// CIVE histograms: soil a narrow peak (sigma about 1.5-2.5 levels) near the neutral level.
+
+ThresholdParams clear_of_peak(int fixed_level) {
+  ThresholdParams params = params_with_fixed(fixed_level);
+  params.unimodal = UnimodalPolicy::kClearOfPeak;
+  return params;
+}
+
+TEST(ClearOfPeak, IsTheDefaultOfCiveAndRawExgOnly) {
+  EXPECT_EQ(default_unimodal_policy(VegetationIndex::kCive), UnimodalPolicy::kClearOfPeak);
+  EXPECT_EQ(default_unimodal_policy(VegetationIndex::kExgRaw), UnimodalPolicy::kClearOfPeak);
+  EXPECT_EQ(default_unimodal_policy(VegetationIndex::kExgNormalized), UnimodalPolicy::kFixedScale);
+  EXPECT_EQ(ThresholdParams{}.unimodal, UnimodalPolicy::kIndexDefault);
+}
+
+double share_above(const Histogram& histogram, int threshold) {
+  return static_cast<double>(histogram_range(histogram, threshold + 1, 255).count) /
+         histogram_total(histogram);
+}
+
+TEST(ClearOfPeak, SplitThroughTheSoilPeakMovesClearOfIt) {
+  Histogram histogram{};
+  add_bump(histogram, 127, 2, 97000);  // soil
+  add_bump(histogram, 131, 2, 3000);   // a few pale seedlings, inside the soil's flank
+  const ThresholdParams params = clear_of_peak(131);
+  ASSERT_EQ(histogram_peak(histogram), 127);
+  ThresholdParams keep = params;
+  keep.unimodal = UnimodalPolicy::kKeepSplit;
+  const ThresholdResult split = compute_threshold(histogram, ThresholdMethod::kOtsu, keep);
+  ASSERT_FALSE(split.bimodal);
+  ASSERT_LT(split.threshold, 130);  // Otsu halves the soil peak
+  const ThresholdResult result = compute_threshold(histogram, ThresholdMethod::kOtsu, params);
+  EXPECT_FALSE(result.bimodal);
+  EXPECT_EQ(result.threshold, 127 + params.peak_margin);
+}
+
+TEST(ClearOfPeak, PlausibleSplitIsKept) {
+  Histogram histogram{};
+  add_bump(histogram, 128, 1.5, 94000);  // soil
+  add_bump(histogram, 136, 6, 6000);     // plants, spread over many levels
+  const ThresholdParams params = clear_of_peak(131);
+  ThresholdParams keep = params;
+  keep.unimodal = UnimodalPolicy::kKeepSplit;
+  const ThresholdResult split = compute_threshold(histogram, ThresholdMethod::kOtsu, keep);
+  ASSERT_FALSE(split.bimodal);
+  ASSERT_GE(split.threshold, 128 + params.peak_margin);
+  EXPECT_EQ(compute_threshold(histogram, ThresholdMethod::kOtsu, params).threshold,
+            split.threshold);
+}
+
+TEST(ClearOfPeak, FollowsTheSoilOfEachFrame) {
+  // The same seedlings on a soil 4 levels greener (another camera, wet soil): a fixed level
+  // would count much of that soil as plant; the answer moves with the soil peak.
+  const ThresholdParams params = clear_of_peak(131);
+  for (int soil_level : {126, 130}) {
+    Histogram histogram{};
+    add_bump(histogram, soil_level, 1.5, 99000);
+    add_bump(histogram, soil_level + 2, 1.5, 1000);
+    const ThresholdResult result = compute_threshold(histogram, ThresholdMethod::kOtsu, params);
+    EXPECT_FALSE(result.bimodal) << soil_level;
+    EXPECT_EQ(result.threshold, soil_level + params.peak_margin) << soil_level;
+    EXPECT_LT(share_above(histogram, result.threshold), 0.03) << soil_level;
+  }
+}
+
+TEST(ClearOfPeak, BareSoilLeavesFewPixels) {
+  // Bare soil as narrow as the field sets' (sigma 1.5 levels): at most its upper 2-sigma tail
+  // (2.3 %) is plant.
+  Histogram histogram{};
+  add_bump(histogram, 127, 1.5, 100000);
+  for (ThresholdMethod method : all_threshold_methods()) {
+    if (method == ThresholdMethod::kFixed) continue;
+    const ThresholdResult result = compute_threshold(histogram, method, clear_of_peak(131));
+    EXPECT_FALSE(result.bimodal) << to_string(method);
+    EXPECT_LT(share_above(histogram, result.threshold), 0.03) << to_string(method);
+  }
+}
+
+TEST(ClearOfPeak, GreenPeakIsAFullCanopyOnTheFixedScale) {
+  Histogram histogram{};
+  add_bump(histogram, 165, 8, 100000);
+  for (ThresholdMethod method : all_threshold_methods()) {
+    const ThresholdResult result = compute_threshold(histogram, method, clear_of_peak(131));
+    EXPECT_EQ(result.threshold, 131) << to_string(method);  // every pixel above: all plants
+  }
+}
+
+TEST(ClearOfPeak, MarginIsAParameter) {
+  Histogram histogram{};
+  add_bump(histogram, 127, 2, 100000);
+  ThresholdParams params = clear_of_peak(131);
+  params.peak_margin = 5;
+  EXPECT_EQ(compute_threshold(histogram, ThresholdMethod::kOtsu, params).threshold, 132);
+}
+
 }  // namespace
 }  // namespace weedspray::vision
 
