@@ -53,24 +53,30 @@ cv::Rect zone_rect(int row, int col, int rows, int cols, cv::Size size) {
   return {x0, y0, x1 - x0, y1 - y0};
 }
 
-void tally_zones(const cv::Mat& truth, std::span<const double> weed_density, const ZoneRule& rule,
-                 ZoneTally& tally) {
-  for (int row = 0; row < rule.rows; ++row) {
-    for (int col = 0; col < rule.cols; ++col) {
-      const cv::Rect zone = zone_rect(row, col, rule.rows, rule.cols, truth.size());
-      const cv::Mat weed = truth(zone) == 2;
-      const double share = static_cast<double>(cv::countNonZero(weed)) / zone.area();
-      const bool sprayed = would_spray(
-          weed_density[static_cast<std::size_t>(row * rule.cols + col)], rule.decision_threshold);
-      if (share >= rule.weedy_share) {
-        ++tally.weedy;
-        tally.weedy_sprayed += sprayed;
-      } else {
-        ++tally.clean;
-        tally.clean_dry += !sprayed;
-      }
+void add_zone_samples(const cv::Mat& truth, std::span<const double> weed_density, int rows,
+                      int cols, std::vector<ZoneSample>& samples) {
+  for (int row = 0; row < rows; ++row) {
+    for (int col = 0; col < cols; ++col) {
+      const cv::Rect zone = zone_rect(row, col, rows, cols, truth.size());
+      const double share = static_cast<double>(cv::countNonZero(truth(zone) == 2)) / zone.area();
+      samples.push_back({share, weed_density[static_cast<std::size_t>(row * cols + col)]});
     }
   }
+}
+
+ZoneTally tally_zones(std::span<const ZoneSample> samples, const ZoneRule& rule) {
+  ZoneTally tally;
+  for (const ZoneSample& zone : samples) {
+    const bool sprayed = would_spray(zone.weed_density, rule.decision_threshold);
+    if (zone.true_weed_share >= rule.weedy_share) {
+      ++tally.weedy;
+      tally.weedy_sprayed += sprayed;
+    } else {
+      ++tally.clean;
+      tally.clean_dry += !sprayed;
+    }
+  }
+  return tally;
 }
 
 }  // namespace weedspray::lab

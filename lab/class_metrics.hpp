@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -50,10 +51,18 @@ struct ZoneTally {
 
 bool would_spray(double weed_density, double decision_threshold);
 
-// One image: truth (class ids over the zones' region) and the pipeline's weed density per
-// zone (row-major, rows * cols).
-void tally_zones(const cv::Mat& truth, std::span<const double> weed_density, const ZoneRule& rule,
-                 ZoneTally& tally);
+// One zone of one image: its true weed share and the pipeline's weed density.
+struct ZoneSample {
+  double true_weed_share = 0;
+  double weed_density = 0;
+};
+
+// The zones of one image: truth (class ids over the zones' region) and the pipeline's weed
+// density per zone (row-major, rows * cols), appended to `samples`.
+void add_zone_samples(const cv::Mat& truth, std::span<const double> weed_density, int rows,
+                      int cols, std::vector<ZoneSample>& samples);
+
+ZoneTally tally_zones(std::span<const ZoneSample> samples, const ZoneRule& rule);
 
 // Zone (row, col) of a rows x cols grid over a size image, cut as vision::Pipeline cuts it.
 cv::Rect zone_rect(int row, int col, int rows, int cols, cv::Size size);

@@ -124,6 +124,8 @@ void add_vision_commands(CLI::App& app) {
   eval->add_option("--decision-threshold", weeds.decision_threshold,
                    "Weed density at which a zone is sprayed (default: the daemon's "
                    "spray.decision_threshold)");
+  eval->add_flag("--sweep", weeds.sweep,
+                 "With --classes: also the zone trade-off over a range of decision thresholds");
   eval->add_option("--weedy-share", weeds.weedy_share,
                    "A zone is weedy when at least this share of it is weed")
       ->capture_default_str();

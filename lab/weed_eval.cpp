@@ -62,13 +62,16 @@ WeedEvalRow evaluate_weed_source(const std::vector<LabelledImage>& images,
         throw std::runtime_error(image.name + ": mask is not class ids 0 soil, 1 crop, 2 weed (" +
                                  error.what() + ")");
       }
-      tally_zones(truth, result.densities(), rule, row.zones);
+      add_zone_samples(truth, result.densities(), rule.rows, rule.cols, row.zone_samples);
     }
   }
   const double n = static_cast<double>(images.size());
   row.ms_per_image /= n;
   row.vegetation_iou /= n;
-  if (class_masks) row.scores = class_scores(confusion);
+  if (class_masks) {
+    row.scores = class_scores(confusion);
+    row.zones = tally_zones(row.zone_samples, rule);
+  }
   return row;
 }
 

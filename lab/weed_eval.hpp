@@ -14,8 +14,9 @@ namespace weedspray::lab {
 
 struct WeedEvalRow {
   vision::WeedSource source{};
-  ClassScores scores;         // with class masks
-  ZoneTally zones;            // with class masks
+  ClassScores scores;                    // with class masks
+  ZoneTally zones;                       // with class masks, at the rule's decision threshold
+  std::vector<ZoneSample> zone_samples;  // with class masks: every zone of every image
   double vegetation_iou = 0;  // mean over images of (crop or weed) against plant (non-zero)
   double ms_per_image = 0;    // Pipeline::process, index to zone densities
 };

@@ -121,6 +121,37 @@ void print_table(const WeedEvalOptions& options, std::size_t images,
   }
 }
 
+// The sprayer's dial: recall and clean zones left dry over decision thresholds.
+void print_sweep(const std::vector<WeedEvalRow>& rows, const ZoneRule& zones) {
+  constexpr double kThresholds[] = {0.0, 0.0005, 0.001, 0.0025, 0.005, 0.01, 0.02, 0.05};
+  constexpr double kRecallTarget = 0.95;
+  std::printf("\nzone trade-off by decision threshold (recall / clean_left_dry)\n%-11s",
+              "weed_source");
+  for (double threshold : kThresholds) std::printf(" %13.4f", threshold);
+  std::printf("   best with recall >= %.2f\n", kRecallTarget);
+  for (const WeedEvalRow& row : rows) {
+    std::printf("%-11s", std::string(to_string(row.source)).c_str());
+    double best_threshold = -1;
+    ZoneTally best;
+    for (double threshold : kThresholds) {
+      ZoneRule rule = zones;
+      rule.decision_threshold = threshold;
+      const ZoneTally tally = tally_zones(row.zone_samples, rule);
+      std::printf("   %.3f/%.3f", tally.recall(), tally.clean_left_dry());
+      if (tally.recall() >= kRecallTarget &&
+          (best_threshold < 0 || tally.clean_left_dry() > best.clean_left_dry())) {
+        best_threshold = threshold;
+        best = tally;
+      }
+    }
+    if (best_threshold < 0) {
+      std::printf("   none\n");
+    } else {
+      std::printf("   %.4f: %.3f/%.3f\n", best_threshold, best.recall(), best.clean_left_dry());
+    }
+  }
+}
+
 }  // namespace
 
 int run_weed_eval(const WeedEvalOptions& options) {
@@ -140,6 +171,7 @@ int run_weed_eval(const WeedEvalOptions& options) {
     print_json(images.size(), rows, setup.zones, options.class_masks);
   } else {
     print_table(options, images.size(), rows, setup);
+    if (options.sweep && options.class_masks) print_sweep(rows, setup.zones);
   }
   return 0;
 }

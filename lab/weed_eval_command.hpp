@@ -18,6 +18,7 @@ struct WeedEvalOptions {
   double weedy_share = 0.005;
   int crop_margin_px = -1;        // < 0: the configuration's, else kDefaultCropMarginPx
   double row_band_fraction = -1;  // < 0: the configuration's, else InterRowRule's default
+  bool sweep = false;             // also the zone trade-off at a range of decision thresholds
   bool json = false;
 };
 

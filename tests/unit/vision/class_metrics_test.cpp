@@ -77,8 +77,12 @@ TEST(ZoneTally, WeedyZonesSprayedAndCleanZonesLeftDry) {
   rule.decision_threshold = 0.02;
   // Sprayed: zones 0 (0.05), 2 (0.02: equal to the threshold sprays); zone 5 (0.019) dry.
   const std::vector<double> density = {0.05, 0.0, 0.02, 0.0, 0.0, 0.019, 0.0, 0.0};
-  ZoneTally tally;
-  tally_zones(truth, density, rule, tally);
+  std::vector<ZoneSample> samples;
+  add_zone_samples(truth, density, rule.rows, rule.cols, samples);
+  ASSERT_EQ(samples.size(), 8u);
+  EXPECT_DOUBLE_EQ(samples[0].true_weed_share, 0.01);
+  EXPECT_DOUBLE_EQ(samples[2].true_weed_share, 0.0);
+  const ZoneTally tally = tally_zones(samples, rule);
   EXPECT_EQ(tally.weedy, 2);
   EXPECT_EQ(tally.weedy_sprayed, 1);
   EXPECT_EQ(tally.clean, 6);
@@ -88,8 +92,7 @@ TEST(ZoneTally, WeedyZonesSprayedAndCleanZonesLeftDry) {
 
   // A zone under the weedy share is clean: 1 px of 100 is not 2 %.
   rule.weedy_share = 0.02;
-  ZoneTally strict;
-  tally_zones(truth, density, rule, strict);
+  const ZoneTally strict = tally_zones(samples, rule);
   EXPECT_EQ(strict.weedy, 0);
   EXPECT_DOUBLE_EQ(strict.recall(), 1.0);
   EXPECT_EQ(strict.clean, 8);

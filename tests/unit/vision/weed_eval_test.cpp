@@ -1,0 +1,84 @@
+// vision-eval --classes end to end on a synthetic labelled field whose answer is known.
+#include "lab/weed_eval.hpp"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+
+namespace weedspray::lab {
+namespace {
+
+// 200x100: soil, two 16-px crop rows (x 32..47, 132..147), a 10x10 weed at x 85..94 (zone 1
+// of a 1x4 grid) and a 4x4 weed at x 180..183 (zone 3); masks hold the class ids.
+LabelledImage synthetic_field() {
+  LabelledImage image;
+  image.name = "synthetic";
+  image.bgr = cv::Mat(100, 200, CV_8UC3, cv::Scalar(70, 100, 130));
+  image.mask = cv::Mat(100, 200, CV_8UC1, cv::Scalar(0));
+  const cv::Scalar plant(40, 150, 60);
+  for (const int x : {32, 132}) {
+    image.bgr(cv::Rect(x, 0, 16, 100)).setTo(plant);
+    image.mask(cv::Rect(x, 0, 16, 100)).setTo(1);
+  }
+  image.bgr(cv::Rect(85, 40, 10, 10)).setTo(plant);
+  image.mask(cv::Rect(85, 40, 10, 10)).setTo(2);
+  image.bgr(cv::Rect(180, 40, 4, 4)).setTo(plant);
+  image.mask(cv::Rect(180, 40, 4, 4)).setTo(2);
+  image.plant = image.mask != 0;
+  return image;
+}
+
+ZoneRule one_row_of_four() {
+  ZoneRule rule;
+  rule.rows = 1;
+  rule.cols = 4;
+  rule.weedy_share = 0.005;        // 25 of 5000 px
+  rule.decision_threshold = 0.01;  // the 10x10 weed (2 %) sprays, the 4x4 (0.32 %) does not
+  return rule;
+}
+
+TEST(WeedEval, InterRowSeparatesRowsFromWeedsExactly) {
+  vision::PipelineConfig config = vision::default_pipeline_config();
+  config.weed_source = vision::WeedSource::kInterRow;
+  const WeedEvalRow row =
+      evaluate_weed_source({synthetic_field()}, config, {}, one_row_of_four(), true);
+  EXPECT_DOUBLE_EQ(row.scores.iou[0], 1.0);
+  EXPECT_DOUBLE_EQ(row.scores.iou[1], 1.0);
+  EXPECT_DOUBLE_EQ(row.scores.iou[2], 1.0);
+  EXPECT_DOUBLE_EQ(row.scores.miou, 1.0);
+  EXPECT_DOUBLE_EQ(row.scores.mpa, 1.0);
+  EXPECT_DOUBLE_EQ(row.vegetation_iou, 1.0);
+  // Zone 1 (2 % weed) is weedy and sprayed; zone 3 (0.32 %) is under the weedy share.
+  EXPECT_EQ(row.zones.weedy, 1);
+  EXPECT_DOUBLE_EQ(row.zones.recall(), 1.0);
+  EXPECT_EQ(row.zones.clean, 3);
+  EXPECT_DOUBLE_EQ(row.zones.clean_left_dry(), 1.0);
+}
+
+TEST(WeedEval, VegetationCallsTheCropWeed) {
+  vision::PipelineConfig config = vision::default_pipeline_config();
+  const WeedEvalRow row =
+      evaluate_weed_source({synthetic_field()}, config, {}, one_row_of_four(), true);
+  const double crop = 2 * 16 * 100;
+  const double weed = 100 + 16;
+  EXPECT_DOUBLE_EQ(row.scores.iou[1], 0.0);
+  EXPECT_DOUBLE_EQ(row.scores.iou[2], weed / (weed + crop));
+  EXPECT_DOUBLE_EQ(row.scores.pixel_accuracy[2], 1.0);
+  EXPECT_DOUBLE_EQ(row.vegetation_iou, 1.0);
+  // The crop rows make zones 0 and 2 sprayed although they hold no weed.
+  EXPECT_DOUBLE_EQ(row.zones.clean_left_dry(), 1.0 / 3.0);
+}
+
+TEST(WeedEval, MasksThatAreNotClassIdsNameTheImage) {
+  LabelledImage image = synthetic_field();
+  image.mask.setTo(255, image.plant);
+  try {
+    evaluate_weed_source({image}, vision::default_pipeline_config(), {}, one_row_of_four(), true);
+    FAIL() << "accepted a 0/255 plant mask as class ids";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("synthetic"), std::string::npos) << error.what();
+  }
+}
+
+}  // namespace
+}  // namespace weedspray::lab
