@@ -6,6 +6,7 @@
 
 #include <vector>
 
+#include "allocation_counter.hpp"
 #include "test_images.hpp"
 #include "vision/pipeline.hpp"
 
@@ -169,6 +170,16 @@ TEST(InterRowRule, ANewRowBesideTrackedOnesCountsOnlyOnceConfirmed) {
   // A second row enters: first sighting is weed, the second makes it a row.
   EXPECT_GT(pipeline.process(field({40, 140}, {}).view()).zone_density[2], 0.0);
   EXPECT_DOUBLE_EQ(pipeline.process(field({40, 140}, {}).view()).zone_density[2], 0.0);
+}
+
+TEST(InterRowRule, NoAllocationOnceWarmedUp) {
+  Pipeline pipeline(inter_row_config());
+  const BgrFrame rows = field({40, 140}, {90});
+  const BgrFrame gap = field({}, {90});
+  pipeline.process(rows.view());  // warm-up: sizes the buffers
+  const long before = weedspray::test::allocation_count();
+  for (int i = 0; i < 5; ++i) pipeline.process((i % 2 ? gap : rows).view());
+  EXPECT_EQ(weedspray::test::allocation_count(), before);
 }
 
 TEST(InterRowRule, BadRuleIsNamed) {
