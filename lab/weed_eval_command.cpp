@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include <opencv2/core.hpp>
+
 #include "lab/weed_eval.hpp"
 #include "lab/weed_model.hpp"
 
@@ -98,7 +100,7 @@ void print_table(const WeedEvalOptions& options, std::size_t images,
   if (options.class_masks) {
     std::printf(
         "zones %dx%d: weedy when >= %.2f %% of the zone is weed; sprayed when the weed density "
-        ">= %.4f (decision threshold); hybrid margin %d px\n\n",
+        ">= %.4f (decision threshold); hybrid margin %d px; one thread\n\n",
         zones.rows, zones.cols, 100.0 * zones.weedy_share, zones.decision_threshold,
         setup.base.crop_margin_px);
     std::printf("%-11s %7s %7s %7s %7s %7s %8s %6s %7s %10s %9s\n", "weed_source", "IoU_soil",
@@ -156,6 +158,7 @@ void print_sweep(const std::vector<WeedEvalRow>& rows, const ZoneRule& zones) {
 
 int run_weed_eval(const WeedEvalOptions& options) {
   const Setup setup = setup_from(options);
+  cv::setNumThreads(1);  // ms_per_image as on the daemon's camera worker
   const std::vector<std::string> stems =
       options.list.empty() ? std::vector<std::string>{} : read_stem_list(options.list);
   const std::vector<LabelledImage> images =
