@@ -51,6 +51,10 @@ struct ValvePwmDriverConfig {
   std::chrono::nanoseconds miss_tolerance = std::chrono::milliseconds(5);
   // Every edge's lateness, if set (owned by the caller so other threads can summarise it).
   LatenessHistogram* lateness = nullptr;
+  // Called on every wake of this, the highest-priority thread (e.g. to watch other loops);
+  // must be real-time safe. A plain function pointer: nothing to allocate or copy.
+  void (*on_wake)(void* context, std::chrono::nanoseconds now) noexcept = nullptr;
+  void* on_wake_context = nullptr;
 };
 
 struct ValvePwmStats {
@@ -80,6 +84,8 @@ class ValvePwmDriver {
 
   // Counters, readable from any thread.
   ValvePwmStats stats() const noexcept { return published_stats_.read(); }
+  // For real-time readers: false (out unchanged) when the slot was busy.
+  bool try_stats(ValvePwmStats& out) const noexcept { return published_stats_.try_read(out); }
 
   // The RT loop. Starts with the valves safe; returns with the valves safe.
   void run(std::stop_token stop) noexcept {
@@ -92,6 +98,7 @@ class ValvePwmDriver {
     while (!stop.stop_requested()) {
       ++stats_.wakes;
       std::chrono::nanoseconds now = clock_.now();
+      if (config_.on_wake != nullptr) config_.on_wake(config_.on_wake_context, now);
       const std::uint64_t version = commands_.version();
       if (version != seen_version) {
         ValveCommand cmd;

@@ -1,6 +1,7 @@
 #include "io/linux/gpio_output_bank.hpp"
 
 #include <linux/gpio.h>
+#include <sys/ioctl.h>
 #include <unistd.h>
 
 #include <cstring>
@@ -113,6 +114,14 @@ int GpioOutputBank::write(std::uint32_t mask) noexcept {
 }
 
 void GpioOutputBank::force_safe() noexcept {
+  // The raw ioctl with its own payload touches no shared buffer, so another thread may force a
+  // line safe while its owner is stuck in write() (the loops' cross-watch does).
+  EmergencyWrite safe;
+  if (emergency_write(safe)) {
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      if (::ioctl(safe.fd, safe.request, safe.payload.data()) >= 0) return;
+    }
+  }
   write(impl_->safe_mask);
 }
 

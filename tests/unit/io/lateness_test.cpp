@@ -6,6 +6,7 @@
 
 #include "control/pwm_schedule.hpp"
 #include "io/lateness_histogram.hpp"
+#include "io/loop_watch.hpp"
 #include "io/realtime.hpp"
 #include "io/sim/manual_clock.hpp"
 #include "io/sim/memory_output_bank.hpp"
@@ -113,6 +114,16 @@ TEST(ValvePwmDriver, CountsEdgesLaterThanTheToleranceAsMissed) {
   LateValveRig on_time(1ms, 5ms);
   EXPECT_EQ(on_time.driver->stats().missed_edges, 0U);
   EXPECT_GT(on_time.driver->stats().late_edges, 0U) << "1 ms is late (> 0.5 ms), not a miss";
+}
+
+TEST(LoopWatch, StaleOnlyWhenTheCounterStaysStillLongerThanTheTimeout) {
+  LoopWatch watch(50ms);
+  EXPECT_FALSE(watch.stale(7, 0ms)) << "first sight";
+  EXPECT_FALSE(watch.stale(7, 50ms)) << "still within the timeout";
+  EXPECT_TRUE(watch.stale(7, 51ms));
+  EXPECT_FALSE(watch.stale(8, 52ms)) << "moving again";
+  EXPECT_FALSE(watch.stale(8, 100ms));
+  EXPECT_TRUE(watch.stale(8, 103ms));
 }
 
 }  // namespace
