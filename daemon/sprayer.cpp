@@ -512,12 +512,18 @@ void Sprayer::camera_loop(std::stop_token stop, CameraWorker& worker) noexcept {
     std::copy(result.crop_density.begin(), result.crop_density.end(),
               densities.crop_density.begin());
     // The weed model failed (an empty error is a malformed frame: zero densities, no alarm).
+    const bool injected = worker.injected_failure.load();
     densities.vision_failed =
-        !worker.pipeline->last_frame_ok() && !worker.pipeline->last_error().empty();
+        injected || (!worker.pipeline->last_frame_ok() && !worker.pipeline->last_error().empty());
     status.vision_failed = densities.vision_failed;
     if (densities.vision_failed) {
+      if (injected) {
+        densities.density.fill(0.0);
+        densities.crop_density.fill(0.0);
+      }
       ++status.vision_failures;
-      const std::string& error = worker.pipeline->last_error();
+      static const std::string kInjected = "failure injected by a test";
+      const std::string& error = injected ? kInjected : worker.pipeline->last_error();
       const std::size_t n = std::min(error.size(), status.vision_error.size() - 1);
       std::memcpy(status.vision_error.data(), error.data(), n);
       status.vision_error[n] = '\0';

@@ -79,6 +79,11 @@ class Sprayer {
   // Cameras whose weed model failed on their latest frame, with why ("camera 1: ..."; empty
   // when none): the vision_model_failed alarm. Their nozzles are held closed meanwhile.
   std::string vision_failures() const;
+  // Tests of the failure handling: while set, camera i's frames count as failed in its weed
+  // model (as a network failing at run time makes Pipeline::process() report them).
+  void inject_vision_failure(std::size_t i, bool fail) noexcept {
+    cameras_[i].injected_failure.store(fail);
+  }
 
  private:
   struct CameraWorker {
@@ -93,6 +98,7 @@ class Sprayer {
     double last_frame_distance_m = -1e9;
     bool uses_model = false;     // dnn/hybrid: inference goes through inference_gate_
     bool vision_failed = false;  // control loop: the latest frame failed, nozzles held closed
+    std::atomic<bool> injected_failure{false};  // inject_vision_failure()
   };
 
   Nanos pressure_period() const noexcept;

@@ -153,6 +153,21 @@ TEST(Alarms, ControlOverruns) {
   EXPECT_EQ(alarms.evaluate(in), alarm_bit(AlarmId::kControlOverruns));
 }
 
+// A warning, not a fault: the failing camera's nozzles close, the others keep spraying.
+TEST(Alarms, VisionModelFailedIsAWarningUntilCleared) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(1s);
+  in.vision_model_failed = true;
+  EXPECT_EQ(alarms.evaluate(in), alarm_bit(AlarmId::kVisionModelFailed));
+  EXPECT_FALSE(alarms.fault_latched());
+  EXPECT_EQ(alarm_name(AlarmId::kVisionModelFailed), "vision_model_failed");
+  in = at(in, 2s);
+  in.vision_model_failed = false;  // frames process again: latched until ClearAlarms
+  EXPECT_EQ(alarms.evaluate(in), 0U);
+  EXPECT_EQ(alarms.active(), alarm_bit(AlarmId::kVisionModelFailed));
+  EXPECT_EQ(alarms.present(), 0U);
+}
+
 TEST(Alarms, NamesRoundTrip) {
   for (std::size_t i = 0; i < kAlarmCount; ++i) {
     const auto id = static_cast<AlarmId>(i);

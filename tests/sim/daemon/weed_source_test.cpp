@@ -1,0 +1,179 @@
+// The weed source decides what the sprayer sprays: the same frames through the whole runtime
+// (replay camera -> vision pipeline -> scheduler -> rate law -> valve duties) give different
+// duties with weed_source "vegetation" and "dnn"; a weed model failing at run time closes the
+// nozzles of its camera, and only those, until it processes frames again. (No frame makes
+// OpenCV DNN fail once the model passed its load-time forward pass, so the failure is injected
+// where the camera worker reads Pipeline::process()'s verdict.)
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <thread>
+#include <vector>
+
+#include "daemon/backends.hpp"
+#include "daemon/sprayer.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+
+// Hand-set 3-class net (tools/train/make_tiny_onnx.py): with mean 0 and scale 1/255 a pixel's
+// class is its strongest of R (soil), G (crop), B (weed).
+const fs::path kTinyModel = fs::path(WEEDSPRAY_SOURCE_DIR) / "tests/data/tiny-3class.onnx";
+
+// A 1280x800 frame of brown soil with discs of `left` colour over the left half and `right`
+// colour over the right half (BGR), written as a PNG the replay camera plays in a loop.
+fs::path write_field(const std::string& name, cv::Scalar left, cv::Scalar right) {
+  cv::Mat image(800, 1280, CV_8UC3, cv::Scalar(60, 90, 120));
+  for (int y = 60; y < 800; y += 140) {
+    for (int x = 70; x < 1280; x += 160) cv::circle(image, {x, y}, 45, x < 640 ? left : right, -1);
+  }
+  const fs::path path =
+      fs::temp_directory_path() / ("weedspray-" + name + "-" + std::to_string(::getpid()) + ".png");
+  cv::imwrite(path.string(), image);
+  return path;
+}
+
+const cv::Scalar kGreen(40, 150, 50);  // vegetation to a colour index; crop to the tiny net
+const cv::Scalar kBlue(170, 80, 60);   // no vegetation to a colour index; weed to the tiny net
+const cv::Scalar kSoil(60, 90, 120);
+
+Config field_config(const std::string& weed_source) {
+  Config config = default_config();
+  config.sim.speed_profile = "constant";
+  config.sim.speed_max_m_per_s = 2.0;
+  config.vision.weed_source = weed_source;
+  config.vision.model = kTinyModel.string();
+  config.vision.model_mean = {0, 0, 0};
+  config.vision.model_scale = 1.0 / 255.0;
+  return config;
+}
+
+// Runs the sprayer on the simulated machine and samples what it commands.
+class SimRun {
+ public:
+  SimRun(const Config& config, const fs::path& images) : config_(config) {
+    Options options;
+    options.sim = true;
+    options.sim_images = images.string();
+    backends_ = make_sim_backends(config, options);
+    sprayer_ = std::make_unique<Sprayer>(config, backends_);
+    LiveParams params = live_params_from(config);
+    params.pump_enabled = true;
+    params.valves_enabled = true;
+    sprayer_->set_params(params);
+    backends_.drive_world(0);
+    sprayer_->start();
+    start_ = backends_.clock->now();
+  }
+  ~SimRun() { sprayer_->stop(); }
+
+  double elapsed_s() const {
+    return std::chrono::duration<double>(backends_.clock->now() - start_).count();
+  }
+  // Mean commanded duty of each nozzle from now until `until_s` of run time.
+  std::vector<double> mean_duty_until(double until_s) {
+    std::vector<double> sum(static_cast<std::size_t>(config_.boom.nozzles), 0.0);
+    int samples = 0;
+    while (elapsed_s() < until_s) {
+      backends_.drive_world(elapsed_s());
+      const ControlStatus c = sprayer_->control();
+      for (std::size_t n = 0; n < sum.size(); ++n) sum[n] += c.duty_pct[n];
+      ++samples;
+      std::this_thread::sleep_for(5ms);
+    }
+    for (auto& s : sum) s /= std::max(samples, 1);
+    return sum;
+  }
+  Sprayer& sprayer() { return *sprayer_; }
+
+ private:
+  Config config_;
+  Backends backends_;
+  std::unique_ptr<Sprayer> sprayer_;
+  Nanos start_{};
+};
+
+// The ground imaged reaches the nozzles 1.2 m behind the camera's nadir about 1.3 s after the
+// start at 2 m/s; from 2.5 s on, every nozzle is steered by the looping frame.
+constexpr double kSteadyFrom_s = 2.5;
+constexpr double kSteadyUntil_s = 4.0;
+
+TEST(WeedSource, SameFramesDifferentDutiesVegetationAndDnn) {
+  // Left half: green plants and no weeds (crop to the network); right half: no green, weeds to
+  // the network.
+  const fs::path field = write_field("crop-left", kGreen, kBlue);
+  std::vector<double> vegetation, dnn;
+  {
+    SimRun run(field_config("vegetation"), field);
+    run.mean_duty_until(kSteadyFrom_s);
+    vegetation = run.mean_duty_until(kSteadyUntil_s);
+  }
+  {
+    SimRun run(field_config("dnn"), field);
+    run.mean_duty_until(kSteadyFrom_s);
+    dnn = run.mean_duty_until(kSteadyUntil_s);
+    const CameraStatus camera = run.sprayer().camera(0);
+    EXPECT_GT(camera.frames, 3U);
+    EXPECT_EQ(camera.vision_failures, 0U);
+  }
+  fs::remove(field);
+  ASSERT_EQ(vegetation.size(), 4U);
+  SCOPED_TRACE("duty % per nozzle: vegetation " + ::testing::PrintToString(vegetation) + ", dnn " +
+               ::testing::PrintToString(dnn));
+  for (std::size_t n = 0; n < 2; ++n) {
+    SCOPED_TRACE("crop-only nozzle " + std::to_string(n));
+    EXPECT_GT(vegetation[n], 10.0) << "vegetation sprays the crop";
+    EXPECT_EQ(dnn[n], 0.0) << "dnn leaves the crop dry";
+  }
+  for (std::size_t n = 2; n < 4; ++n) {
+    SCOPED_TRACE("weedy nozzle " + std::to_string(n));
+    EXPECT_EQ(vegetation[n], 0.0);
+    EXPECT_GT(dnn[n], 10.0);
+  }
+}
+
+TEST(WeedSource, FailingModelClosesOnlyItsCamerasNozzles) {
+  Config config = field_config("dnn");
+  config.cameras.push_back(config.cameras[0]);
+  config.cameras[0].nozzle_count = 2;
+  config.cameras[1].first_nozzle = 2;
+  config.cameras[1].nozzle_count = 2;
+  const fs::path field = write_field("weeds", kBlue, kBlue);
+  SimRun run(config, field);
+  run.mean_duty_until(kSteadyFrom_s);
+  const auto before = run.mean_duty_until(kSteadyUntil_s);
+  for (std::size_t n = 0; n < 4; ++n) EXPECT_GT(before[n], 10.0) << "nozzle " << n;
+  EXPECT_TRUE(run.sprayer().vision_failures().empty());
+
+  // Camera 1's model fails: from its next frame (0.4 s apart) its nozzles close at once.
+  run.sprayer().inject_vision_failure(1, true);
+  run.mean_duty_until(kSteadyUntil_s + 0.6);
+  const auto failing = run.mean_duty_until(kSteadyUntil_s + 2.0);
+  EXPECT_GT(failing[0], 10.0);
+  EXPECT_GT(failing[1], 10.0);
+  EXPECT_EQ(failing[2], 0.0);
+  EXPECT_EQ(failing[3], 0.0);
+  const CameraStatus camera = run.sprayer().camera(1);
+  EXPECT_TRUE(camera.vision_failed);
+  EXPECT_GT(camera.vision_failures, 0U);
+  EXPECT_FALSE(run.sprayer().camera(0).vision_failed);
+  const std::string failures = run.sprayer().vision_failures();
+  EXPECT_EQ(failures, "camera 1: failure injected by a test");
+
+  // Frames process again: the new ground reaches the nozzles and they spray again.
+  run.sprayer().inject_vision_failure(1, false);
+  run.mean_duty_until(kSteadyUntil_s + 2.0 + kSteadyFrom_s);
+  const auto recovered = run.mean_duty_until(kSteadyUntil_s + 2.0 + kSteadyUntil_s);
+  for (std::size_t n = 0; n < 4; ++n) EXPECT_GT(recovered[n], 10.0) << "nozzle " << n;
+  EXPECT_TRUE(run.sprayer().vision_failures().empty());
+  fs::remove(field);
+}
+
+}  // namespace
+}  // namespace weedspray::daemon
