@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -11,6 +13,9 @@
 #include "lab/commands.hpp"
 #include "lab/experiment_field.hpp"
 #include "lab/experiment_plot.hpp"
+#include "lab/vision_dataset.hpp"
+#include "lab/weed_eval_command.hpp"
+#include "lab/weed_model.hpp"
 
 namespace weedspray::lab {
 namespace {
@@ -25,6 +30,11 @@ struct ExperimentOptions {
   bool tune = false;
   std::uint64_t seed = 1;
   std::string images_dir;
+  std::string masks_dir;
+  std::string stems_file;
+  std::string weed_source = "truth";
+  std::string model;
+  double decision_threshold = -1.0;  // < 0: the daemon's spray.decision_threshold default
   double control_period_ms = 5.0;
   double converter_lead_ms = 0.0;
   double converter_lag_ms = 0.0;
@@ -352,45 +362,90 @@ int run_dose_command(const ExperimentOptions& o) {
   return 0;
 }
 
-int run_savings_command(const ExperimentOptions& o) {
-  std::string dir = o.images_dir;
-  if (dir.empty()) {
-    const char* data = std::getenv("WEEDSPRAY_DATA_DIR");
-    dir = std::string(data ? data : WEEDSPRAY_DEFAULT_DATA_DIR) + "/ews-train/images";
+// The savings field's weed densities: the masks' true weed share ("truth"), or what a weed
+// source of the vision pipeline reports on the photos.
+LabelledField savings_field(const ExperimentOptions& o, const std::vector<LabelledImage>& images) {
+  if (o.weed_source == "truth") {
+    if (!o.model.empty()) throw std::runtime_error("--model needs a --weed-source dnn or hybrid");
+    return labelled_field(images, std::nullopt);
   }
-  const std::vector<std::array<double, 4>> zones = field_zone_densities(dir);
+  vision::PipelineConfig config = vision::default_pipeline_config();
+  config.weed_source = parse_weed_source_option("--weed-source", o.weed_source);
+  config.crop_margin_px = kDefaultCropMarginPx;
+  std::vector<std::uint8_t> onnx;
+  if (vision::needs_model(config.weed_source)) {
+    if (o.model.empty()) {
+      throw std::runtime_error("--weed-source " + o.weed_source + " needs --model FILE");
+    }
+    WeedModel model = read_weed_model(o.model);
+    config.dnn = model.spec;
+    onnx = std::move(model.onnx);
+  }
+  return labelled_field(images, config, onnx);
+}
+
+int run_savings_command(const ExperimentOptions& o) {
+  const char* data = std::getenv("WEEDSPRAY_DATA_DIR");
+  const std::string peanut = std::string(data ? data : WEEDSPRAY_DEFAULT_DATA_DIR) + "/peanut";
+  const std::string images = o.images_dir.empty() ? peanut + "/images" : o.images_dir;
+  const std::string masks = o.masks_dir.empty() ? peanut + "/masks" : o.masks_dir;
+  const std::vector<LabelledImage> photos = load_labelled_images(
+      images, masks,
+      o.stems_file.empty() ? std::vector<std::string>{} : read_stem_list(o.stems_file));
+  const LabelledField field = savings_field(o, photos);
   ex::SavingsOptions options;
   options.seed = o.seed;
-  const ex::SavingsResult r = ex::run_savings(zones, options);
+  // Weed densities are pixel shares (a few %), so the law's density scale and the decision
+  // threshold are the daemon's (spray.max_density, spray.decision_threshold), not the wheat
+  // paper's canopy figures.
+  options.max_density = 1.0;
+  options.decision_threshold =
+      o.decision_threshold >= 0 ? o.decision_threshold : default_decision_threshold();
+  const ex::SavingsResult r = ex::run_savings(field.weed_density, options);
   const ex::SavingsRun& clamp = r.spec_clamp;
+  const ex::TruthTally equal_truth = ex::tally_against_truth(r.equal_coverage, field.truth);
+  const ex::TruthTally clamp_truth = ex::tally_against_truth(clamp, field.truth);
   if (o.json) {
     // Headline = equal coverage (every zone above the decision threshold sprayed at least at
     // the minimum duty); spec_clamp_* = the SPEC clamp (< 20 % duty -> closed).
     std::printf(
-        "{\"savings_pct\": %.3f, \"under_dosed_zones\": %d, \"unsprayed_weedy_zones\": "
-        "%d, \"zones\": %d, \"variable_l\": %.4f, \"uniform_l\": %.4f, "
+        "{\"images\": %zu, \"weed_source\": \"%s\", \"decision_threshold\": %.4f, "
+        "\"savings_pct\": %.3f, "
+        "\"weedy_zones\": %d, \"weedy_left_dry\": %d, \"crop_only_zones\": %d, "
+        "\"crop_only_sprayed\": %d, \"under_dosed_zones\": %d, \"zones\": %d, "
+        "\"variable_l\": %.4f, \"uniform_l\": %.4f, "
         "\"nozzle_savings_pct\": [%.2f, %.2f, %.2f, %.2f], \"policy\": \"equal_coverage\", "
-        "\"spec_clamp_savings_pct\": %.3f, \"spec_clamp_under_dosed_zones\": %d, "
-        "\"spec_clamp_unsprayed_weedy_zones\": %d, \"spec_clamp_variable_l\": %.4f, "
-        "\"scheduler\": \"NozzleScheduler\"}\n",
-        r.savings_pct, r.under_dosed_zones, r.unsprayed_weedy_zones, r.zones, r.variable_l,
-        r.uniform_l, r.nozzle_savings_pct[0], r.nozzle_savings_pct[1], r.nozzle_savings_pct[2],
-        r.nozzle_savings_pct[3], clamp.savings_pct, clamp.under_dosed_zones,
-        clamp.unsprayed_weedy_zones, clamp.variable_l);
+        "\"spec_clamp_savings_pct\": %.3f, \"spec_clamp_weedy_left_dry\": %d, "
+        "\"spec_clamp_crop_only_sprayed\": %d, \"spec_clamp_under_dosed_zones\": %d, "
+        "\"spec_clamp_variable_l\": %.4f, \"scheduler\": \"NozzleScheduler\"}\n",
+        photos.size(), o.weed_source.c_str(), options.decision_threshold, r.savings_pct,
+        equal_truth.weedy_zones, equal_truth.weedy_left_dry, equal_truth.crop_only_zones,
+        equal_truth.crop_only_sprayed, r.under_dosed_zones, r.zones, r.variable_l, r.uniform_l,
+        r.nozzle_savings_pct[0], r.nozzle_savings_pct[1], r.nozzle_savings_pct[2],
+        r.nozzle_savings_pct[3], clamp.savings_pct, clamp_truth.weedy_left_dry,
+        clamp_truth.crop_only_sprayed, clamp.under_dosed_zones, clamp.variable_l);
   } else {
-    std::printf("field: %zu zones of %.1f m x 4 nozzles from %s (vision pipeline, 2x4 grid)\n",
-                zones.size(), options.zone_length_m, dir.c_str());
+    std::printf(
+        "field: %zu zones of %.1f m x 4 nozzles from %zu photos in %s%s%s (2x4 grid per "
+        "photo), weed density: %s, decision threshold %.3f\n",
+        field.weed_density.size(), options.zone_length_m, photos.size(), images.c_str(),
+        o.stems_file.empty() ? "" : " listed in ", o.stems_file.c_str(), o.weed_source.c_str(),
+        options.decision_threshold);
+    std::printf(
+        "truth (%s): %d weedy nozzle-zones (true weed >= 0.5 %%), %d crop-only nozzle-zones\n",
+        masks.c_str(), equal_truth.weedy_zones, equal_truth.crop_only_zones);
     std::printf("decisions pinned to ground intervals by the NozzleScheduler (1.2 m boom)\n");
     std::printf("uniform %.3f L\n", r.uniform_l);
     std::printf(
-        "equal coverage (weedy zones >= min duty): variable %.3f L  savings %.1f %%  "
-        "under-dosed %d of %d  weedy zones left dry %d\n",
-        r.variable_l, r.savings_pct, r.under_dosed_zones, r.zones, r.unsprayed_weedy_zones);
+        "equal coverage (weedy zones >= min duty): variable %.3f L  savings %.1f %%  weedy left "
+        "dry %d  crop-only sprayed %d  under-dosed %d of %d\n",
+        r.variable_l, r.savings_pct, equal_truth.weedy_left_dry, equal_truth.crop_only_sprayed,
+        r.under_dosed_zones, r.zones);
     std::printf(
-        "SPEC clamp (< 20 %% duty closed):         variable %.3f L  savings %.1f %%  "
-        "under-dosed %d of %d  weedy zones left dry %d\n",
-        clamp.variable_l, clamp.savings_pct, clamp.under_dosed_zones, r.zones,
-        clamp.unsprayed_weedy_zones);
+        "SPEC clamp (< 20 %% duty closed):         variable %.3f L  savings %.1f %%  weedy left "
+        "dry %d  crop-only sprayed %d  under-dosed %d of %d\n",
+        clamp.variable_l, clamp.savings_pct, clamp_truth.weedy_left_dry,
+        clamp_truth.crop_only_sprayed, clamp.under_dosed_zones, r.zones);
     std::printf("per nozzle savings (equal coverage) %.1f %.1f %.1f %.1f %% (paper: 46.3 %%)\n",
                 r.nozzle_savings_pct[0], r.nozzle_savings_pct[1], r.nozzle_savings_pct[2],
                 r.nozzle_savings_pct[3]);
@@ -464,7 +519,22 @@ void add_experiment_commands(CLI::App& app) {
                   "step: DAC written this long after each tick (the daemon: 1 ms)")
       ->check(CLI::Range(0.0, 100.0));
   cmd->add_option("--images", options->images_dir,
-                  "savings: field images directory (default $WEEDSPRAY_DATA_DIR/ews-train/images)");
+                  "savings: labelled field photos (default $WEEDSPRAY_DATA_DIR/peanut/images)");
+  cmd->add_option("--masks", options->masks_dir,
+                  "savings: their class-id masks, 0 soil 1 crop 2 weed (default "
+                  "$WEEDSPRAY_DATA_DIR/peanut/masks)");
+  cmd->add_option("--stems", options->stems_file,
+                  "savings: only the photos listed in this file, one stem a line (e.g. "
+                  "tools/train/splits/peanut-val.txt: photos a shipped model never saw)");
+  cmd->add_option("--weed-source", options->weed_source,
+                  "savings: weed density the sprayer acts on: truth (the masks' weed share, the "
+                  "best any detector can do) | vegetation | inter_row | dnn | hybrid");
+  cmd->add_option("--model", options->model,
+                  "savings: ONNX model for --weed-source dnn|hybrid (spec from its .json)");
+  cmd->add_option("--decision-threshold", options->decision_threshold,
+                  "savings: zones with a weed density below this are not sprayed (default: the "
+                  "daemon's spray.decision_threshold)")
+      ->check(CLI::Range(0.0, 1.0));
   cmd->callback([options] {
     try {
       const int rc = run_experiment(*options);

@@ -1,45 +1,73 @@
 #include "lab/experiment_field.hpp"
 
-#include <algorithm>
-#include <filesystem>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/core.hpp>
 #include <stdexcept>
-
-#include "vision/pipeline.hpp"
 
 namespace weedspray::lab {
 
-std::vector<std::array<double, 4>> field_zone_densities(const std::string& images_dir) {
-  namespace fs = std::filesystem;
-  if (!fs::is_directory(images_dir))
-    throw std::runtime_error("field images directory not found: " + images_dir);
-  std::vector<fs::path> files;
-  for (const auto& entry : fs::directory_iterator(images_dir))
-    if (entry.path().extension() == ".png" || entry.path().extension() == ".jpg")
-      files.push_back(entry.path());
-  std::sort(files.begin(), files.end());
-  if (files.empty()) throw std::runtime_error("no .png/.jpg images in " + images_dir);
+namespace ex = control::experiments;
 
-  vision::PipelineConfig config = vision::default_pipeline_config();
-  config.rows = 2;
-  config.cols = 4;
-  vision::Pipeline pipeline(config);
-  std::vector<std::array<double, 4>> zones;
-  for (const auto& file : files) {
-    const cv::Mat bgr = cv::imread(file.string(), cv::IMREAD_COLOR);
-    if (bgr.empty()) throw std::runtime_error("cannot read image: " + file.string());
-    const vision::ImageView view{bgr.data, bgr.cols, bgr.rows, bgr.step[0],
-                                 vision::PixelFormat::kBgr24};
-    const vision::FrameResult& r = pipeline.process(view);
-    // Row 0 is the top of the frame: the ground farther ahead, reached later. Travel order is
-    // therefore the near (bottom) row first.
+std::vector<std::array<ex::ZoneTruth, kFieldNozzles>> mask_zone_truth(const cv::Mat& class_mask) {
+  if (class_mask.empty() || class_mask.type() != CV_8UC1) {
+    throw std::invalid_argument("mask_zone_truth: an 8-bit one-channel class-id mask is needed");
+  }
+  // Row 0 is the top of the frame: the ground farther ahead, reached later. Travel order is
+  // therefore the near (bottom) row first. Zone bounds as vision::Pipeline computes them.
+  std::vector<std::array<ex::ZoneTruth, kFieldNozzles>> rows;
+  for (int row = kFieldZoneRows - 1; row >= 0; --row) {
+    const int y_begin = row * class_mask.rows / kFieldZoneRows;
+    const int y_end = (row + 1) * class_mask.rows / kFieldZoneRows;
+    std::array<ex::ZoneTruth, kFieldNozzles> zones{};
+    for (int col = 0; col < kFieldNozzles; ++col) {
+      const int x_begin = col * class_mask.cols / kFieldNozzles;
+      const int x_end = (col + 1) * class_mask.cols / kFieldNozzles;
+      const cv::Mat zone = class_mask(cv::Range(y_begin, y_end), cv::Range(x_begin, x_end));
+      const double pixels = static_cast<double>(zone.total());
+      zones[static_cast<std::size_t>(col)] = {cv::countNonZero(zone == 2) / pixels,
+                                              cv::countNonZero(zone == 1) / pixels};
+    }
+    rows.push_back(zones);
+  }
+  return rows;
+}
+
+LabelledField labelled_field(const std::vector<LabelledImage>& images,
+                             const std::optional<vision::PipelineConfig>& source,
+                             std::span<const std::uint8_t> model_onnx) {
+  std::optional<vision::Pipeline> pipeline;
+  if (source) {
+    vision::PipelineConfig config = *source;
+    config.rows = kFieldZoneRows;
+    config.cols = kFieldNozzles;
+    pipeline.emplace(config, model_onnx);
+  }
+  LabelledField field;
+  for (const LabelledImage& image : images) {
+    const auto truth = mask_zone_truth(image.mask);
+    field.truth.insert(field.truth.end(), truth.begin(), truth.end());
+    if (!pipeline) {
+      for (const auto& row : truth) {
+        std::array<double, kFieldNozzles> weed{};
+        for (int col = 0; col < kFieldNozzles; ++col) weed[col] = row[col].weed;
+        field.weed_density.push_back(weed);
+      }
+      continue;
+    }
+    pipeline->reset_tracking();  // the photos are not consecutive frames
+    const vision::FrameResult& r =
+        pipeline->process({image.bgr.data, image.bgr.cols, image.bgr.rows, image.bgr.step[0],
+                           vision::PixelFormat::kBgr24});
+    if (!pipeline->last_frame_ok()) {
+      throw std::runtime_error(image.name +
+                               ": the vision pipeline failed: " + pipeline->last_error());
+    }
     for (int row = r.rows - 1; row >= 0; --row) {
-      std::array<double, 4> zone{};
-      for (int col = 0; col < 4; ++col) zone[static_cast<std::size_t>(col)] = r.density(row, col);
-      zones.push_back(zone);
+      std::array<double, kFieldNozzles> weed{};
+      for (int col = 0; col < kFieldNozzles; ++col) weed[col] = r.density(row, col);
+      field.weed_density.push_back(weed);
     }
   }
-  return zones;
+  return field;
 }
 
 }  // namespace weedspray::lab

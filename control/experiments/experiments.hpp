@@ -223,6 +223,8 @@ struct SavingsRun {
   int unsprayed_weedy_zones = 0;
   std::vector<double> zone_target_l;     // per zone (all nozzles)
   std::vector<double> zone_delivered_l;  // per zone (all nozzles)
+  // What the law decided for each nozzle-zone [L]: 0 = left dry.
+  std::vector<std::array<double, 4>> nozzle_zone_target_l;
   std::array<double, 4> nozzle_delivered_l{};
   std::array<double, 4> nozzle_savings_pct{};  // set by run_savings (needs the uniform run)
 };
@@ -246,6 +248,27 @@ SavingsResult run_savings(const std::vector<std::array<double, 4>>& zone_densiti
 SavingsRun run_savings_variable(const std::vector<std::array<double, 4>>& zone_densities,
                                 const SavingsOptions& options, LowDutyPolicy policy,
                                 double uniform_l);
+
+// ---------- savings against labelled crop/weed images ----------
+// True pixel shares of one nozzle-zone (from class-id masks).
+struct ZoneTruth {
+  double weed = 0.0;
+  double crop = 0.0;
+};
+// What a run's decisions did to the truth. A nozzle-zone is weedy when its true weed pixels are
+// at least weedy_share of it (vision-eval's rule), crop-only when it is not weedy and its crop
+// pixels are at least weedy_share; sprayed = the law decided a non-zero volume for it.
+struct TruthTally {
+  int weedy_zones = 0;
+  int weedy_left_dry = 0;  // weeds missed
+  int crop_only_zones = 0;
+  int crop_only_sprayed = 0;  // herbicide on the crop alone
+};
+// truth[z][n] in the track order of the run's zone densities. Throws std::invalid_argument when
+// the run and the truth have a different number of zones.
+TruthTally tally_against_truth(const SavingsRun& run,
+                               const std::vector<std::array<ZoneTruth, 4>>& truth,
+                               double weedy_share = 0.005);
 
 // Calibration runs are deterministic for given options, so the spray experiments share one
 // per process (several tests of one binary, or both savings runs, calibrate once).

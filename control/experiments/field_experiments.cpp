@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <span>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "control/experiments/experiments.hpp"
@@ -145,6 +147,7 @@ SavingsRun run_savings_variable(const std::vector<std::array<double, 4>>& zone_d
     }
     run.zone_target_l.push_back(zone_total);
   }
+  run.nozzle_zone_target_l = target_l;
 
   // Drive: frames pinned by the scheduler as the odometer reaches them; every control period
   // the law runs on the density the scheduler gives for the ground under each nozzle.
@@ -258,6 +261,31 @@ SavingsResult run_savings(const std::vector<std::array<double, 4>>& zone_densiti
   result.zone_delivered_l = headline.zone_delivered_l;
   result.nozzle_savings_pct = headline.nozzle_savings_pct;
   return result;
+}
+
+TruthTally tally_against_truth(const SavingsRun& run,
+                               const std::vector<std::array<ZoneTruth, 4>>& truth,
+                               double weedy_share) {
+  if (truth.size() != run.nozzle_zone_target_l.size()) {
+    throw std::invalid_argument("savings truth: " + std::to_string(truth.size()) +
+                                " zones of truth for a run of " +
+                                std::to_string(run.nozzle_zone_target_l.size()) + " zones");
+  }
+  TruthTally tally;
+  for (std::size_t z = 0; z < truth.size(); ++z) {
+    for (std::size_t n = 0; n < 4; ++n) {
+      const ZoneTruth& zone = truth[z][n];
+      const bool sprayed = run.nozzle_zone_target_l[z][n] > 0.0;
+      if (zone.weed >= weedy_share) {
+        ++tally.weedy_zones;
+        tally.weedy_left_dry += !sprayed;
+      } else if (zone.crop >= weedy_share) {
+        ++tally.crop_only_zones;
+        tally.crop_only_sprayed += sprayed;
+      }
+    }
+  }
+  return tally;
 }
 
 }  // namespace weedspray::control::experiments

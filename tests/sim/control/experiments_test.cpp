@@ -148,5 +148,54 @@ TEST(SavingsExperiment, VariableSprayingSavesLiquidOnASparseField) {
   EXPECT_NEAR(run_savings(dense, SavingsOptions{}).savings_pct, 0.0, 2.0);
 }
 
+// A labelled field: weedy zones (crop and weed), crop-only zones, bare zones, and zones with a
+// trace of weed under the decision threshold. Ground-truth weed density sprays every weedy
+// zone and no crop-only one; acting on all vegetation (crop + weed) sprays the crop too.
+TEST(SavingsExperiment, TallyAgainstLabelledWeeds) {
+  std::vector<std::array<ZoneTruth, 4>> truth;
+  for (int z = 0; z < 24; ++z) {
+    truth.push_back({ZoneTruth{0.04, 0.10},    // weedy, with crop
+                     ZoneTruth{0.00, 0.15},    // crop only
+                     ZoneTruth{0.007, 0.00},   // weedy, but under a 1 % decision threshold
+                     ZoneTruth{0.00, 0.00}});  // bare soil
+  }
+  auto densities = [&](bool with_crop) {
+    std::vector<std::array<double, 4>> zones(truth.size());
+    for (std::size_t z = 0; z < truth.size(); ++z) {
+      for (std::size_t n = 0; n < 4; ++n) {
+        zones[z][n] = truth[z][n].weed + (with_crop ? truth[z][n].crop : 0.0);
+      }
+    }
+    return zones;
+  };
+  SavingsOptions options;
+  options.max_density = 1.0;
+  options.decision_threshold = 0.005;
+  const SavingsResult weeds = run_savings(densities(false), options);
+  const TruthTally on_weeds = tally_against_truth(weeds.equal_coverage, truth);
+  EXPECT_EQ(on_weeds.weedy_zones, 48);
+  EXPECT_EQ(on_weeds.crop_only_zones, 24);
+  EXPECT_EQ(on_weeds.weedy_left_dry, 0);
+  EXPECT_EQ(on_weeds.crop_only_sprayed, 0);
+
+  const SavingsResult green = run_savings(densities(true), options);
+  const TruthTally on_green = tally_against_truth(green.equal_coverage, truth);
+  EXPECT_EQ(on_green.weedy_left_dry, 0);
+  EXPECT_EQ(on_green.crop_only_sprayed, 24);
+  // Every sprayed zone is at the minimum duty here: the crop column adds half again.
+  EXPECT_GT(green.variable_l, 1.4 * weeds.variable_l);
+  EXPECT_GT(weeds.savings_pct, green.savings_pct);
+
+  // The daemon's 1 % threshold leaves the 0.7 % zones dry, the SPEC clamp every weedy zone
+  // whose duty falls under 20 %.
+  options.decision_threshold = 0.01;
+  const SavingsResult strict = run_savings(densities(false), options);
+  EXPECT_EQ(tally_against_truth(strict.equal_coverage, truth).weedy_left_dry, 24);
+  EXPECT_EQ(tally_against_truth(strict.spec_clamp, truth).weedy_left_dry, 48);
+
+  truth.pop_back();
+  EXPECT_THROW(tally_against_truth(weeds.equal_coverage, truth), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace weedspray::control::experiments

@@ -1,0 +1,59 @@
+// The savings experiment's field from labelled crop/weed photos (lab/experiment_field): zone
+// truth from class-id masks, and the weed density the sprayer acts on.
+#include "lab/experiment_field.hpp"
+
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+#include <vector>
+
+namespace weedspray::lab {
+namespace {
+
+// 40 x 20 mask: weed fills the top-left zone (far row, nozzle 0), crop a quarter of the
+// bottom-right zone (near row, nozzle 3).
+cv::Mat example_mask() {
+  cv::Mat mask(20, 40, CV_8UC1, cv::Scalar(0));
+  mask(cv::Rect(0, 0, 10, 10)).setTo(2);
+  mask(cv::Rect(30, 10, 5, 5)).setTo(1);
+  return mask;
+}
+
+TEST(SavingsField, MaskZoneTruthInTrackOrder) {
+  const auto rows = mask_zone_truth(example_mask());
+  ASSERT_EQ(rows.size(), 2u);
+  // Near (bottom) row first.
+  EXPECT_DOUBLE_EQ(rows[0][3].crop, 0.25);
+  EXPECT_DOUBLE_EQ(rows[0][3].weed, 0.0);
+  EXPECT_DOUBLE_EQ(rows[1][0].weed, 1.0);
+  EXPECT_DOUBLE_EQ(rows[1][1].weed, 0.0);
+  EXPECT_THROW(mask_zone_truth(cv::Mat()), std::invalid_argument);
+}
+
+// Two labelled photos: brown soil, green where the mask says crop or weed.
+std::vector<LabelledImage> example_photos() {
+  const cv::Mat mask = example_mask();
+  cv::Mat image(mask.size(), CV_8UC3, cv::Scalar(70, 100, 130));
+  image.setTo(cv::Scalar(40, 150, 60), mask != 0);
+  return {{"a", image, mask != 0, mask}, {"b", image, mask != 0, mask}};
+}
+
+TEST(SavingsField, TruthAndVegetationDensities) {
+  const std::vector<LabelledImage> photos = example_photos();
+  const LabelledField truth = labelled_field(photos, std::nullopt);
+  ASSERT_EQ(truth.weed_density.size(), 4u);  // 2 photos x 2 zone rows
+  ASSERT_EQ(truth.truth.size(), 4u);
+  EXPECT_DOUBLE_EQ(truth.weed_density[1][0], 1.0);
+  EXPECT_DOUBLE_EQ(truth.weed_density[0][3], 0.0);  // crop is not weed
+
+  // Today's behaviour: every green pixel counts, the crop too.
+  const LabelledField green = labelled_field(photos, vision::default_pipeline_config());
+  ASSERT_EQ(green.weed_density.size(), 4u);
+  EXPECT_DOUBLE_EQ(green.weed_density[1][0], 1.0);
+  EXPECT_DOUBLE_EQ(green.weed_density[0][3], 0.25);
+  EXPECT_DOUBLE_EQ(green.weed_density[0][0], 0.0);
+  EXPECT_DOUBLE_EQ(green.truth[0][3].crop, 0.25);
+}
+
+}  // namespace
+}  // namespace weedspray::lab
