@@ -4,7 +4,9 @@
 
 // GCC 12 reports a false -Wmaybe-uninitialized inside std::variant<..., std::string> when the
 // key table is built (GCC bug 107138 and relatives); the table is plain constant data.
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 
 namespace weedspray::daemon {
 
