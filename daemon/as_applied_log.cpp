@@ -41,6 +41,7 @@ void AsAppliedLog::open_new(std::uint32_t nozzles) {
   int n = std::fprintf(file_, "time_s,distance_m,speed_m_per_s,pressure_mpa,flow_l_per_min");
   for (std::uint32_t i = 0; i < nozzles; ++i) n += std::fprintf(file_, ",duty_pct_%u", i);
   for (std::uint32_t i = 0; i < nozzles; ++i) n += std::fprintf(file_, ",density_%u", i);
+  for (std::uint32_t i = 0; i < nozzles; ++i) n += std::fprintf(file_, ",crop_density_%u", i);
   n += std::fprintf(file_, "\n");
   bytes_ = static_cast<std::uintmax_t>(std::max(n, 0));
   prune();
@@ -68,6 +69,9 @@ bool AsAppliedLog::write(const AppliedRecord& r) {
                    r.distance_m, r.speed_m_per_s, r.pressure_mpa, r.flow_l_per_min);
   for (std::uint32_t i = 0; i < r.nozzles; ++i) n += std::fprintf(file_, ",%.1f", r.duty_pct[i]);
   for (std::uint32_t i = 0; i < r.nozzles; ++i) n += std::fprintf(file_, ",%.4f", r.density[i]);
+  for (std::uint32_t i = 0; i < r.nozzles; ++i) {
+    n += std::fprintf(file_, ",%.4f", r.crop_density[i]);
+  }
   n += std::fprintf(file_, "\n");
   if (n <= 0 || std::ferror(file_)) {
     ++write_errors_;

@@ -1,7 +1,7 @@
 // The as-applied log: one CSV line per PWM period (time, distance, speed, pressure, flow, and
-// per nozzle duty and density), in size-rotated files. Written by a normal-priority thread fed
-// from the control loop's queue; flushed and fdatasync'd every second (a power cut loses at
-// most that second; a reader must tolerate a torn last line).
+// per nozzle duty, weed density and crop density), in size-rotated files. Written by a
+// normal-priority thread fed from the control loop's queue; flushed and fdatasync'd every
+// second (a power cut loses at most that second; a reader must tolerate a torn last line).
 #pragma once
 
 #include <cstdio>

@@ -79,7 +79,8 @@ struct ControlStatus {
   double flow_l_per_min = 0;
   std::uint32_t nozzles = 0;
   std::array<double, io::kMaxValves> duty_pct{};
-  std::array<double, io::kMaxValves> density{};  // pinned density under each nozzle now
+  std::array<double, io::kMaxValves> density{};       // pinned density under each nozzle now
+  std::array<double, io::kMaxValves> crop_density{};  // pinned crop share, likewise
   double volume_l = 0;          // measured by the flow meter while spraying (session)
   double area_m2 = 0;           // ground covered while spraying (session)
   double uniform_volume_l = 0;  // nominal dose x area: what uniform spraying would use
@@ -102,7 +103,8 @@ struct AppliedRecord {
   double flow_l_per_min = 0;
   std::uint32_t nozzles = 0;
   std::array<float, io::kMaxValves> duty_pct{};
-  std::array<float, io::kMaxValves> density{};
+  std::array<float, io::kMaxValves> density{};       // weed density
+  std::array<float, io::kMaxValves> crop_density{};  // share of the ground that is crop
 };
 
 }  // namespace weedspray::daemon

@@ -157,6 +157,7 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
     scheduler.closing_delay_s = config.boom.valve_close_delay_s;
     scheduler.gap_policy = control::GapPolicy::kClose;
     worker.scheduler = std::make_unique<control::NozzleScheduler>(scheduler);
+    worker.crop_scheduler = std::make_unique<control::NozzleScheduler>(scheduler);
     const auto footprint = control::ground_footprint(scheduler.geometry);
     worker.footprint_length_m = footprint.far_m - footprint.near_m;
     for (int n = c.first_nozzle; n < c.first_nozzle + c.nozzle_count; ++n) {
@@ -368,6 +369,8 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
         worker.vision_failed = frame->vision_failed;
         worker.scheduler->add_frame(frame_distance,
                                     std::span<const double>(frame->density.data(), zones));
+        worker.crop_scheduler->add_frame(
+            frame_distance, std::span<const double>(frame->crop_density.data(), zones));
         const Nanos scheduled = io_.clock->now();
         status.last_latency_ms = seconds(scheduled - frame->capture_time) * 1e3;
         ++status.frames_scheduled;
@@ -398,8 +401,11 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
                                          status.speed_m_per_s, compensation_pressure)
                      .duty_pct > 0.0;
         };
-        density = worker.scheduler->value_at(n - static_cast<std::size_t>(worker.first_nozzle),
-                                             status.distance_m, status.speed_m_per_s, sprays);
+        const std::size_t local = n - static_cast<std::size_t>(worker.first_nozzle);
+        density =
+            worker.scheduler->value_at(local, status.distance_m, status.speed_m_per_s, sprays);
+        status.crop_density[n] =
+            worker.crop_scheduler->duty_at(local, status.distance_m, status.speed_m_per_s);
       }
       status.density[n] = density;
       // A camera whose weed model fails closes its own nozzles until it processes frames again.
@@ -458,6 +464,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       for (std::size_t n = 0; n < nozzles; ++n) {
         record.duty_pct[n] = static_cast<float>(status.duty_pct[n]);
         record.density[n] = static_cast<float>(status.density[n]);
+        record.crop_density[n] = static_cast<float>(status.crop_density[n]);
       }
       records_.try_push(record);  // a full queue drops the record (the writer is stuck)
     }

@@ -90,6 +90,8 @@ class Sprayer {
     io::Camera* camera = nullptr;
     std::unique_ptr<vision::Pipeline> pipeline;
     std::unique_ptr<control::NozzleScheduler> scheduler;  // owned by the control loop
+    // The crop shares, pinned to the ground alike (status and the as-applied record only).
+    std::unique_ptr<control::NozzleScheduler> crop_scheduler;
     FrameQueue frames;
     io::LatestValue<CameraStatus> status;
     int first_nozzle = 0;

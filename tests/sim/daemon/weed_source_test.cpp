@@ -76,20 +76,30 @@ class SimRun {
   double elapsed_s() const {
     return std::chrono::duration<double>(backends_.clock->now() - start_).count();
   }
-  // Mean commanded duty of each nozzle from now until `until_s` of run time.
+  // Mean commanded duty of each nozzle from now until `until_s` of run time (and the mean
+  // crop share under each nozzle, in crop_).
   std::vector<double> mean_duty_until(double until_s) {
-    std::vector<double> sum(static_cast<std::size_t>(config_.boom.nozzles), 0.0);
+    const auto nozzles = static_cast<std::size_t>(config_.boom.nozzles);
+    std::vector<double> sum(nozzles, 0.0);
+    crop_.assign(nozzles, 0.0);
     int samples = 0;
     while (elapsed_s() < until_s) {
       backends_.drive_world(elapsed_s());
       const ControlStatus c = sprayer_->control();
-      for (std::size_t n = 0; n < sum.size(); ++n) sum[n] += c.duty_pct[n];
+      for (std::size_t n = 0; n < nozzles; ++n) {
+        sum[n] += c.duty_pct[n];
+        crop_[n] += c.crop_density[n];
+      }
       ++samples;
       std::this_thread::sleep_for(5ms);
     }
-    for (auto& s : sum) s /= std::max(samples, 1);
+    for (std::size_t n = 0; n < nozzles; ++n) {
+      sum[n] /= std::max(samples, 1);
+      crop_[n] /= std::max(samples, 1);
+    }
     return sum;
   }
+  const std::vector<double>& mean_crop() const { return crop_; }
   Sprayer& sprayer() { return *sprayer_; }
 
  private:
@@ -97,6 +107,7 @@ class SimRun {
   Backends backends_;
   std::unique_ptr<Sprayer> sprayer_;
   Nanos start_{};
+  std::vector<double> crop_;
 };
 
 // The ground imaged reaches the nozzles 1.2 m behind the camera's nadir about 1.3 s after the
@@ -108,7 +119,7 @@ TEST(WeedSource, SameFramesDifferentDutiesVegetationAndDnn) {
   // Left half: green plants and no weeds (crop to the network); right half: no green, weeds to
   // the network.
   const fs::path field = write_field("crop-left", kGreen, kBlue);
-  std::vector<double> vegetation, dnn;
+  std::vector<double> vegetation, dnn, dnn_crop;
   {
     SimRun run(field_config("vegetation"), field);
     run.mean_duty_until(kSteadyFrom_s);
@@ -118,6 +129,7 @@ TEST(WeedSource, SameFramesDifferentDutiesVegetationAndDnn) {
     SimRun run(field_config("dnn"), field);
     run.mean_duty_until(kSteadyFrom_s);
     dnn = run.mean_duty_until(kSteadyUntil_s);
+    dnn_crop = run.mean_crop();
     const CameraStatus camera = run.sprayer().camera(0);
     EXPECT_GT(camera.frames, 3U);
     EXPECT_EQ(camera.vision_failures, 0U);
@@ -130,11 +142,13 @@ TEST(WeedSource, SameFramesDifferentDutiesVegetationAndDnn) {
     SCOPED_TRACE("crop-only nozzle " + std::to_string(n));
     EXPECT_GT(vegetation[n], 10.0) << "vegetation sprays the crop";
     EXPECT_EQ(dnn[n], 0.0) << "dnn leaves the crop dry";
+    EXPECT_GT(dnn_crop[n], 0.05) << "and reports the crop under the nozzle";
   }
   for (std::size_t n = 2; n < 4; ++n) {
     SCOPED_TRACE("weedy nozzle " + std::to_string(n));
     EXPECT_EQ(vegetation[n], 0.0);
     EXPECT_GT(dnn[n], 10.0);
+    EXPECT_EQ(dnn_crop[n], 0.0);
   }
 }
 

@@ -51,6 +51,7 @@ TEST(AsAppliedLog, WritesOneLinePerRecordAndRotates) {
   r.distance_m = 1.5;
   r.duty_pct = {25, 50, 75, 100};
   r.density = {0.1f, 0.2f, 0.3f, 0.4f};
+  r.crop_density = {0.5f, 0.0f, 0.25f, 0.0f};
   {
     AsAppliedLog log(dir, 4096, 3);
     for (int i = 0; i < 400; ++i) {
@@ -68,11 +69,14 @@ TEST(AsAppliedLog, WritesOneLinePerRecordAndRotates) {
   std::getline(in, header);
   EXPECT_EQ(header,
             "time_s,distance_m,speed_m_per_s,pressure_mpa,flow_l_per_min,duty_pct_0,duty_pct_1,"
-            "duty_pct_2,duty_pct_3,density_0,density_1,density_2,density_3");
+            "duty_pct_2,duty_pct_3,density_0,density_1,density_2,density_3,crop_density_0,"
+            "crop_density_1,crop_density_2,crop_density_3");
   std::string line;
   std::getline(in, line);
   EXPECT_NE(line.find(",1.5000,"), std::string::npos) << line;
-  EXPECT_NE(line.find(",25.0,50.0,75.0,100.0,0.1000,0.2000,0.3000,0.4000"), std::string::npos)
+  EXPECT_NE(line.find(",25.0,50.0,75.0,100.0,0.1000,0.2000,0.3000,0.4000,0.5000,0.0000,0.2500,"
+                      "0.0000"),
+            std::string::npos)
       << line;
   for (const auto& f : files) EXPECT_LE(fs::file_size(f), 4096U + 200U);
   fs::remove_all(dir);
