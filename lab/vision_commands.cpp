@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 #include "lab/commands.hpp"
@@ -18,7 +19,19 @@ struct EvalOptions {
   bool weed_sources = false;
   bool bounds = false;
   bool keep_split = false;
+  std::string unimodal;  // empty: each index's default
+  int peak_margin = -1;  // < 0: the library's
 };
+
+// "unimodal policy: ..." for the table's heading.
+std::string unimodal_policy_text(const vision::ThresholdParams& params) {
+  if (params.unimodal != vision::UnimodalPolicy::kIndexDefault) {
+    return std::string(to_string(params.unimodal));
+  }
+  const vision::VegetationIndex index = vision::default_pipeline_config().index;
+  return "each index's default (" + std::string(to_string(index)) + ": " +
+         std::string(to_string(vision::default_unimodal_policy(index))) + ")";
+}
 
 int run_vision_eval(const EvalOptions& all) {
   if (all.weeds.class_masks || all.weed_sources) return run_weed_eval(all.weeds);
@@ -29,6 +42,15 @@ int run_vision_eval(const EvalOptions& all) {
       load_labelled_images(options.images_dir, options.masks_dir, stems);
   vision::PipelineConfig base = vision::default_pipeline_config();
   if (all.keep_split) base.threshold_params.unimodal = vision::UnimodalPolicy::kKeepSplit;
+  if (!all.unimodal.empty()) {
+    const auto policy = vision::parse_unimodal_policy(all.unimodal);
+    if (!policy) {
+      throw std::runtime_error("--unimodal: unknown policy '" + all.unimodal +
+                               "' (index_default, clear_of_peak, fixed_scale, keep_split)");
+    }
+    base.threshold_params.unimodal = *policy;
+  }
+  if (all.peak_margin >= 0) base.threshold_params.peak_margin = all.peak_margin;
   const std::vector<EvalRow> rows = evaluate_combinations(images, vision::all_vegetation_indices(),
                                                           vision::all_threshold_methods(), base);
   const vision::PipelineConfig defaults = vision::default_pipeline_config();
@@ -48,8 +70,9 @@ int run_vision_eval(const EvalOptions& all) {
                 std::string(to_string(defaults.threshold)).c_str());
     return 0;
   }
-  std::printf("%zu images from %s (unimodal policy: %s)\n\n", images.size(),
-              options.images_dir.c_str(), all.keep_split ? "keep split" : "fixed scale");
+  std::printf("%zu images from %s (unimodal policy: %s, peak margin %d)\n\n", images.size(),
+              options.images_dir.c_str(), unimodal_policy_text(base.threshold_params).c_str(),
+              base.threshold_params.peak_margin);
   std::printf("%-11s %-9s %8s %9s %9s %10s %9s\n", "index", "threshold", "mean_IoU", "mean_T",
               "eps_otsu", "rho_otsu_%", "ms/image");
   for (const EvalRow& row : rows) {
@@ -137,7 +160,16 @@ void add_vision_commands(CLI::App& app) {
   eval->add_flag("--bounds", eval_options->bounds,
                  "Also print per-index IoU upper bounds (best threshold per image / shared)");
   eval->add_flag("--keep-split", eval_options->keep_split,
-                 "Keep each method's split on unimodal histograms (the papers' behaviour)");
+                 "Keep each method's split on unimodal histograms (the papers' behaviour; "
+                 "= --unimodal keep_split)");
+  eval->add_option("--unimodal", eval_options->unimodal,
+                   "What frames that do not look bimodal get: index_default (CIVE, raw ExG: "
+                   "clear_of_peak; others: fixed_scale) | clear_of_peak | fixed_scale | "
+                   "keep_split");
+  eval->add_option("--peak-margin", eval_options->peak_margin,
+                   "clear_of_peak: levels above the histogram peak that are still soil "
+                   "(default 3)")
+      ->check(CLI::Range(0, 255));
   eval->callback(
       [eval_options] { run_reporting_errors([&] { return run_vision_eval(*eval_options); }); });
 

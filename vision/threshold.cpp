@@ -15,6 +15,14 @@ constexpr std::array<std::string_view, kMethods.size()> kMethodNames = {
     "fit", "otsu", "kmeans", "hbt", "pso", "ipso", "fixed",
 };
 
+// In UnimodalPolicy's order.
+constexpr std::array<std::string_view, 4> kPolicyNames = {
+    "index_default",
+    "clear_of_peak",
+    "fixed_scale",
+    "keep_split",
+};
+
 struct Extent {
   int min_level = 0;
   int max_level = 0;
@@ -248,6 +256,17 @@ std::span<const ThresholdMethod> all_threshold_methods() {
 }
 std::span<const std::string_view> threshold_method_names() {
   return kMethodNames;
+}
+
+std::string_view to_string(UnimodalPolicy policy) {
+  return kPolicyNames[static_cast<std::size_t>(policy)];
+}
+
+std::optional<UnimodalPolicy> parse_unimodal_policy(std::string_view name) {
+  for (std::size_t i = 0; i < kPolicyNames.size(); ++i) {
+    if (kPolicyNames[i] == name) return static_cast<UnimodalPolicy>(i);
+  }
+  return std::nullopt;
 }
 
 UnimodalPolicy default_unimodal_policy(VegetationIndex index) {

@@ -50,6 +50,10 @@ enum class UnimodalPolicy : std::uint8_t {
   kKeepSplit,   // keep the method's own split (the papers' behaviour; splits bare soil)
 };
 
+// Config names: "index_default", "clear_of_peak", "fixed_scale", "keep_split".
+std::string_view to_string(UnimodalPolicy policy);
+std::optional<UnimodalPolicy> parse_unimodal_policy(std::string_view name);
+
 // The policy measured best for an index on both bundled field sets (ews-train wheat, peanut;
 // weedspray-lab vision-eval): kClearOfPeak for CIVE and raw ExG, whose soil is a narrow peak
 // near the neutral level; kFixedScale for the others, where Otsu's unimodal split often lands

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+#include <filesystem>
 #include <stdexcept>
 #include <vector>
 
@@ -53,6 +55,36 @@ TEST(SavingsField, TruthAndVegetationDensities) {
   EXPECT_DOUBLE_EQ(green.weed_density[0][3], 0.25);
   EXPECT_DOUBLE_EQ(green.weed_density[0][0], 0.0);
   EXPECT_DOUBLE_EQ(green.truth[0][3].crop, 0.25);
+}
+
+// The savings experiment's field on the peanut validation photos: acting on true weeds sprays
+// no crop-only zone; acting on all vegetation (today's default) sprays nearly all of them and
+// uses more liquid. Missing data is a failure, not a skip.
+TEST(SavingsField, PeanutValidationPhotos) {
+  const char* data_dir = std::getenv("WEEDSPRAY_DATA_DIR");
+  const std::filesystem::path peanut = std::filesystem::path(data_dir ? data_dir : "") / "peanut";
+  ASSERT_TRUE(std::filesystem::is_directory(peanut / "images"))
+      << peanut << " not found (WEEDSPRAY_DATA_DIR)";
+  const std::vector<LabelledImage> photos =
+      load_labelled_images(peanut / "images", peanut / "masks",
+                           read_stem_list(std::filesystem::path(WEEDSPRAY_SOURCE_DIR) /
+                                          "tools/train/splits/peanut-val.txt"));
+  ASSERT_EQ(photos.size(), 60u);
+  control::experiments::SavingsOptions options;
+  options.max_density = 1.0;
+  options.decision_threshold = 0.005;  // = the weedy share: truth leaves no weedy zone dry
+  const LabelledField truth = labelled_field(photos, std::nullopt);
+  const LabelledField green = labelled_field(photos, vision::default_pipeline_config());
+  const auto on_truth = control::experiments::run_savings(truth.weed_density, options);
+  const auto on_green = control::experiments::run_savings(green.weed_density, options);
+  const auto truth_tally = tally_against_truth(on_truth.equal_coverage, truth.truth);
+  const auto green_tally = tally_against_truth(on_green.equal_coverage, green.truth);
+  EXPECT_GT(truth_tally.weedy_zones, 200);
+  EXPECT_GT(truth_tally.crop_only_zones, 50);
+  EXPECT_EQ(truth_tally.weedy_left_dry, 0);
+  EXPECT_EQ(truth_tally.crop_only_sprayed, 0);
+  EXPECT_GT(green_tally.crop_only_sprayed, 0.9 * green_tally.crop_only_zones);
+  EXPECT_GT(on_truth.savings_pct, on_green.savings_pct + 5.0);
 }
 
 }  // namespace

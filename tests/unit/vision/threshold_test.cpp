@@ -189,6 +189,12 @@ TEST(ClearOfPeak, IsTheDefaultOfCiveAndRawExgOnly) {
   EXPECT_EQ(default_unimodal_policy(VegetationIndex::kExgRaw), UnimodalPolicy::kClearOfPeak);
   EXPECT_EQ(default_unimodal_policy(VegetationIndex::kExgNormalized), UnimodalPolicy::kFixedScale);
   EXPECT_EQ(ThresholdParams{}.unimodal, UnimodalPolicy::kIndexDefault);
+  for (auto policy : {UnimodalPolicy::kIndexDefault, UnimodalPolicy::kClearOfPeak,
+                      UnimodalPolicy::kFixedScale, UnimodalPolicy::kKeepSplit}) {
+    EXPECT_EQ(parse_unimodal_policy(to_string(policy)), policy);
+  }
+  EXPECT_EQ(parse_unimodal_policy("clear_of_peak"), UnimodalPolicy::kClearOfPeak);
+  EXPECT_FALSE(parse_unimodal_policy("fixed").has_value());
 }
 
 double share_above(const Histogram& histogram, int threshold) {
