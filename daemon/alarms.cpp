@@ -66,13 +66,17 @@ AlarmMask AlarmEvaluator::clear() noexcept {
 AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
   const auto& t = thresholds_;
   std::array<bool, kAlarmCount> condition{};
-  std::array<bool, kAlarmCount> debounced{};
+  std::array<double, kAlarmCount> hold_s{};  // how long a condition must last to raise
   const auto set = [&](AlarmId id, bool present, bool needs_debounce) {
     condition[static_cast<std::size_t>(id)] = present;
-    debounced[static_cast<std::size_t>(id)] = needs_debounce;
+    hold_s[static_cast<std::size_t>(id)] = needs_debounce ? t.debounce_s : 0.0;
   };
   const bool valves_open = in.spraying && in.open_fraction > 0.05;
   set(AlarmId::kPressureSensorFault, !in.pressure_valid, false);
+  // One bad reading (a glitch on the loop, a lost converter sample) must not latch Fault: the
+  // pressure loop already stops the pump in every cycle whose reading is bad, so the machine
+  // is safe meanwhile; only a fault that persists is latched.
+  hold_s[static_cast<std::size_t>(AlarmId::kPressureSensorFault)] = t.sensor_fault_hold_s;
   set(AlarmId::kOverPressure,
       in.over_pressure_trip || (in.pressure_valid && in.pressure_mpa > t.over_pressure_mpa), false);
   set(AlarmId::kLineBlocked,
@@ -111,7 +115,7 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
       continue;
     }
     if (!condition_since_[i]) condition_since_[i] = in.now;
-    if (debounced[i] && seconds(in.now - *condition_since_[i]) < t.debounce_s) continue;
+    if (seconds(in.now - *condition_since_[i]) < hold_s[i]) continue;
     present_ |= alarm_bit(id);
     if (!(latched_ & alarm_bit(id))) {
       latched_ |= alarm_bit(id);

@@ -203,6 +203,7 @@ struct AlarmsSection {
   double modbus_silent_s;
   double camera_stall_s;
   double debounce_s;
+  double sensor_fault_hold_s;  // a pressure-sensor fault must last this long to latch
   double timing_tolerance_ms;  // lateness that affects spraying
   int control_overrun_limit;   // such misses per second that raise control_overruns
 };

@@ -355,6 +355,9 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "no frame for this long raises camera_lost"},
     {WS_KEY(alarms, debounce_s), 1.0, 0, 60, "s",
      "a flow/pressure condition must hold this long before it raises an alarm"},
+    {WS_KEY(alarms, sensor_fault_hold_s), 0.15, 0, 5, "s",
+     "a pressure-sensor fault must last this long before it latches Fault (the pump is off "
+     "from the first bad reading)"},
     {WS_KEY(alarms, timing_tolerance_ms), 5.0, 0.5, 100, "ms",
      "while spraying, a valve edge or control-loop cycle later than this, or a missed "
      "pressure-loop period, is a deadline miss that affects spraying"},

@@ -283,6 +283,7 @@ class Daemon final : public CommandHandler {
     inject_sim_faults(t);
     const PressureStatus pressure = sprayer_->pressure();
     const ControlStatus control = sprayer_->control();
+    report_stalls(pressure);
 
     if (state_.state() == SprayerState::kStarting && pressure.cycles > 0 && control.cycles > 0) {
       transition(StateEvent::kSetupDone, "loops running");
@@ -438,6 +439,19 @@ class Daemon final : public CommandHandler {
   // Lateness that affects spraying (alarms.timing_tolerance_ms), in any loop.
   std::uint64_t total_misses(const PressureStatus& pressure, const ControlStatus& control) const {
     return pressure.misses + control.misses + sprayer_->pwm().missed_edges;
+  }
+
+  // The loops' cross-watch acted: say so (the late wakes also count as misses).
+  void report_stalls(const PressureStatus& pressure) {
+    const std::uint64_t pressure_stalls = sprayer_->pressure_loop_stalls();
+    if (pressure_stalls != pressure_stalls_seen_) {
+      spdlog::error("pressure loop stalled with the pump on: the valve thread switched it off");
+      pressure_stalls_seen_ = pressure_stalls;
+    }
+    if (pressure.valve_thread_stalls != valve_stalls_seen_) {
+      spdlog::error("valve thread stalled: pump off and return valve open until it runs again");
+      valve_stalls_seen_ = pressure.valve_thread_stalls;
+    }
   }
 
   // A PM QoS request keeps the CPUs out of slow idle states while the loops run (see
@@ -646,6 +660,8 @@ class Daemon final : public CommandHandler {
   std::uint64_t heartbeat_pressure_ = 0;
   std::uint64_t heartbeat_control_ = 0;
   std::uint64_t heartbeat_valves_ = 0;
+  std::uint64_t pressure_stalls_seen_ = 0;
+  std::uint64_t valve_stalls_seen_ = 0;
   std::vector<float> latencies_;
   std::size_t latency_next_ = 0;
   double last_status_s_ = -1e9;

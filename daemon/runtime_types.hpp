@@ -40,7 +40,8 @@ struct PressureStatus {
   std::uint64_t overruns = 0;
   std::uint64_t misses = 0;  // lateness that affects spraying (alarms.timing_tolerance_ms)
   std::uint64_t adc_errors = 0;
-  std::uint64_t stale_samples = 0;  // cycles whose newest ADC sample was too old to use
+  std::uint64_t valve_thread_stalls = 0;  // times the valve thread stopped advancing
+  std::uint64_t stale_samples = 0;        // cycles whose newest ADC sample was too old to use
 };
 
 // Camera worker -> control loop, one per processed frame.

@@ -102,6 +102,10 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
   driver.max_sleep = std::chrono::milliseconds(2);
   driver.miss_tolerance = from_seconds(config.alarms.timing_tolerance_ms / 1e3);
   driver.lateness = &timing_.valve_edges;
+  driver.on_wake = [](void* self, Nanos now) noexcept {
+    static_cast<Sprayer*>(self)->watch_pressure_loop(now);
+  };
+  driver.on_wake_context = this;
   pwm_driver_ = std::make_unique<io::ValvePwmDriver<control::PwmSchedule>>(*io_.clock, *io_.valves,
                                                                            *schedule_, driver);
   io::AnalogIoTiming analog_timing;
@@ -234,6 +238,19 @@ void Sprayer::stop() noexcept {
   io_.force_safe();
 }
 
+void Sprayer::watch_pressure_loop(Nanos now) noexcept {
+  PressureStatus pressure;
+  if (!pressure_.try_read(pressure)) return;
+  const bool stalled = pressure_watch_.stale(pressure.cycles, now);
+  if (stalled && pressure.pump_on && !pump_forced_off_.load()) {
+    // The pressure loop owns the pump, but it is not running: switch the pump off from here
+    // (force_safe is a single ioctl, safe beside a writer stuck in the kernel).
+    if (io_.pump != nullptr) io_.pump->force_safe();
+    pump_forced_off_.store(true);
+    pressure_loop_stalls_.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
 Nanos Sprayer::pressure_period() const noexcept {
   return from_seconds(1.0 / config_.pressure.loop_hz);
 }
@@ -252,8 +269,22 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
   PressureStatus status;
   bool outputs_safe = false;
   const double dt = seconds(period);
+  io::LoopWatch valve_thread(kCrossWatchTimeout);
+  bool valves_stalled = false;
   while (!stop.stop_requested()) {
     loop.wait_next();
+    // The valve thread switched the pump off while this loop was stalled: the pump state this
+    // loop believes in is gone, so decide it afresh.
+    if (pump_forced_off_.exchange(false)) {
+      status.pump_on = false;
+      outputs_safe = false;
+    }
+    io::ValvePwmStats valves;
+    if (pwm_driver_->try_stats(valves)) {
+      const bool stalled = valve_thread.stale(valves.wakes, io_.clock->now());
+      if (stalled && !valves_stalled) ++status.valve_thread_stalls;
+      valves_stalled = stalled;
+    }
     if (params_.version() != params_version) {
       params_version = params_.version();
       params_.try_read(params);
@@ -275,7 +306,8 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
     // Over-pressure: pump off in this very cycle; the main loop raises the alarm.
     if (status.sensor_ok && status.pressure_mpa > params.over_pressure_mpa) status.tripped = true;
 
-    if (params.pump_enabled && status.sensor_ok && !status.tripped) {
+    // A stalled valve thread may hold valves open or shut: no pump, return valve open.
+    if (params.pump_enabled && status.sensor_ok && !status.tripped && !valves_stalled) {
       if (io_.pump != nullptr && !status.pump_on) io_.pump->write(1);
       status.pump_on = true;
       outputs_safe = false;

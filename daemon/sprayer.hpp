@@ -28,6 +28,7 @@
 #include "daemon/runtime_types.hpp"
 #include "io/analog_io_worker.hpp"
 #include "io/latest_value.hpp"
+#include "io/loop_watch.hpp"
 #include "io/realtime.hpp"
 #include "io/spsc_queue.hpp"
 #include "io/tank_level.hpp"
@@ -68,6 +69,8 @@ class Sprayer {
   io::AnalogIoStats analog_io() const noexcept { return analog_io_->stats(); }
   // Lateness histograms of the real-time loops (readable from any thread).
   const LoopTiming& timing() const noexcept { return timing_; }
+  // Times the valve thread found the pressure loop stalled with the pump on and switched it off.
+  std::uint64_t pressure_loop_stalls() const noexcept { return pressure_loop_stalls_.load(); }
   // Threads that asked for SCHED_FIFO but did not get it.
   std::vector<std::string> realtime_warnings() const;
 
@@ -104,6 +107,8 @@ class Sprayer {
   };
 
   Nanos pressure_period() const noexcept;
+  // Runs on the valve thread at every wake: the pressure loop's dead-man.
+  void watch_pressure_loop(Nanos now) noexcept;
   void pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept;
   void control_loop(std::stop_token stop) noexcept;
   void camera_loop(std::stop_token stop, CameraWorker& worker) noexcept;
@@ -132,6 +137,11 @@ class Sprayer {
   std::vector<std::string> thread_names_;
   std::atomic<bool> stopped_{true};
   LoopTiming timing_;
+  // Cross-watch between the valve thread and the pressure loop (io/loop_watch.hpp).
+  static constexpr Nanos kCrossWatchTimeout = std::chrono::milliseconds(50);
+  io::LoopWatch pressure_watch_{kCrossWatchTimeout};  // used by the valve thread only
+  std::atomic<bool> pump_forced_off_{false};
+  std::atomic<std::uint64_t> pressure_loop_stalls_{0};
 };
 
 }  // namespace weedspray::daemon

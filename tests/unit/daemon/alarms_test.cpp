@@ -66,13 +66,27 @@ TEST(Alarms, TripFromThePressureLoopCounts) {
   EXPECT_EQ(alarms.evaluate(in), alarm_bit(AlarmId::kOverPressure));
 }
 
-TEST(Alarms, SensorFault) {
-  AlarmEvaluator alarms(thresholds());
+TEST(Alarms, SensorFaultLatchesOnceItLasts) {
+  AlarmEvaluator alarms(thresholds());  // sensor_fault_hold_s 0.15 s
   auto in = healthy(1s);
   in.pressure_valid = false;
   in.sensor_current_ma = 0.0;
-  EXPECT_EQ(alarms.evaluate(in), alarm_bit(AlarmId::kPressureSensorFault));
+  EXPECT_EQ(alarms.evaluate(in), 0U) << "the first bad reading only stops the pump";
+  EXPECT_EQ(alarms.evaluate(at(in, 1100ms)), 0U);
+  EXPECT_EQ(alarms.evaluate(at(in, 1200ms)), alarm_bit(AlarmId::kPressureSensorFault));
   EXPECT_TRUE(is_fault(AlarmId::kPressureSensorFault));
+}
+
+TEST(Alarms, OneBadSensorReadingDoesNotLatchFault) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(1s);
+  in.pressure_valid = false;
+  EXPECT_EQ(alarms.evaluate(in), 0U);
+  in.pressure_valid = true;
+  EXPECT_EQ(alarms.evaluate(at(in, 1050ms)), 0U);
+  in.pressure_valid = false;
+  EXPECT_EQ(alarms.evaluate(at(in, 1100ms)), 0U) << "the hold restarts after a good reading";
+  EXPECT_FALSE(alarms.fault_latched());
 }
 
 TEST(Alarms, LineBlockedNeedsTheDebounce) {
