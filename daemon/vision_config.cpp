@@ -116,8 +116,13 @@ std::shared_ptr<LoadedModel> read_model(const Config& config) {
   auto model = std::make_shared<LoadedModel>();
   model->path = find_model(config);
   std::error_code error;
-  if (std::filesystem::is_directory(model->path, error)) {
-    throw VisionKeyError("vision.model", model->path.string() + " is a folder, not a model file");
+  if (!std::filesystem::is_regular_file(model->path, error)) {
+    throw VisionKeyError("vision.model", model->path.string() + " is not a regular file");
+  }
+  // Far above any network a sprayer's board runs in a frame's time (the shipped one is ~2 MB).
+  constexpr std::uintmax_t kMaxModelBytes = 256u << 20;
+  if (std::filesystem::file_size(model->path, error) > kMaxModelBytes) {
+    throw VisionKeyError("vision.model", model->path.string() + " is larger than 256 MiB");
   }
   std::ifstream in(model->path, std::ios::binary);
   if (!in) throw VisionKeyError("vision.model", model->path.string() + " cannot be read");

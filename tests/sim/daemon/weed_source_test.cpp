@@ -88,18 +88,21 @@ class StreamingCamera final : public io::Camera {
 // Runs the sprayer on the simulated machine and samples what it commands.
 class SimRun {
  public:
-  // streaming_period > 0: StreamingCameras of `images` (one file) replace the replay cameras.
-  SimRun(const Config& config, const fs::path& images, Nanos streaming_period = Nanos(0))
+  // streaming_period > 0: StreamingCameras replace the replay cameras, camera i streaming
+  // camera_images[i] (or `images`, one file, when camera_images is empty).
+  SimRun(const Config& config, const fs::path& images, Nanos streaming_period = Nanos(0),
+         const std::vector<fs::path>& camera_images = {})
       : config_(config) {
     Options options;
     options.sim = true;
     options.sim_images = images.string();
     backends_ = make_sim_backends(config, options);
     if (streaming_period.count() > 0) {
-      for (auto*& camera : backends_.cameras) {
+      for (std::size_t i = 0; i < backends_.cameras.size(); ++i) {
+        const fs::path& image = camera_images.empty() ? images : camera_images.at(i);
         streaming_.push_back(
-            std::make_unique<StreamingCamera>(images, *backends_.clock, streaming_period));
-        camera = streaming_.back().get();
+            std::make_unique<StreamingCamera>(image, *backends_.clock, streaming_period));
+        backends_.cameras[i] = streaming_.back().get();
       }
     }
     sprayer_ = std::make_unique<Sprayer>(config, backends_);
@@ -130,6 +133,9 @@ class SimRun {
         sum[n] += c.duty_pct[n];
         crop_[n] += c.crop_density[n];
       }
+      const CameraStatus camera = sprayer_->camera(0);
+      if (camera.frames != frames_seen_) vision_ms_.push_back(camera.vision_ms);
+      frames_seen_ = camera.frames;
       ++samples;
       std::this_thread::sleep_for(5ms);
     }
@@ -140,6 +146,13 @@ class SimRun {
     return sum;
   }
   const std::vector<double>& mean_crop() const { return crop_; }
+  // Median time camera 0's worker spent in Pipeline::process() per frame so far.
+  double median_vision_ms() {
+    if (vision_ms_.empty()) return 0;
+    std::nth_element(vision_ms_.begin(), vision_ms_.begin() + vision_ms_.size() / 2,
+                     vision_ms_.end());
+    return vision_ms_[vision_ms_.size() / 2];
+  }
   Sprayer& sprayer() { return *sprayer_; }
 
  private:
@@ -149,6 +162,8 @@ class SimRun {
   std::unique_ptr<Sprayer> sprayer_;
   Nanos start_{};
   std::vector<double> crop_;
+  std::vector<double> vision_ms_;
+  std::uint64_t frames_seen_ = 0;
 };
 
 // The ground imaged reaches the nozzles 1.2 m behind the camera's nadir about 1.3 s after the

@@ -113,6 +113,11 @@ TEST(WeedSourceConfig, UnloadableModelIsNamed) {
   EXPECT_NE(std::string(e.what()).find("not a loadable ONNX model"), std::string::npos) << e.what();
   const auto folder = parse_error("[vision]\nweed_source = \"dnn\"\nmodel = \"/tmp\"\n");
   EXPECT_EQ(folder.key(), "vision.model");
+  EXPECT_NE(std::string(folder.what()).find("not a regular file"), std::string::npos);
+  // A device would be read forever.
+  const auto device = parse_error("[vision]\nweed_source = \"dnn\"\nmodel = \"/dev/zero\"\n");
+  EXPECT_NE(std::string(device.what()).find("/dev/zero is not a regular file"), std::string::npos)
+      << device.what();
 }
 
 TEST(WeedSourceConfig, OutputChannelsMustMatchTheClassList) {
