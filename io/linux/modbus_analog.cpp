@@ -1,5 +1,7 @@
 #include "io/linux/modbus_analog.hpp"
 
+#include <time.h>
+
 #include <modbus/modbus.h>
 
 #include <algorithm>
@@ -10,6 +12,13 @@
 namespace weedspray::io::hw {
 
 namespace {
+
+// The output has no injected clock; the monotonic clock only rate-limits port reopening.
+std::chrono::nanoseconds reopen_clock() noexcept {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return std::chrono::seconds{ts.tv_sec} + std::chrono::nanoseconds{ts.tv_nsec};
+}
 
 void check_register(int address, const std::string& what, const std::string& device) {
   if (address < 0 || address > 0xFFFF)
@@ -24,7 +33,8 @@ ModbusAnalogInput::ModbusAnalogInput(const ModbusAnalogInputConfig& config, cons
   if (!(config.volts_per_count > 0.0))
     throw std::runtime_error("modbus analog input (" + config.port.device +
                              "): volts_per_count must be > 0");
-  ctx_ = detail::open_modbus_rtu(config.port, "modbus analog input");
+  ctx_ = detail::open_modbus_rtu(config.port, "modbus analog input",
+                                 detail::ModbusRecovery::kFlushOnly);
 }
 
 AnalogSample ModbusAnalogInput::read() noexcept {
@@ -40,14 +50,15 @@ AnalogSample ModbusAnalogInput::read() noexcept {
     s.ok = true;
   } else {
     ++errors_;
-    last_error_ = modbus_strerror(err);
-    if (detail::classify_modbus_error(err) == detail::ModbusErrorKind::kPort) {
-      modbus_close(ctx_.get());
-      modbus_connect(ctx_.get());
-    }
+    last_errno_ = err;
+    detail::recover_after_error(ctx_.get(), err, s.time, last_reopen_);
   }
   s.error_count = errors_;
   return s;
+}
+
+std::string ModbusAnalogInput::last_error() const {
+  return last_errno_ == 0 ? std::string() : modbus_strerror(last_errno_);
 }
 
 ModbusAnalogOutput::ModbusAnalogOutput(const ModbusAnalogOutputConfig& config) : config_(config) {
@@ -55,7 +66,8 @@ ModbusAnalogOutput::ModbusAnalogOutput(const ModbusAnalogOutputConfig& config) :
   if (!(config.volts_per_count > 0.0))
     throw std::runtime_error("modbus analog output (" + config.port.device +
                              "): volts_per_count must be > 0");
-  ctx_ = detail::open_modbus_rtu(config.port, "modbus analog output");
+  ctx_ = detail::open_modbus_rtu(config.port, "modbus analog output",
+                                 detail::ModbusRecovery::kFlushOnly);
   if (write(config.safe_volts) != 0)
     throw std::runtime_error("modbus analog output (" + config.port.device +
                              "): writing the safe value failed: " + modbus_strerror(errno));
@@ -73,10 +85,7 @@ int ModbusAnalogOutput::write(double volts) noexcept {
                             static_cast<std::uint16_t>(raw)) != 1) {
     const int err = errno;
     ++errors_;
-    if (detail::classify_modbus_error(err) == detail::ModbusErrorKind::kPort) {
-      modbus_close(ctx_.get());
-      modbus_connect(ctx_.get());
-    }
+    detail::recover_after_error(ctx_.get(), err, reopen_clock(), last_reopen_);
     return err > 0 ? -err : -EIO;
   }
   return 0;

@@ -34,14 +34,16 @@ class ModbusAnalogInput final : public AnalogInput {
   // Throws std::runtime_error naming the device/setting.
   ModbusAnalogInput(const ModbusAnalogInputConfig& config, const Clock& clock);
   AnalogSample read() noexcept override;
-  std::string last_error() const { return last_error_; }
+  // The last failure in words (formatted here, not on the converters' thread).
+  std::string last_error() const;
 
  private:
   ModbusAnalogInputConfig config_;
   const Clock& clock_;
   ModbusContext ctx_;
   std::uint64_t errors_ = 0;
-  std::string last_error_;
+  int last_errno_ = 0;
+  std::chrono::nanoseconds last_reopen_{std::chrono::nanoseconds::min() / 2};
 };
 
 class ModbusAnalogOutput final : public AnalogOutput {
@@ -58,6 +60,7 @@ class ModbusAnalogOutput final : public AnalogOutput {
   ModbusAnalogOutputConfig config_;
   ModbusContext ctx_;
   std::uint64_t errors_ = 0;
+  std::chrono::nanoseconds last_reopen_{std::chrono::nanoseconds::min() / 2};
 };
 
 }  // namespace weedspray::io::hw

@@ -14,7 +14,8 @@ void ModbusDeleter::operator()(_modbus* ctx) const noexcept {
 
 namespace detail {
 
-ModbusContext open_modbus_rtu(const ModbusRtuSettings& c, const std::string& what) {
+ModbusContext open_modbus_rtu(const ModbusRtuSettings& c, const std::string& what,
+                              ModbusRecovery recovery) {
   const std::string where = what + " (" + c.device + "): ";
   if (c.parity != 'N' && c.parity != 'E' && c.parity != 'O')
     throw std::runtime_error(where + "parity must be 'N', 'E' or 'O', got '" +
@@ -37,7 +38,9 @@ ModbusContext open_modbus_rtu(const ModbusRtuSettings& c, const std::string& wha
   modbus_set_response_timeout(ctx.get(), static_cast<std::uint32_t>(us / 1'000'000),
                               static_cast<std::uint32_t>(us % 1'000'000));
   // After a bad frame, wait out the line and flush, so garbage does not poison the next read.
-  modbus_set_error_recovery(ctx.get(), MODBUS_ERROR_RECOVERY_PROTOCOL);
+  modbus_set_error_recovery(ctx.get(), recovery == ModbusRecovery::kWaitAndFlush
+                                           ? MODBUS_ERROR_RECOVERY_PROTOCOL
+                                           : MODBUS_ERROR_RECOVERY_NONE);
   if (modbus_connect(ctx.get()) != 0)
     throw std::runtime_error(where + "cannot open the serial port: " + modbus_strerror(errno));
   return ctx;
@@ -50,6 +53,18 @@ ModbusErrorKind classify_modbus_error(int err) noexcept {
       err == EMBBADSLAVE || (err >= EMBXILFUN && err <= EMBXGTAR))
     return ModbusErrorKind::kInvalid;
   return ModbusErrorKind::kPort;
+}
+
+void recover_after_error(_modbus* ctx, int err, std::chrono::nanoseconds now,
+                         std::chrono::nanoseconds& last_reopen) noexcept {
+  if (classify_modbus_error(err) != ModbusErrorKind::kPort) {
+    modbus_flush(ctx);
+    return;
+  }
+  if (now - last_reopen < std::chrono::seconds(1)) return;
+  last_reopen = now;
+  modbus_close(ctx);
+  modbus_connect(ctx);
 }
 
 }  // namespace detail

@@ -27,9 +27,23 @@ struct ModbusRtuSettings {
 
 namespace detail {
 
-// Validates, creates, configures (slave, timeout, protocol error recovery) and connects.
+// How a context gets over a bad frame. kWaitAndFlush is libmodbus's protocol recovery: it
+// sleeps a whole response timeout, then flushes (fine on a slow polling thread). kFlushOnly
+// leaves recovery to the caller, who flushes at once (recover_after_error): the pressure
+// converters' real-time thread cannot lose a response timeout - its sample is stale after
+// three loop periods.
+enum class ModbusRecovery { kWaitAndFlush, kFlushOnly };
+
+// Validates, creates, configures (slave, timeout, error recovery) and connects.
 // Throws std::runtime_error starting with `what` and naming the device/setting.
-ModbusContext open_modbus_rtu(const ModbusRtuSettings& settings, const std::string& what);
+ModbusContext open_modbus_rtu(const ModbusRtuSettings& settings, const std::string& what,
+                              ModbusRecovery recovery = ModbusRecovery::kWaitAndFlush);
+
+// After a failed transaction on a kFlushOnly context: a bad frame or timeout discards what is
+// left in the input buffer (tcflush, no sleep); a port error reopens the port, at most once a
+// second (`last_reopen`, `now` on the caller's clock). Allocation-free.
+void recover_after_error(_modbus* ctx, int err, std::chrono::nanoseconds now,
+                         std::chrono::nanoseconds& last_reopen) noexcept;
 
 // The libmodbus error classes the backends count.
 enum class ModbusErrorKind { kTimeout, kCrc, kInvalid, kPort };
