@@ -8,13 +8,14 @@ void Backends::force_safe() noexcept {
   if (return_valve != nullptr) return_valve->force_safe();
   if (buzzer != nullptr) buzzer->force_safe();
   if (led != nullptr) led->force_safe();
+  if (heartbeat != nullptr) heartbeat->force_safe();
 }
 
 std::size_t Backends::register_emergency_writes() const noexcept {
   io::EmergencyOutputs::clear();
   std::size_t registered = 0;
   io::EmergencyWrite write;
-  for (const io::DigitalOutputBank* bank : {valves, pump, buzzer, led}) {
+  for (const io::DigitalOutputBank* bank : {valves, pump, buzzer, led, heartbeat}) {
     if (bank != nullptr && bank->emergency_write(write) && io::EmergencyOutputs::add(write))
       ++registered;
   }

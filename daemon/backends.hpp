@@ -27,10 +27,11 @@ namespace weedspray::daemon {
 
 struct Backends {
   io::Clock* clock = nullptr;
-  io::DigitalOutputBank* valves = nullptr;  // one line per nozzle
-  io::DigitalOutputBank* pump = nullptr;    // null: not wired
-  io::DigitalOutputBank* buzzer = nullptr;  // null: not wired
-  io::DigitalOutputBank* led = nullptr;     // null: not wired
+  io::DigitalOutputBank* valves = nullptr;     // one line per nozzle
+  io::DigitalOutputBank* pump = nullptr;       // null: not wired
+  io::DigitalOutputBank* buzzer = nullptr;     // null: not wired
+  io::DigitalOutputBank* led = nullptr;        // null: not wired
+  io::DigitalOutputBank* heartbeat = nullptr;  // null: not wired (valve thread's square wave)
   io::AnalogInput* pressure_adc = nullptr;
   io::AnalogOutput* return_valve = nullptr;
   io::PulseInput* flow = nullptr;       // null: no flow meter

@@ -85,6 +85,9 @@ int write_hw_safe_outputs(const Config& config, std::vector<std::string>& errors
   attempt("led", [&](Backends& b) {
     b.led = single_line(b, gpio, gpio.led_name, gpio.led_offset, false);
   });
+  attempt("heartbeat", [&](Backends& b) {
+    b.heartbeat = single_line(b, gpio, gpio.heartbeat_name, gpio.heartbeat_offset, false);
+  });
   attempt("return valve", [&](Backends& b) {
     b.clock = keep(b, std::make_shared<io::hw::MonotonicClock>());
     PressureConverters converters = make_hw_pressure_converters(config, *b.clock);
@@ -119,6 +122,7 @@ Backends make_hw_backends(const Config& config) {
   b.pump = single_line(b, gpio, gpio.pump_name, gpio.pump_offset, gpio.pump_active_low);
   b.buzzer = single_line(b, gpio, gpio.buzzer_name, gpio.buzzer_offset, false);
   b.led = single_line(b, gpio, gpio.led_name, gpio.led_offset, false);
+  b.heartbeat = single_line(b, gpio, gpio.heartbeat_name, gpio.heartbeat_offset, false);
   if (config.flow.counter.empty()) {
     b.flow = pulse_line(b, gpio, gpio.flow_name, gpio.flow_offset);
   } else {

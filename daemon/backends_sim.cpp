@@ -66,6 +66,8 @@ Backends make_sim_backends(const Config& config, const Options& options) {
   auto tank = std::make_shared<io::sim::RigTankLevel>(*rig, *clock);
   auto buzzer = std::make_shared<io::sim::MemoryOutputBank>(1, 0, *clock);
   auto led = std::make_shared<io::sim::MemoryOutputBank>(1, 0, *clock);
+  // Keeps its last 4096 edges so tests can see the wave.
+  auto heartbeat = std::make_shared<io::sim::MemoryOutputBank>(1, 0, *clock, 4096);
   b.valves = valves.get();
   b.pump = pump.get();
   b.pressure_adc = adc.get();
@@ -75,10 +77,12 @@ Backends make_sim_backends(const Config& config, const Options& options) {
   b.tank = tank.get();
   b.buzzer = buzzer.get();
   b.led = led.get();
+  b.heartbeat = heartbeat.get();
   for (std::shared_ptr<void> p :
        {std::shared_ptr<void>(valves), std::shared_ptr<void>(pump), std::shared_ptr<void>(adc),
         std::shared_ptr<void>(dac), std::shared_ptr<void>(flow), std::shared_ptr<void>(wheel),
-        std::shared_ptr<void>(tank), std::shared_ptr<void>(buzzer), std::shared_ptr<void>(led)}) {
+        std::shared_ptr<void>(tank), std::shared_ptr<void>(buzzer), std::shared_ptr<void>(led),
+        std::shared_ptr<void>(heartbeat)}) {
     b.owned.push_back(p);
   }
   b.sensor = pressure_sensor_config(config);

@@ -128,6 +128,9 @@ struct GpioSection {
   std::string buzzer_name;
   int led_offset;
   std::string led_name;
+  int heartbeat_offset;  // square wave while the valve thread runs (external dead-man relay)
+  std::string heartbeat_name;
+  double heartbeat_hz;
   int key_offset;
   std::string key_name;
   bool key_active_low;

@@ -316,6 +316,7 @@ class Loader {
          {std::tuple{&c.gpio.pump_name, c.gpio.pump_offset, "gpio.pump_name"},
           std::tuple{&c.gpio.buzzer_name, c.gpio.buzzer_offset, "gpio.buzzer_name"},
           std::tuple{&c.gpio.led_name, c.gpio.led_offset, "gpio.led_name"},
+          std::tuple{&c.gpio.heartbeat_name, c.gpio.heartbeat_offset, "gpio.heartbeat_name"},
           std::tuple{&c.gpio.key_name, c.gpio.key_offset, "gpio.key_name"},
           std::tuple{&c.gpio.flow_name, c.gpio.flow_offset, "gpio.flow_name"},
           std::tuple{&c.gpio.wheel_name, c.gpio.wheel_offset, "gpio.wheel_name"}}) {

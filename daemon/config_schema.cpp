@@ -237,6 +237,13 @@ const std::vector<KeySpec<Config>>& config_keys() {
     {WS_KEY(gpio, led_offset), -1, -1, 1023, "line", "alarm LED line (-1 = none)"},
     {WS_KEY(gpio, led_name), std::string(""), 0, 0, "",
      "alarm LED line by name instead of offset (empty = use the offset)"},
+    {WS_KEY(gpio, heartbeat_offset), -1, -1, 1023, "line",
+     "heartbeat output (-1 = none): a square wave from the valve thread while the real-time "
+     "core runs, low when it stops; drives a retriggerable relay that powers the valves"},
+    {WS_KEY(gpio, heartbeat_name), std::string(""), 0, 0, "",
+     "heartbeat line by name instead of offset (empty = use the offset)"},
+    {WS_KEY(gpio, heartbeat_hz), 50.0, 1, 250, "Hz",
+     "heartbeat square-wave frequency (the relay's hold-up time must exceed a few periods)"},
     {WS_KEY(gpio, key_offset), -1, -1, 1023, "line",
      "start/stop key input (-1 = none); each press toggles Idle/Spraying"},
     {WS_KEY(gpio, key_name), std::string(""), 0, 0, "",

@@ -106,6 +106,8 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
     static_cast<Sprayer*>(self)->watch_pressure_loop(now);
   };
   driver.on_wake_context = this;
+  driver.heartbeat = io_.heartbeat;
+  driver.heartbeat_half_period = from_seconds(0.5 / config.gpio.heartbeat_hz);
   pwm_driver_ = std::make_unique<io::ValvePwmDriver<control::PwmSchedule>>(*io_.clock, *io_.valves,
                                                                            *schedule_, driver);
   io::AnalogIoTiming analog_timing;

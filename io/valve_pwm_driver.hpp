@@ -55,10 +55,16 @@ struct ValvePwmDriverConfig {
   // must be real-time safe. A plain function pointer: nothing to allocate or copy.
   void (*on_wake)(void* context, std::chrono::nanoseconds now) noexcept = nullptr;
   void* on_wake_context = nullptr;
+  // Heartbeat output (LinuxCNC's charge pump): toggled every half period while this loop runs,
+  // left at its safe (low) value when it returns. An external retriggerable relay powers the
+  // valves only while the wave comes, so a stopped real-time core cuts them in hardware.
+  DigitalOutputBank* heartbeat = nullptr;
+  std::chrono::nanoseconds heartbeat_half_period = std::chrono::milliseconds(10);
 };
 
 struct ValvePwmStats {
   std::uint64_t wakes = 0;  // loop iterations: advances at least every max_sleep while alive
+  std::uint64_t heartbeat_toggles = 0;
   std::uint64_t edges_written = 0;
   std::uint64_t late_edges = 0;     // written > late_threshold after their time
   std::uint64_t missed_edges = 0;   // written > miss_tolerance after their time
@@ -99,6 +105,7 @@ class ValvePwmDriver {
       ++stats_.wakes;
       std::chrono::nanoseconds now = clock_.now();
       if (config_.on_wake != nullptr) config_.on_wake(config_.on_wake_context, now);
+      beat(now);
       const std::uint64_t version = commands_.version();
       if (version != seen_version) {
         ValveCommand cmd;
@@ -123,7 +130,7 @@ class ValvePwmDriver {
           ++stats_.deadman_expiries;
         }
         publish_stats();
-        clock_.sleep_until(now + config_.max_sleep);
+        clock_.sleep_until(std::min(now + config_.max_sleep, next_beat_));
         continue;
       }
       if (stats_.expired) {
@@ -136,7 +143,7 @@ class ValvePwmDriver {
       // Peeked afresh on every wake, so duties set since the last wake are reflected.
       const PwmEdgeT upcoming = schedule_.peek_edge();
       const std::chrono::nanoseconds wake =
-          std::min({upcoming.time, expires_at, now + config_.max_sleep});
+          std::min({upcoming.time, expires_at, now + config_.max_sleep, next_beat_});
       if (wake > now) {
         publish_stats();  // wakes advance even when no edge is due (the watchdog reads them)
         clock_.sleep_until(wake);
@@ -163,6 +170,7 @@ class ValvePwmDriver {
     bank_.force_safe();
     stats_.last_mask = bank_.safe_mask();
     stats_.expired = true;
+    if (config_.heartbeat != nullptr) config_.heartbeat->force_safe();
     publish_stats();
   }
 
@@ -176,6 +184,18 @@ class ValvePwmDriver {
   }
   void publish_stats() noexcept { published_stats_.publish(stats_); }
 
+  void beat(std::chrono::nanoseconds now) noexcept {
+    if (config_.heartbeat == nullptr) {
+      next_beat_ = std::chrono::nanoseconds::max();
+      return;
+    }
+    if (now < next_beat_ && next_beat_ != std::chrono::nanoseconds::max()) return;
+    beat_level_ = !beat_level_;
+    if (config_.heartbeat->write(beat_level_ ? 1U : 0U) != 0) ++stats_.write_errors;
+    ++stats_.heartbeat_toggles;
+    next_beat_ = now + config_.heartbeat_half_period;
+  }
+
   Clock& clock_;
   DigitalOutputBank& bank_;
   Schedule& schedule_;
@@ -183,6 +203,8 @@ class ValvePwmDriver {
   LatestValue<ValveCommand> commands_;
   LatestValue<ValvePwmStats> published_stats_;
   ValvePwmStats stats_;
+  std::chrono::nanoseconds next_beat_ = std::chrono::nanoseconds::max();
+  bool beat_level_ = false;
 };
 
 }  // namespace weedspray::io

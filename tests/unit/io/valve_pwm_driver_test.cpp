@@ -285,5 +285,30 @@ TEST(ValvePwmDriver, DrivesThePlantValvesAndLeavesThemClosed) {
                                     std::to_string(delivered[3]));
 }
 
+TEST(ValvePwmDriver, HeartbeatIsASquareWaveWhileRunningAndLowAfter) {
+  ValvePwmDriverConfig config;
+  config.command_expiry = 10s;
+  ScriptedClock clock;
+  sim::MemoryOutputBank heartbeat{1, 0, clock, 1000};
+  config.heartbeat = &heartbeat;
+  config.heartbeat_half_period = 10ms;  // 50 Hz
+  sim::MemoryOutputBank bank{4, 0, clock, 1000};
+  control::PwmConfig pwm_config{};
+  control::PwmSchedule schedule{pwm_config};
+  ValvePwmDriver<control::PwmSchedule> driver(clock, bank, schedule, config);
+  driver.command(Rig::command(0ns));
+  clock.stop_at = 1s;
+  driver.run(clock.stop.get_token());
+
+  const auto writes = heartbeat.history();
+  ASSERT_GE(writes.size(), 99U);
+  for (std::size_t i = 1; i < writes.size(); ++i) {
+    EXPECT_NE(writes[i].mask, writes[i - 1].mask) << "every write toggles";
+    EXPECT_EQ(writes[i].time - writes[i - 1].time, 10ms) << "edge " << i;
+  }
+  EXPECT_EQ(driver.stats().heartbeat_toggles, writes.size());
+  EXPECT_EQ(heartbeat.mask(), 0U) << "low once the loop has stopped: the relay drops";
+}
+
 }  // namespace
 }  // namespace weedspray::io
