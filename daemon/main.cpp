@@ -13,7 +13,10 @@ int main(int argc, char** argv) {
   Options options;
   options.config_path = kDefaultConfigPath;
   CLI::App app{"weedsprayd: camera-guided variable-rate weed sprayer controller"};
-  app.add_option("--config", options.config_path, "main configuration file (drop-ins: conf.d/)");
+  auto* config_option = app.add_option("--config", options.config_path,
+                                       "main configuration file (drop-ins: conf.d/)");
+  app.add_flag("--resume", options.resume,
+               "sim: continue the last simulation's totals (otherwise they start from zero)");
   app.add_flag("--check-config", options.check_config, "validate the configuration and exit");
   app.add_flag("--dump-config", options.dump_config, "print the effective configuration");
   app.add_flag("--print-default-config", options.print_default_config,
@@ -41,6 +44,7 @@ int main(int argc, char** argv) {
                                                          : "expected NAME@SECONDS, got " + value;
       });
   CLI11_PARSE(app, argc, argv);
+  options.config_given = config_option->count() > 0;
   if (!options.sim_faults.empty() && !options.sim) {
     std::cerr << "weedsprayd: --sim-fault needs --sim\n";
     return 1;

@@ -7,7 +7,9 @@
 namespace weedspray::daemon {
 
 struct Options {
-  std::string config_path;  // main configuration file
+  std::string config_path;    // main configuration file
+  bool config_given = false;  // --config was on the command line
+  bool resume = false;        // sim: continue the last simulation's totals
   bool check_config = false;
   bool dump_config = false;
   bool print_default_config = false;

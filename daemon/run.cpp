@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <thread>
@@ -40,8 +42,24 @@ double seconds(Nanos t) {
   return std::chrono::duration<double>(t).count();
 }
 
+// Where a simulation keeps its totals and as-applied logs: never the sprayer's own records.
+std::string sim_state_dir() {
+  if (const char* xdg = std::getenv("XDG_STATE_HOME"); xdg != nullptr && *xdg == '/')
+    return std::string(xdg) + "/weedspray-sim";
+  if (const char* home = std::getenv("HOME"); home != nullptr && *home == '/')
+    return std::string(home) + "/.local/state/weedspray-sim";
+  return "/tmp/weedspray-sim";
+}
+
 Config load_with_overrides(const Options& options) {
-  Config config = load_config(options.config_path);
+  // A simulation needs no file: every key has a default. Hardware mode always reads one.
+  const bool defaults_only =
+      options.sim && !options.config_given && !std::filesystem::exists(options.config_path);
+  Config config = defaults_only ? default_config() : load_config(options.config_path);
+  if (options.sim) {
+    config.daemon.state_dir = sim_state_dir();
+    config.log.dir.clear();
+  }
   if (!options.state_dir.empty()) config.daemon.state_dir = options.state_dir;
   return config;
 }
@@ -83,7 +101,12 @@ class Daemon final : public CommandHandler {
     totals_file_ = std::filesystem::path(config_.daemon.state_dir) / "totals.toml";
     std::filesystem::create_directories(config_.daemon.state_dir);
     std::string totals_error;
-    base_totals_ = load_totals(totals_file_, &totals_error);
+    if (options_.sim && !options_.resume) {
+      spdlog::info("simulation: totals start from zero in {} (--resume continues them)",
+                   config_.daemon.state_dir);
+    } else {
+      base_totals_ = load_totals(totals_file_, &totals_error);
+    }
     if (!totals_error.empty()) spdlog::warn("totals not restored: {}", totals_error);
     log_ = std::make_unique<AsAppliedLog>(config_.as_applied_dir(),
                                           static_cast<std::uintmax_t>(config_.log.rotate_bytes),
@@ -127,7 +150,8 @@ class Daemon final : public CommandHandler {
     sd_event_source_set_enabled(tick_source_, SD_EVENT_ON);
 
     spdlog::info("weedsprayd running ({} nozzles, {} camera(s), config {})", config_.boom.nozzles,
-                 config_.cameras.size(), options_.config_path);
+                 config_.cameras.size(),
+                 config_.files.empty() ? std::string("built-in defaults") : options_.config_path);
     const int r = sd_event_loop(event_);
     sd_notify(0, "STOPPING=1");
     shutdown();
@@ -700,6 +724,10 @@ int run_daemon(const Options& options) {
     return 1;
   }
   setup_logging(config.daemon.log_level);
+  if (options.sim && !options.config_given && !std::filesystem::exists(options.config_path)) {
+    spdlog::info("simulating on the built-in defaults ({} not found; --config FILE to use one)",
+                 options.config_path);
+  }
   // Block the signals sd-event handles before any thread exists, so every thread inherits the
   // mask and they arrive only through the event loop.
   sigset_t signals;

@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include <cerrno>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -75,6 +76,11 @@ std::string json_value(const Value& value) {
   return out.str();
 }
 
+// A reading that rounds to zero at three decimals prints as 0.000, not -0.000 (sensor noise).
+double shown(double x) {
+  return std::abs(x) < 0.0005 ? 0.0 : x;
+}
+
 std::string text_value(const Value& value) {
   std::ostringstream out;
   out << std::fixed << std::setprecision(3);
@@ -82,7 +88,9 @@ std::string text_value(const Value& value) {
       [&](const auto& v) {
         using V = std::decay_t<decltype(v)>;
         if constexpr (std::is_same_v<V, std::vector<double>>) {
-          for (std::size_t i = 0; i < v.size(); ++i) out << (i ? " " : "") << v[i];
+          for (std::size_t i = 0; i < v.size(); ++i) out << (i ? " " : "") << shown(v[i]);
+        } else if constexpr (std::is_same_v<V, double>) {
+          out << shown(v);
         } else if constexpr (std::is_same_v<V, std::vector<std::string>>) {
           for (std::size_t i = 0; i < v.size(); ++i) out << (i ? ", " : "") << v[i];
           if (v.empty()) out << "none";

@@ -176,8 +176,9 @@ grep -q "^area_m2 = " "$T/state/totals.toml" || fail "totals not saved"
 area=$(sed -n 's/^area_m2 = //p' "$T/state/totals.toml")
 echo "ok: as-applied log and totals ($area m^2)"
 
-# Restart: totals restored; then a pressure-sensor wire breaks while spraying.
-"$WEEDSPRAYD" --sim --user --config "$T/etc/weedspray.toml" --state-dir "$T/state" \
+# Restart: totals restored (--resume: a simulation starts from zero otherwise); then a
+# pressure-sensor wire breaks while spraying.
+"$WEEDSPRAYD" --sim --user --config "$T/etc/weedspray.toml" --state-dir "$T/state" --resume \
   --valve-state-file "$T/valves.txt" --sim-fault sensor_open@4 >"$T/daemon.log" 2>&1 &
 DAEMON_PID=$!
 for _ in $(seq 1 100); do
