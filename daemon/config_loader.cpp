@@ -275,6 +275,40 @@ class Loader {
     throw ConfigError(source->second.file, source->second.line, key, message);
   }
 
+  // Every GPIO line is used once on its chip: two nozzles on one valve line, the pump on a
+  // valve's line, or an input sharing an output's line are refused, naming both keys.
+  void validate_gpio_lines_unique() const {
+    const auto& g = config_.gpio;
+    std::map<std::string, std::string> claimed;  // "offset 3" / "name 'PUMP'" -> key
+    const auto claim = [&](const std::string& line, const std::string& key,
+                           const std::string& located_by) {
+      const auto [it, inserted] = claimed.emplace(line, key);
+      if (!inserted) fail(key, line + " is already " + it->second, located_by);
+    };
+    for (std::size_t i = 0; i < g.valve_offsets.size(); ++i) {
+      claim("line " + std::to_string(g.valve_offsets[i]),
+            "gpio.valve_offsets[" + std::to_string(i) + "]", "gpio.valve_offsets");
+    }
+    for (std::size_t i = 0; i < g.valve_names.size(); ++i) {
+      claim("line '" + g.valve_names[i] + "'", "gpio.valve_names[" + std::to_string(i) + "]",
+            "gpio.valve_names");
+    }
+    const bool wheel_wired = config_.wheel.source != "fixed";
+    for (const auto& [offset, name, what, used] :
+         {std::tuple{g.pump_offset, &g.pump_name, "pump", true},
+          std::tuple{g.buzzer_offset, &g.buzzer_name, "buzzer", true},
+          std::tuple{g.led_offset, &g.led_name, "led", true},
+          std::tuple{g.heartbeat_offset, &g.heartbeat_name, "heartbeat", true},
+          std::tuple{g.key_offset, &g.key_name, "key", true},
+          std::tuple{g.flow_offset, &g.flow_name, "flow", config_.flow.counter.empty()},
+          std::tuple{g.wheel_offset, &g.wheel_name, "wheel", wheel_wired}}) {
+      if (!used) continue;
+      const std::string prefix = std::string("gpio.") + what;
+      if (offset >= 0) claim("line " + std::to_string(offset), prefix + "_offset", "");
+      if (!name->empty()) claim("line '" + *name + "'", prefix + "_name", "");
+    }
+  }
+
   // Rules between keys; the message names the key whose value was set last in a file.
   void validate() const {
     const auto& c = config_;
@@ -324,6 +358,7 @@ class Loader {
         fail(key, "set either the line name or its offset, not both");
       }
     }
+    validate_gpio_lines_unique();
     if (!c.flow.counter.empty() && (!c.gpio.flow_name.empty() || c.gpio.flow_offset >= 0)) {
       fail("flow.counter",
            "the flow meter is wired either to a GPIO line (gpio.flow_offset / "
@@ -407,8 +442,19 @@ toml::table parse_document(std::string_view text, const std::string& name) {
 }
 
 std::string read_file(const std::filesystem::path& path) {
+  std::error_code error;
+  const auto status = std::filesystem::status(path, error);
+  if (error || !std::filesystem::exists(status)) {
+    throw ConfigError(path.string(), 0, "", "cannot be read: no such file");
+  }
+  if (!std::filesystem::is_regular_file(status)) {
+    throw ConfigError(path.string(), 0, "",
+                      std::filesystem::is_directory(status)
+                          ? "is a directory, not a configuration file"
+                          : "is not a regular file");
+  }
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw ConfigError(path.string(), 0, "", "cannot be read");
+  if (!in) throw ConfigError(path.string(), 0, "", "cannot be read (permission?)");
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
@@ -438,8 +484,17 @@ Config load_config(const std::filesystem::path& main_file) {
   std::error_code error;
   if (std::filesystem::is_directory(drop_in_dir, error)) {
     std::vector<std::filesystem::path> drop_ins;
-    for (const auto& entry : std::filesystem::directory_iterator(drop_in_dir)) {
-      if (entry.path().extension() == ".toml") drop_ins.push_back(entry.path());
+    // Listing errors are ConfigErrors naming the folder (directory_iterator would throw a
+    // filesystem_error out of a reload).
+    std::filesystem::directory_iterator entries(drop_in_dir, error);
+    if (error) {
+      throw ConfigError(drop_in_dir.string(), 0, "", "cannot be listed: " + error.message());
+    }
+    for (auto it = entries; it != std::filesystem::directory_iterator(); it.increment(error)) {
+      if (error) {
+        throw ConfigError(drop_in_dir.string(), 0, "", "cannot be listed: " + error.message());
+      }
+      if (it->path().extension() == ".toml") drop_ins.push_back(it->path());
     }
     std::sort(drop_ins.begin(), drop_ins.end());
     for (const auto& path : drop_ins) documents.emplace_back(path.string(), read_file(path));

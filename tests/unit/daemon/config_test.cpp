@@ -342,6 +342,48 @@ TEST_F(ConfigFiles, MissingMainFileIsAnError) {
   EXPECT_THROW((void)load_config(dir_ / "nope.toml"), ConfigError);
 }
 
+TEST_F(ConfigFiles, ADirectoryOrAnUnreadableDropInIsNamed) {
+  try {
+    (void)load_config(dir_);
+    FAIL() << "a directory was accepted as the configuration file";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("is a directory"), std::string::npos) << e.what();
+  }
+  write("weedspray.toml", "[pressure]\nsetpoint_mpa = 0.2\n");
+  fs::create_directories(dir_ / "conf.d" / "50-folder.toml");  // a folder named like a drop-in
+  try {
+    (void)load_config(dir_ / "weedspray.toml");
+    FAIL() << "a drop-in that is not a file was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(e.file().find("50-folder.toml"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ConfigErrors, EveryGpioLineIsUsedOnceNamingBothKeys) {
+  const auto twice = parse_error({{"m.toml", "[gpio]\nvalve_offsets = [1, 1, 2, 3]\n"}});
+  EXPECT_EQ(twice.key(), "gpio.valve_offsets[1]");
+  EXPECT_NE(std::string(twice.what())
+                .find("m.toml:2: gpio.valve_offsets[1]: line 1 is already "
+                      "gpio.valve_offsets[0]"),
+            std::string::npos)
+      << twice.what();
+  const auto pump =
+      parse_error({{"m.toml", "[gpio]\nvalve_offsets = [1, 2, 3, 4]\npump_offset = 1\n"}});
+  EXPECT_EQ(pump.key(), "gpio.pump_offset");
+  EXPECT_EQ(pump.line(), 3);
+  EXPECT_NE(std::string(pump.what()).find("line 1 is already gpio.valve_offsets[0]"),
+            std::string::npos);
+  const auto input =
+      parse_error({{"m.toml", "[gpio]\nvalve_offsets = [1, 2, 3, 4]\nwheel_offset = 2\n"}});
+  EXPECT_EQ(input.key(), "gpio.wheel_offset");
+  const auto names = parse_error(
+      {{"m.toml", "[gpio]\nvalve_names = ['V0', 'V1', 'V2', 'V3']\nkey_name = 'V2'\n"}});
+  EXPECT_EQ(names.key(), "gpio.key_name");
+  EXPECT_EQ(parse("[gpio]\nvalve_offsets = [1, 2, 3, 4]\npump_offset = 5\nflow_offset = 6\n")
+                .gpio.pump_offset,
+            5);
+}
+
 // etc/weedspray.toml: the installed default. It must parse, equal the built-in defaults, and
 // document every key (each key written out under its section with a comment above it).
 TEST(DefaultConfigFile, ParsesAndDocumentsEveryKey) {
