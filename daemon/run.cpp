@@ -173,8 +173,22 @@ class Daemon final : public CommandHandler {
   }
 
   // --- D-Bus commands (main thread) ---
-  CommandResult start() override { return request(StateEvent::kStart, "Start"); }
-  CommandResult stop() override { return request(StateEvent::kStop, "Stop"); }
+  CommandResult start() override {
+    // The bus name appears before the loops have run a cycle: a Start then is kept, not refused.
+    if (state_.state() == SprayerState::kStarting) {
+      start_when_ready_ = true;
+      spdlog::info("Start accepted: spraying as soon as the loops run");
+      return {};
+    }
+    return request(StateEvent::kStart, "Start");
+  }
+  CommandResult stop() override {
+    if (state_.state() == SprayerState::kStarting && start_when_ready_) {
+      start_when_ready_ = false;
+      return {};
+    }
+    return request(StateEvent::kStop, "Stop");
+  }
 
   CommandResult set_pressure_setpoint(double mpa) override {
     constexpr double kMin = 0.05;
@@ -313,6 +327,8 @@ class Daemon final : public CommandHandler {
       transition(StateEvent::kSetupDone, "loops running");
       sd_notify(0, "READY=1");
       if (config_.daemon.autostart) transition(StateEvent::kStart, "daemon.autostart");
+      if (start_when_ready_) transition(StateEvent::kStart, "Start while starting up");
+      start_when_ready_ = false;
     }
     if (backends_.key != nullptr) {
       const io::DigitalInputSample key = backends_.key->sample();
@@ -692,6 +708,7 @@ class Daemon final : public CommandHandler {
   double last_print_s_ = -1e9;
   double last_persist_s_ = 0;
   int exit_code_ = 0;
+  bool start_when_ready_ = false;  // Start arrived while Starting
 };
 
 }  // namespace

@@ -209,4 +209,25 @@ DAEMON_PID=
 [ "$rc" -eq 0 ] || fail "exit status $rc after SIGTERM in Fault"
 [ "$(cat "$T/valves.txt")" = "valves=0x0 pump=0" ] || fail "outputs at exit: $(cat "$T/valves.txt")"
 echo "ok: sensor fault -> Fault, AlarmRaised, valves closed; totals restored"
+
+# A Start sent the moment the bus name appears (before the loops have run) is kept, not refused.
+"$WEEDSPRAYD" --sim --user --config "$T/etc/weedspray.toml" --state-dir "$T/state" \
+  >"$T/daemon.log" 2>&1 &
+DAEMON_PID=$!
+started=0
+for _ in $(seq 1 200); do
+  if "$SPRAYCTL" --user start 2>"$T/err.txt"; then started=1; break; fi
+  grep -q "refused" "$T/err.txt" && fail "early Start refused: $(cat "$T/err.txt")"
+  sleep 0.05
+done
+[ "$started" = 1 ] || fail "Start never reached the daemon"
+for _ in $(seq 1 50); do
+  [ "$(prop State)" = '"Spraying"' ] && break
+  sleep 0.1
+done
+[ "$(prop State)" = '"Spraying"' ] || fail "early Start: State $(prop State)"
+kill -TERM "$DAEMON_PID"
+wait "$DAEMON_PID" || fail "exit after the early Start"
+DAEMON_PID=
+echo "ok: a Start during start-up sprays once the loops run"
 echo "PASS"
