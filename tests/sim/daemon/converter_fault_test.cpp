@@ -9,6 +9,7 @@
 
 #include "daemon/backends.hpp"
 #include "daemon/sprayer.hpp"
+#include "tests/sim/daemon/run_until.hpp"
 
 namespace weedspray::daemon {
 namespace {
@@ -27,18 +28,6 @@ class HangableAdc final : public io::AnalogInput {
  private:
   io::AnalogInput& inner_;
 };
-
-// Runs the simulated world for up to `limit` until `done()` holds; returns whether it did.
-template <class Done>
-bool run_until(Backends& backends, Done done, std::chrono::nanoseconds limit) {
-  const auto start = backends.clock->now();
-  while (backends.clock->now() - start < limit) {
-    backends.drive_world(std::chrono::duration<double>(backends.clock->now()).count());
-    if (done()) return true;
-    std::this_thread::sleep_for(5ms);
-  }
-  return done();
-}
 
 TEST(ConverterFault, HungPressureAdcStopsThePumpAndClosesTheValvesThenRecovers) {
   Config config = default_config();

@@ -13,6 +13,7 @@
 
 #include "daemon/backends.hpp"
 #include "daemon/sprayer.hpp"
+#include "tests/sim/daemon/run_until.hpp"
 
 namespace weedspray::daemon {
 namespace {
@@ -54,17 +55,6 @@ class StallingBank final : public io::DigitalOutputBank {
   io::DigitalOutputBank& inner_;
   const char* stalled_thread_;
 };
-
-template <class Done>
-bool run_until(Backends& backends, Done done, std::chrono::nanoseconds limit) {
-  const auto start = backends.clock->now();
-  while (backends.clock->now() - start < limit) {
-    backends.drive_world(std::chrono::duration<double>(backends.clock->now()).count());
-    if (done()) return true;
-    std::this_thread::sleep_for(5ms);
-  }
-  return done();
-}
 
 struct SprayingMachine {
   SprayingMachine() {
