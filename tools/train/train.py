@@ -6,7 +6,7 @@ Any folder of images + same-named class-id PNG masks (0 soil, 1 crop, 2 weed by 
     /usr/bin/python3 tools/train/train.py --images ../shared/data/peanut/images \
         --masks ../shared/data/peanut/masks --train-list tools/train/splits/peanut-train.txt \
         --val-list tools/train/splits/peanut-val.txt --out models --name weed-peanut \
-        --epochs 80 --seed 9
+        --epochs 48 --seed 9 --threads 1
 
 Writes OUT/NAME.onnx and OUT/NAME.json (the spec the daemon needs, validation metrics through
 OpenCV DNN, the training command, seed, versions, wall time). No downloaded weights; the run
@@ -60,7 +60,7 @@ def parse_args():
     parser.add_argument("--val-list", required=True, help="image stems to measure on, one per line")
     parser.add_argument("--out", required=True, help="folder for NAME.onnx and NAME.json")
     parser.add_argument("--name", default="weed-model")
-    parser.add_argument("--epochs", type=int, default=80)
+    parser.add_argument("--epochs", type=int, default=48)
     parser.add_argument("--seed", type=int, default=9)
     parser.add_argument("--input", type=parse_size, default=(320, 256), help="network input WxH")
     parser.add_argument("--crop", type=parse_size, default=(256, 192), help="training crop WxH (at input scale)")
