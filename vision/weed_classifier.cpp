@@ -10,11 +10,11 @@
 namespace weedspray::vision {
 
 struct WeedClassifier::Masks {
-  cv::Mat converted;     // the region as BGR when the frame is YUYV or grey
-  cv::Mat vegetation;    // hybrid, region resolution, 0/255
-  cv::Mat crop;          // hybrid: the network's crop, region resolution, 0/255
-  cv::Mat crop_dilated;  // hybrid: crop grown by the margin
-  cv::Mat weed;          // hybrid: vegetation minus crop_dilated
+  cv::Mat converted;   // the region as BGR when the frame is YUYV or grey
+  cv::Mat vegetation;  // hybrid, region resolution, 0/255
+  cv::Mat near_crop;   // hybrid: the network's crop at region resolution, grown by the margin
+  cv::Mat crop;        // hybrid: vegetation within near_crop
+  cv::Mat weed;        // hybrid: vegetation outside near_crop
   cv::Mat margin_kernel;
   cv::Mat scratch;
   cv::Mat class_map;
@@ -168,23 +168,20 @@ void WeedClassifier::classify_hybrid(const std::uint8_t* index, std::uint8_t lev
   const cv::Size size(region_.width, region_.height);
   const cv::Mat index_image(size, CV_8UC1, const_cast<std::uint8_t*>(index));
   cv::compare(index_image, level, m.vegetation, cv::CMP_GT);
-  // The crop mask comes at the network's resolution; the margin is in frame pixels, so grow
-  // it after bringing it to the region's resolution.
+  // Colour says what is vegetation, the network only which of it is crop: the vegetation
+  // mask (and its IoU) stays the colour pipeline's on any camera. The crop mask comes at the
+  // network's resolution; the margin is in frame pixels, so grow it at the region's.
   cv::compare(network_->segment_result(), kClassCrop, m.scratch, cv::CMP_EQ);
-  cv::resize(m.scratch, m.crop, size, 0, 0, cv::INTER_NEAREST);
-  if (m.margin_kernel.empty()) {
-    m.crop.copyTo(m.crop_dilated);
-  } else {
-    cv::dilate(m.crop, m.crop_dilated, m.margin_kernel);
-  }
-  m.vegetation.copyTo(m.weed);
-  m.weed.setTo(0, m.crop_dilated);
-  // Crop density stays the network's (densities_from_classes); weeds come from colour.
+  cv::resize(m.scratch, m.near_crop, size, 0, 0, cv::INTER_NEAREST);
+  if (!m.margin_kernel.empty()) cv::dilate(m.near_crop, m.near_crop, m.margin_kernel);
+  cv::bitwise_and(m.vegetation, m.near_crop, m.crop);
+  cv::bitwise_xor(m.vegetation, m.crop, m.weed);  // vegetation minus crop
   for (int row = 0; row < result.rows; ++row) {
     for (int col = 0; col < result.cols; ++col) {
       const ZoneRect zone = zone_rect(row, col, result.rows, result.cols, size.width, size.height);
-      result.zone_density[row * result.cols + col] =
-          cv::countNonZero(m.weed(zone.rect())) / zone.pixels();
+      const int i = row * result.cols + col;
+      result.zone_density[i] = cv::countNonZero(m.weed(zone.rect())) / zone.pixels();
+      result.crop_density[i] = cv::countNonZero(m.crop(zone.rect())) / zone.pixels();
     }
   }
 }
@@ -213,8 +210,6 @@ ImageView WeedClassifier::class_map(const std::uint8_t* index, std::uint8_t leve
       m.class_map.create(size, CV_8UC1);
       m.class_map.setTo(kClassSoil);
       m.class_map.setTo(kClassCrop, m.crop);
-      cv::bitwise_and(m.vegetation, m.crop_dilated, m.scratch);
-      m.class_map.setTo(kClassCrop, m.scratch);
       m.class_map.setTo(kClassWeed, m.weed);
       break;
   }

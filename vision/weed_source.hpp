@@ -17,7 +17,7 @@ enum class WeedSource : std::uint8_t {
   kVegetation,  // every vegetation pixel is weed (bare soil: fallow, pre-plant)
   kInterRow,    // vegetation outside the crop-row bands is weed
   kDnn,         // the network's weed class
-  kHybrid,      // colour vegetation minus the network's crop class dilated by a margin
+  kHybrid,      // colour vegetation; crop where it lies within a margin of the network's crop
 };
 
 // Config names: "vegetation", "inter_row", "dnn", "hybrid".
