@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "lab/weed_model.hpp"
+
 namespace weedspray::lab {
 namespace {
 
@@ -85,6 +87,21 @@ TEST(SavingsField, PeanutValidationPhotos) {
   EXPECT_EQ(truth_tally.crop_only_sprayed, 0);
   EXPECT_GT(green_tally.crop_only_sprayed, 0.9 * green_tally.crop_only_zones);
   EXPECT_GT(on_truth.savings_pct, on_green.savings_pct + 5.0);
+
+  // The shipped crop/weed network, which never saw these photos: it spares most of the
+  // crop-only zones that vegetation sprays, and leaves few weedy zones dry.
+  const WeedModel model =
+      read_weed_model(std::filesystem::path(WEEDSPRAY_SOURCE_DIR) / "models/weed-peanut.onnx");
+  ASSERT_TRUE(model.spec_from_json);
+  vision::PipelineConfig dnn = vision::default_pipeline_config();
+  dnn.weed_source = vision::WeedSource::kDnn;
+  dnn.dnn = model.spec;
+  const LabelledField predicted = labelled_field(photos, dnn, model.onnx);
+  const auto on_dnn = control::experiments::run_savings(predicted.weed_density, options);
+  const auto dnn_tally = tally_against_truth(on_dnn.equal_coverage, predicted.truth);
+  EXPECT_LT(dnn_tally.crop_only_sprayed, 0.6 * green_tally.crop_only_sprayed);
+  EXPECT_LT(dnn_tally.weedy_left_dry, 0.15 * dnn_tally.weedy_zones);
+  EXPECT_GT(on_dnn.savings_pct, on_green.savings_pct);
 }
 
 }  // namespace
