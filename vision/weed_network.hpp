@@ -28,11 +28,8 @@ class WeedNetwork {
   const DnnModelSpec& spec() const { return spec_; }
 
  private:
-  void shrink(const cv::Mat& image, cv::Size size);  // image -> resized_
-
   DnnModelSpec spec_;
   cv::dnn::Net net_;
-  cv::Mat doubled_;
   cv::Mat resized_;
   cv::Mat blob_;
   cv::Mat scores_;
