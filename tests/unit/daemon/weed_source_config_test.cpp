@@ -67,6 +67,14 @@ TEST(WeedSourceConfig, DnnReadsTheModelOnce) {
   EXPECT_NE(parse(tiny_dnn()).model, nullptr);
 }
 
+// The model keys' defaults are the shipped model and its spec: one line switches to it (a
+// build tree finds it in the checkout's models/, an installed daemon in its data folder).
+TEST(WeedSourceConfig, DefaultModelIsTheShippedOne) {
+  const Config config = parse("[vision]\nweed_source = \"hybrid\"\n");
+  ASSERT_NE(config.model, nullptr);
+  EXPECT_EQ(config.model->path, fs::path(WEEDSPRAY_SOURCE_DIR) / "models" / "weed-peanut.onnx");
+}
+
 TEST(WeedSourceConfig, PipelineGetsTheSpecAndGroundDistancesInPixels) {
   // 4 nozzles x 0.5 m across 1280 px: 1.5625 mm per pixel.
   const Config config =
