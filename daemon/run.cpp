@@ -440,6 +440,8 @@ class Daemon final : public CommandHandler {
       overrun_window_start_ = now;
     }
     in.overruns_last_second = overruns_last_second_;
+    const std::string vision_failures = sprayer_->vision_failures();
+    in.vision_model_failed = !vision_failures.empty();
 
     const AlarmMask raised = alarms_.evaluate(in);
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
@@ -452,6 +454,10 @@ class Daemon final : public CommandHandler {
         spdlog::warn("alarm raised: {} ({} deadline misses while spraying in the last second; {})",
                      name, overruns_last_second_,
                      timing_report_line(timing_input(pressure, control)));
+      } else if (id == AlarmId::kVisionModelFailed) {
+        spdlog::error("alarm raised: {} ({}; that camera's nozzles stay closed until its frames "
+                      "process again)",
+                      name, vision_failures);
       } else {
         spdlog::warn("alarm raised: {}", name);
       }
