@@ -171,8 +171,10 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "duty levels from duty_min_pct to duty_max_pct (plus closed and open); 0 = off, else 2..14"},
     {WS_KEY(spray, hysteresis_pct), 2.0, 0, 20, "%",
      "a quantised duty changes level only past this margin"},
-    {WS_KEY(spray, decision_threshold), 0.01, 0, 1, "",
-     "zones with a weed density below this are not sprayed"},
+    {WS_KEY(spray, decision_threshold), 0.001, 0, 1, "",
+     "zones with a weed density below this are not sprayed; 0.001 (0.1 % of the zone) sits well "
+     "below the 0.5 % that makes a zone weedy because detectors miss part of each small weed "
+     "(weedspray-lab vision-eval --classes --sweep shows the trade-off)"},
     {WS_KEY(spray, low_duty_policy), std::string("raise_to_min"), 0, 0, "",
      "a weedy zone whose duty falls below duty_min_pct: raise_to_min sprays it at duty_min_pct "
      "(every weed sprayed); close leaves it dry (the wheat paper's s < 20 % -> 0 clamp)",

@@ -455,9 +455,10 @@ class Daemon final : public CommandHandler {
                      name, overruns_last_second_,
                      timing_report_line(timing_input(pressure, control)));
       } else if (id == AlarmId::kVisionModelFailed) {
-        spdlog::error("alarm raised: {} ({}; that camera's nozzles stay closed until its frames "
-                      "process again)",
-                      name, vision_failures);
+        spdlog::error(
+            "alarm raised: {} ({}; that camera's nozzles stay closed until its frames "
+            "process again)",
+            name, vision_failures);
       } else {
         spdlog::warn("alarm raised: {}", name);
       }

@@ -15,7 +15,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       (void)weedspray::daemon::load_config_from_strings({{"weedspray.toml", text}});
     } else {
       (void)weedspray::daemon::load_config_from_strings(
-          {{"weedspray.toml", text.substr(0, split)}, {"conf.d/50-fuzz.toml", text.substr(split + 5)}});
+          {{"weedspray.toml", text.substr(0, split)},
+           {"conf.d/50-fuzz.toml", text.substr(split + 5)}});
     }
   } catch (const weedspray::daemon::ConfigError&) {
   }
