@@ -530,9 +530,11 @@ void Sprayer::camera_loop(std::stop_token stop, CameraWorker& worker) noexcept {
       if (got == io::FrameStatus::kError) ++status.errors;
       continue;
     }
-    // A frame captured while the previous one was processed is already old: skip it for the
-    // next, fresh one, so a model slower than the frame interval costs frames, not latency.
-    if (frame.timestamp < busy_until) {
+    // A frame captured while the previous one went through the network is already old: skip it
+    // for the next, fresh one, so a model slower than the frame interval costs frames, not
+    // latency. Colour-only sources take ~1 ms: a frame they find waiting is one delivered late
+    // (the thread was held up), and skipping it would leave its ground unseen.
+    if (worker.uses_model && frame.timestamp < busy_until) {
       ++status.frames_skipped;
       worker.status.publish(status);
       continue;
