@@ -106,8 +106,9 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "automatic threshold method, or fixed; \"default\" = the vision library's choice",
      {"default", "fit", "otsu", "kmeans", "hbt", "pso", "ipso", "fixed"}},
     {WS_KEY(vision, fixed_threshold), -1, -1, 255, "level",
-     "level on the 8-bit index scale for threshold = \"fixed\" and for frames whose histogram "
-     "is not bimodal; -1 = the library's level for the index"},
+     "level on the 8-bit index scale for threshold = \"fixed\", and for frames that are not "
+     "bimodal where the index keeps a fixed level (full canopy; normalised ExG, ExG-ExR); -1 = "
+     "the library's level for the index"},
     {WS_KEY(vision, grid_rows), 1, 1, 4, "",
      "zone rows along travel per frame (columns = the camera's nozzles)"},
     {WS_KEY(vision, weed_source), std::string("vegetation"), 0, 0, "",
