@@ -5,6 +5,7 @@
 #include "io/emergency_outputs.hpp"
 
 #include <fcntl.h>
+#include <sys/mman.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -28,7 +29,7 @@ std::string read_file(const std::filesystem::path& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-enum class Death { kSignal, kEscapedException, kNullDereference };
+enum class Death { kSignal, kEscapedException, kReadOnlyStore };
 
 // Runs `die` in a child with the handlers installed; returns the child's wait status.
 int run_child(const std::filesystem::path& file, Death how, int signal, bool armed) {
@@ -53,9 +54,11 @@ int run_child(const std::filesystem::path& file, Death how, int signal, bool arm
         // An exception leaving a thread's function calls std::terminate.
         std::thread([] { throw std::runtime_error("escaped"); }).join();
         break;
-      case Death::kNullDereference: {
-        volatile int* volatile nowhere = nullptr;
-        *nowhere = 1;
+      case Death::kReadOnlyStore: {
+        // A store to a read-only page: a real SIGSEGV from the MMU, and no undefined behaviour
+        // for UBSan to stop first (as a null store would be in the sanitizer build).
+        void* page = ::mmap(nullptr, 4096, PROT_READ, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+        *static_cast<volatile int*>(page) = 1;
         break;
       }
     }
@@ -96,7 +99,7 @@ TEST(FatalExit, AnExceptionEscapingAThreadWritesSafeAndAborts) {
 
 TEST(FatalExit, ARealSegfaultWritesSafe) {
   const auto file = std::filesystem::temp_directory_path() / "weedspray_emergency_segv";
-  const int status = run_child(file, Death::kNullDereference, 0, true);
+  const int status = run_child(file, Death::kReadOnlyStore, 0, true);
   ASSERT_TRUE(WIFSIGNALED(status));
   EXPECT_EQ(WTERMSIG(status), SIGSEGV);
   EXPECT_EQ(read_file(file), "SAFE\n");
