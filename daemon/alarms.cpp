@@ -15,6 +15,7 @@ constexpr std::array<std::string_view, kAlarmCount> kNames = {
     "vision_too_slow",
     "control_overruns",
     "vision_model_failed",
+    "output_write_failed",
 };
 
 double seconds(std::chrono::nanoseconds t) {
@@ -42,6 +43,7 @@ bool is_fault(AlarmId id) noexcept {
     case AlarmId::kNoFlow:
     case AlarmId::kTankEmpty:
     case AlarmId::kCameraLost:
+    case AlarmId::kOutputWriteFailed:
       return true;
     default:
       return false;
@@ -103,6 +105,9 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
       false);
   // A warning, not a fault: only the failing camera's nozzles close (in the control loop).
   set(AlarmId::kVisionModelFailed, in.vision_model_failed, false);
+  // A fault: an output that cannot be written may be stuck open; everything else is driven
+  // safe, and the failing safe write is retried while in Fault.
+  set(AlarmId::kOutputWriteFailed, in.output_write_failed, false);
   set(AlarmId::kControlOverruns,
       in.overruns_last_second >= static_cast<std::uint64_t>(t.control_overrun_limit), false);
 

@@ -25,8 +25,9 @@ enum class AlarmId : std::uint8_t {
   kVisionTooSlow,      // frames do not cover the ground at this speed, or arrive too late
   kControlOverruns,    // control loops missing their deadlines
   kVisionModelFailed,  // a camera's weed model fails at run time: that camera's nozzles closed
+  kOutputWriteFailed,  // a valve/pump/return-valve/alarm output refused a write (line named)
 };
-inline constexpr std::size_t kAlarmCount = 11;
+inline constexpr std::size_t kAlarmCount = 12;
 
 using AlarmMask = std::uint32_t;
 constexpr AlarmMask alarm_bit(AlarmId id) noexcept {
@@ -60,6 +61,7 @@ struct AlarmInputs {
   double lead_distance_m = 0;   // from the near edge of the footprint to the nozzles
   std::uint64_t overruns_last_second = 0;
   bool vision_model_failed = false;  // some camera's latest frame failed in its weed model
+  bool output_write_failed = false;  // an output write failed since the last evaluation
 };
 
 class AlarmEvaluator {

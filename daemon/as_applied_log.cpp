@@ -38,7 +38,8 @@ void AsAppliedLog::open_new(std::uint32_t nozzles) {
     return;
   }
   nozzles_ = nozzles;
-  int n = std::fprintf(file_, "time_s,distance_m,speed_m_per_s,pressure_mpa,flow_l_per_min");
+  int n =
+      std::fprintf(file_, "time_s,distance_m,speed_m_per_s,pressure_mpa,flow_l_per_min,volume_l");
   for (std::uint32_t i = 0; i < nozzles; ++i) n += std::fprintf(file_, ",duty_pct_%u", i);
   for (std::uint32_t i = 0; i < nozzles; ++i) n += std::fprintf(file_, ",density_%u", i);
   for (std::uint32_t i = 0; i < nozzles; ++i) n += std::fprintf(file_, ",crop_density_%u", i);
@@ -64,9 +65,9 @@ void AsAppliedLog::prune() {
 bool AsAppliedLog::write(const AppliedRecord& r) {
   if (file_ == nullptr || bytes_ >= rotate_bytes_ || r.nozzles != nozzles_) open_new(r.nozzles);
   if (file_ == nullptr) return false;
-  int n =
-      std::fprintf(file_, "%.4f,%.4f,%.3f,%.4f,%.4f", std::chrono::duration<double>(r.time).count(),
-                   r.distance_m, r.speed_m_per_s, r.pressure_mpa, r.flow_l_per_min);
+  int n = std::fprintf(file_, "%.4f,%.4f,%.3f,%.4f,%.4f,%.7f",
+                       std::chrono::duration<double>(r.time).count(), r.distance_m, r.speed_m_per_s,
+                       r.pressure_mpa, r.flow_l_per_min, r.volume_l);
   for (std::uint32_t i = 0; i < r.nozzles; ++i) n += std::fprintf(file_, ",%.1f", r.duty_pct[i]);
   for (std::uint32_t i = 0; i < r.nozzles; ++i) n += std::fprintf(file_, ",%.4f", r.density[i]);
   for (std::uint32_t i = 0; i < r.nozzles; ++i) {

@@ -1,4 +1,5 @@
-// The as-applied log: one CSV line per PWM period (time, distance, speed, pressure, flow, and
+// The as-applied log: one CSV line per PWM period (time, distance, speed, pressure, flow, the
+// volume sprayed since the previous line, and
 // per nozzle duty, weed density and crop density), in size-rotated files. Written by a
 // normal-priority thread fed from the control loop's queue; flushed and fdatasync'd every
 // second (a power cut loses at most that second; a reader must tolerate a torn last line).

@@ -2,13 +2,55 @@
 
 namespace weedspray::daemon {
 
-void Backends::force_safe() noexcept {
-  if (valves != nullptr) valves->force_safe();
-  if (pump != nullptr) pump->force_safe();
-  if (return_valve != nullptr) return_valve->force_safe();
-  if (buzzer != nullptr) buzzer->force_safe();
-  if (led != nullptr) led->force_safe();
-  if (heartbeat != nullptr) heartbeat->force_safe();
+namespace {
+
+io::DigitalOutputBank* bank(const Backends& b, OutputRole role) noexcept {
+  switch (role) {
+    case OutputRole::kValves:
+      return b.valves;
+    case OutputRole::kPump:
+      return b.pump;
+    case OutputRole::kHeartbeat:
+      return b.heartbeat;
+    case OutputRole::kBuzzer:
+      return b.buzzer;
+    case OutputRole::kLed:
+      return b.led;
+    case OutputRole::kReturnValve:
+      return nullptr;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+int Backends::force_safe(OutputRole role) noexcept {
+  if (role == OutputRole::kReturnValve)
+    return return_valve != nullptr ? return_valve->force_safe() : 0;
+  io::DigitalOutputBank* output = bank(*this, role);
+  return output != nullptr ? output->force_safe() : 0;
+}
+
+SafeWriteErrors Backends::force_safe() noexcept {
+  SafeWriteErrors errors{};
+  // Valves and pump first: they move liquid.
+  for (OutputRole role : {OutputRole::kValves, OutputRole::kPump, OutputRole::kReturnValve,
+                          OutputRole::kBuzzer, OutputRole::kLed, OutputRole::kHeartbeat})
+    errors[static_cast<std::size_t>(role)] = force_safe(role);
+  return errors;
+}
+
+std::array<std::string, kOutputRoleCount> Backends::output_devices() const {
+  std::array<std::string, kOutputRoleCount> devices;
+  for (std::size_t i = 0; i < kOutputRoleCount; ++i) {
+    const auto role = static_cast<OutputRole>(i);
+    if (role == OutputRole::kReturnValve) {
+      if (return_valve != nullptr) devices[i] = return_valve->describe();
+    } else if (const io::DigitalOutputBank* output = bank(*this, role)) {
+      devices[i] = output->describe();
+    }
+  }
+  return devices;
 }
 
 std::size_t Backends::register_emergency_writes() const noexcept {

@@ -10,6 +10,7 @@
 
 #include "daemon/config.hpp"
 #include "daemon/options.hpp"
+#include "daemon/output_write_watch.hpp"
 #include "io/analog.hpp"
 #include "io/camera.hpp"
 #include "io/clock.hpp"
@@ -24,6 +25,8 @@ class HydraulicPlant;
 }
 
 namespace weedspray::daemon {
+
+using SafeWriteErrors = std::array<int, kOutputRoleCount>;
 
 struct Backends {
   io::Clock* clock = nullptr;
@@ -47,13 +50,25 @@ struct Backends {
   std::function<void(double t_s)> drive_world;
   // Sim only: "valves=0x0 pump=0" as the plant sees them (written at exit for the tests).
   std::function<std::string()> describe_outputs;
+  // Sim only: the output's writes fail with -error from now on (0: they work again).
+  std::function<void(OutputRole, int error)> fail_output_writes;
+  // Sim only: "sprayed_l=<the plant's true volume through the nozzles>" (written at exit).
+  std::function<std::string()> plant_truth;
+  // Sim only: a device fault by name (see SimFault::device); false for an unknown one.
+  std::function<bool(const std::string& fault)> device_fault;
   // Sim only: runs fn on the plant, advanced to now and locked (ground truth, fault injection).
   std::function<void(const std::function<void(control::plant::HydraulicPlant&)>&)> with_plant;
 
   std::vector<std::shared_ptr<void>> owned;  // keeps the devices alive
 
   // Every output to its safe value: valves closed, pump off, return valve open, buzzer/LED off.
-  void force_safe() noexcept;
+  // Each output is tried (its backend retries); returns -errno per output whose safe value
+  // could not be written, 0 for the others (and for outputs not wired).
+  SafeWriteErrors force_safe() noexcept;
+  // One output only (the main loop retries a failed one while in Fault); 0 or -errno.
+  int force_safe(OutputRole role) noexcept;
+  // What each output drives, for messages ("" when not wired).
+  std::array<std::string, kOutputRoleCount> output_devices() const;
   // Registers each output's one-syscall safe write for the fatal-exit handlers
   // (io/emergency_outputs.hpp); returns how many outputs have one (the simulation has none).
   std::size_t register_emergency_writes() const noexcept;

@@ -2,6 +2,7 @@
 // recorded field images as the cameras, simulated time paced to real time.
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
@@ -99,6 +100,34 @@ Backends make_sim_backends(const Config& config, const Options& options) {
   b.with_plant = [rig](const std::function<void(control::plant::HydraulicPlant&)>& fn) {
     rig->with_plant(fn);
   };
+  b.fail_output_writes = [rig, buzzer, led, heartbeat](OutputRole role, int error) {
+    switch (role) {
+      case OutputRole::kValves:
+        rig->fail_writes(io::sim::HydraulicRig::Output::kValves, error);
+        break;
+      case OutputRole::kPump:
+        rig->fail_writes(io::sim::HydraulicRig::Output::kPump, error);
+        break;
+      case OutputRole::kBuzzer:
+        buzzer->fail_writes(error);
+        break;
+      case OutputRole::kLed:
+        led->fail_writes(error);
+        break;
+      case OutputRole::kHeartbeat:
+        heartbeat->fail_writes(error);
+        break;
+      case OutputRole::kReturnValve:
+        break;  // the DAC's failures: see analog I/O tests
+    }
+  };
+  b.plant_truth = [rig]() {
+    double delivered = 0;
+    rig->with_plant([&](control::plant::HydraulicPlant& p) { delivered = p.total_delivered_l(); });
+    char text[64];
+    std::snprintf(text, sizeof text, "sprayed_l=%.6f\n", delivered);
+    return std::string(text);
+  };
   b.describe_outputs = [rig]() {
     std::ostringstream out;
     out << "valves=0x" << std::hex << rig->valve_mask() << std::dec
@@ -108,6 +137,7 @@ Backends make_sim_backends(const Config& config, const Options& options) {
 
   std::string images = options.sim_images.empty() ? config.sim.images_dir : options.sim_images;
   if (images.empty()) images = WEEDSPRAY_DEFAULT_SIM_IMAGES;
+  std::vector<std::shared_ptr<io::sim::ReplayCamera>> replay_cameras;
   for (const auto& camera_config : config.cameras) {
     io::sim::ReplayCameraConfig replay;
     replay.source = images;
@@ -120,7 +150,18 @@ Backends make_sim_backends(const Config& config, const Options& options) {
     auto camera = std::make_shared<io::sim::ReplayCamera>(replay, *clock);
     b.cameras.push_back(camera.get());
     b.owned.push_back(camera);
+    replay_cameras.push_back(camera);
   }
+  b.device_fault = [tank, replay_cameras](const std::string& fault) {
+    if (fault == "tank_silent" || fault == "tank_ok") {
+      tank->inject_timeouts(fault == "tank_silent" ? 1 << 30 : 0);
+    } else if (fault == "camera_gone" || fault == "camera_back") {
+      for (const auto& camera : replay_cameras) camera->set_unplugged(fault == "camera_gone");
+    } else {
+      return false;
+    }
+    return true;
+  };
   return b;
 }
 

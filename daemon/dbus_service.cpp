@@ -88,6 +88,7 @@ const sd_bus_vtable kVtable[] = {
     SD_BUS_METHOD("SetPressureSetpoint", "d", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("ReloadConfig", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("ClearAlarms", "", "", DbusService::method, kMethodFlags),
+    SD_BUS_METHOD("InjectSimFault", "s", "", DbusService::method, kMethodFlags),
     SD_BUS_SIGNAL("AlarmRaised", "s", 0),
     SD_BUS_SIGNAL("AlarmCleared", "s", 0),
     SD_BUS_VTABLE_END,
@@ -198,6 +199,11 @@ int DbusService::dispatch(sd_bus_message* message, void* userdata, sd_bus_error*
     result = self.handler_.reload_config();
   } else if (member == "ClearAlarms") {
     result = self.handler_.clear_alarms();
+  } else if (member == "InjectSimFault") {
+    const char* name = nullptr;
+    const int r = sd_bus_message_read(message, "s", &name);
+    if (r < 0) return r;
+    result = self.handler_.inject_sim_fault(name);
   } else {
     return sd_bus_error_setf(error, SD_BUS_ERROR_UNKNOWN_METHOD, "no method %s",
                              std::string(member).c_str());

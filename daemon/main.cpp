@@ -31,14 +31,16 @@ int main(int argc, char** argv) {
   app.add_option("--state-dir", options.state_dir, "overrides daemon.state_dir");
   app.add_option("--valve-state-file", options.valve_state_file,
                  "sim: write the final valve states here on exit");
+  app.add_option("--sim-truth-file", options.sim_truth_file,
+                 "sim: write the plant's true sprayed volume here on exit (the soak's reference)");
   app.add_option("--run-seconds", options.run_seconds, "exit by itself after this long")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--timing-report", options.timing_report,
                  "on exit, write each real-time loop's lateness (p50/p99/max, misses) as JSON "
                  "to this file (- = standard output)");
-  app.add_option("--sim-fault", options.sim_faults,
-                 "sim: inject NAME@SECONDS (sensor_open, sensor_short, filter_blocked, "
-                 "tank_empty, nozzleN_blocked)")
+  app.add_option(
+         "--sim-fault", options.sim_faults,
+         std::string("sim: inject NAME@SECONDS (") + weedspray::daemon::kSimFaultNames + ")")
       ->check([](const std::string& value) {
         return weedspray::daemon::parse_sim_fault(value) ? std::string()
                                                          : "expected NAME@SECONDS, got " + value;

@@ -20,6 +20,7 @@ struct Options {
   std::string sim_images;        // overrides sim.images_dir
   std::string state_dir;         // overrides daemon.state_dir
   std::string valve_state_file;  // sim: final valve states written here on exit
+  std::string sim_truth_file;    // sim: the plant's true sprayed volume written here on exit
   double run_seconds = 0;        // stop by itself after this long (0 = until a signal)
   std::string timing_report;     // on exit: real-time loop lateness as JSON here ("-" = stdout)
   // Sim only: faults injected into the plant, "NAME@SECONDS" (see daemon/sim_faults.hpp).

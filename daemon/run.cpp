@@ -11,9 +11,11 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <thread>
 
 #include "daemon/alarms.hpp"
@@ -134,6 +136,8 @@ class Daemon final : public CommandHandler {
     if (backends_.drive_world) backends_.drive_world(0.0);
     request_cpu_wakeup_latency();
     sprayer_->start();
+    output_watch_.emplace(backends_.output_devices());
+    unsafe_outputs_ = sprayer_->safe_write_errors();
     for (const auto& warning : sprayer_->realtime_warnings()) {
       spdlog::warn("real-time priority not granted ({}); running at normal priority", warning);
     }
@@ -161,12 +165,14 @@ class Daemon final : public CommandHandler {
   // Called on every exit path: threads stopped, outputs forced safe, state persisted.
   void shutdown() noexcept {
     if (sprayer_) sprayer_->stop();
-    backends_.force_safe();
-    spdlog::info("outputs safe: valves closed, pump off, return valve open");
+    report_safe_writes(backends_.force_safe());
     report_timing();
     cpu_latency_ = {};
     if (!options_.valve_state_file.empty() && backends_.describe_outputs) {
       std::ofstream(options_.valve_state_file) << backends_.describe_outputs();
+    }
+    if (!options_.sim_truth_file.empty() && backends_.plant_truth) {
+      std::ofstream(options_.sim_truth_file) << backends_.plant_truth();
     }
     log_thread_ = {};  // joins after draining
     persist_totals();
@@ -358,14 +364,36 @@ class Daemon final : public CommandHandler {
     if (options_.run_seconds > 0 && t >= options_.run_seconds) sd_event_exit(event_, 0);
   }
 
+  void apply_sim_fault(const SimFault& fault) {
+    spdlog::warn("sim: injecting fault {}", fault.name);
+    if (fault.output) {
+      if (backends_.fail_output_writes)
+        backends_.fail_output_writes(*fault.output, fault.output_error);
+    } else if (!fault.device.empty()) {
+      if (backends_.device_fault) backends_.device_fault(fault.device);
+    } else {
+      backends_.with_plant(fault.apply);
+    }
+  }
+
+  CommandResult inject_sim_fault(const std::string& name) override {
+    if (!backends_.with_plant)
+      return {kErrorNotPermitted, "InjectSimFault: only a simulation (--sim) takes faults"};
+    const auto fault = parse_sim_fault(name + "@0");
+    if (!fault)
+      return {kErrorInvalidArgument,
+              "InjectSimFault: unknown fault '" + name + "' (known: " + kSimFaultNames + ")"};
+    apply_sim_fault(*fault);
+    return {};
+  }
+
   void inject_sim_faults(double t) {
     if (!backends_.with_plant) return;
     sim_faults_done_.resize(options_.sim_faults.size(), false);
     for (std::size_t i = 0; i < options_.sim_faults.size(); ++i) {
       const auto fault = parse_sim_fault(options_.sim_faults[i]);
       if (sim_faults_done_[i] || !fault || t < fault->at_s) continue;
-      spdlog::warn("sim: injecting fault {}", fault->name);
-      backends_.with_plant(fault->apply);
+      apply_sim_fault(*fault);
       sim_faults_done_[i] = true;
     }
   }
@@ -442,13 +470,18 @@ class Daemon final : public CommandHandler {
     in.overruns_last_second = overruns_last_second_;
     const std::string vision_failures = sprayer_->vision_failures();
     in.vision_model_failed = !vision_failures.empty();
+    const std::string output_failures = check_outputs();
+    in.output_write_failed = !output_failures.empty();
 
     const AlarmMask raised = alarms_.evaluate(in);
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
       const auto id = static_cast<AlarmId>(i);
       if (!(raised & alarm_bit(id))) continue;
       const std::string name(alarm_name(id));
-      if (is_fault(id)) {
+      if (id == AlarmId::kOutputWriteFailed) {
+        spdlog::error("alarm raised: {} ({}; fault: every other output driven safe)", name,
+                      output_failures);
+      } else if (is_fault(id)) {
         spdlog::error("alarm raised: {} (fault: valves closed, pump off)", name);
       } else if (id == AlarmId::kControlOverruns) {
         spdlog::warn("alarm raised: {} ({} deadline misses while spraying in the last second; {})",
@@ -474,8 +507,34 @@ class Daemon final : public CommandHandler {
       was_spraying_ = false;
     }
     const bool any = alarms_.active() != 0;
-    if (backends_.led != nullptr) backends_.led->write(any ? 1 : 0);
-    if (backends_.buzzer != nullptr) backends_.buzzer->write(alarms_.fault_latched() ? 1 : 0);
+    const auto count_failure = [this](OutputRole role, int result) {
+      if (result != 0) ++main_thread_write_failures_[static_cast<std::size_t>(role)];
+    };
+    if (backends_.led != nullptr)
+      count_failure(OutputRole::kLed, backends_.led->write(any ? 1 : 0));
+    if (backends_.buzzer != nullptr)
+      count_failure(OutputRole::kBuzzer, backends_.buzzer->write(alarms_.fault_latched() ? 1 : 0));
+  }
+
+  // The outputs' failed writes since the last tick, and the safe writes still failing (retried
+  // here while in Fault, when every output is meant to be safe): "" when all is well, else a
+  // message naming each output (the output_write_failed alarm).
+  std::string check_outputs() {
+    if (state_.state() == SprayerState::kFault) {
+      for (std::size_t i = 0; i < kOutputRoleCount; ++i) {
+        if (unsafe_outputs_[i] == 0) continue;
+        unsafe_outputs_[i] = backends_.force_safe(static_cast<OutputRole>(i));
+        if (unsafe_outputs_[i] == 0)
+          spdlog::info("{} safe again after a failed safe write",
+                       output_role_name(static_cast<OutputRole>(i)));
+      }
+    }
+    OutputWriteCounters counters = sprayer_->output_write_counters();
+    for (std::size_t i = 0; i < kOutputRoleCount; ++i) {
+      counters.failed_writes[i] += main_thread_write_failures_[i];
+      counters.unsafe_error[i] = -unsafe_outputs_[i];
+    }
+    return output_watch_->update(counters);
   }
 
   std::uint64_t total_overruns(const PressureStatus& pressure, const ControlStatus& control) const {
@@ -537,6 +596,29 @@ class Daemon final : public CommandHandler {
     in.realtime = sprayer_->realtime_warnings().empty();
     in.cpu_latency_request = cpu_latency_state_;
     return in;
+  }
+
+  // At exit: every output safe, or each one that is not named (and the exit status says so,
+  // so systemd's ExecStopPost and the journal both see it).
+  void report_safe_writes(const SafeWriteErrors& errors) noexcept {
+    try {
+      const auto devices = backends_.output_devices();
+      bool all_safe = true;
+      for (std::size_t i = 0; i < kOutputRoleCount; ++i) {
+        if (errors[i] == 0) continue;
+        all_safe = false;
+        spdlog::critical("output NOT safe: {} ({}): safe value not written: {}",
+                         output_role_name(static_cast<OutputRole>(i)), devices[i],
+                         std::strerror(-errors[i]));
+      }
+      if (all_safe) {
+        spdlog::info("outputs safe: valves closed, pump off, return valve open");
+      } else {
+        exit_code_ = 1;
+      }
+    } catch (...) {
+      exit_code_ = 1;
+    }
   }
 
   void report_timing() noexcept {
@@ -715,6 +797,9 @@ class Daemon final : public CommandHandler {
   double last_print_s_ = -1e9;
   double last_persist_s_ = 0;
   int exit_code_ = 0;
+  std::optional<OutputWriteWatch> output_watch_;
+  SafeWriteErrors unsafe_outputs_{};  // -errno of safe writes that failed and still do
+  std::array<std::uint64_t, kOutputRoleCount> main_thread_write_failures_{};
   bool start_when_ready_ = false;  // Start arrived while Starting
 };
 

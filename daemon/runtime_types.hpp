@@ -42,6 +42,7 @@ struct PressureStatus {
   std::uint64_t adc_errors = 0;
   std::uint64_t valve_thread_stalls = 0;  // times the valve thread stopped advancing
   std::uint64_t stale_samples = 0;        // cycles whose newest ADC sample was too old to use
+  std::uint64_t pump_write_errors = 0;    // pump relay writes refused (on or off)
 };
 
 // Camera worker -> control loop, one per processed frame.
@@ -102,6 +103,8 @@ struct AppliedRecord {
   double speed_m_per_s = 0;
   double pressure_mpa = 0;
   double flow_l_per_min = 0;
+  double volume_l = 0;  // sprayed since the previous record (the totals' counter): a lost
+                        // record is volume missing from the log
   std::uint32_t nozzles = 0;
   std::array<float, io::kMaxValves> duty_pct{};
   std::array<float, io::kMaxValves> density{};       // weed density

@@ -194,7 +194,7 @@ std::string Sprayer::vision_failures() const {
 
 void Sprayer::start() {
   stopped_ = false;
-  io_.force_safe();  // outputs start safe, explicitly
+  safe_write_errors_ = io_.force_safe();  // outputs start safe, explicitly
   const auto add = [this](io::ThreadRole role, std::string name, auto body) {
     threads_.emplace_back(role, std::move(body));
     thread_names_.push_back(std::move(name));
@@ -237,7 +237,18 @@ void Sprayer::stop() noexcept {
   for (auto& thread : threads_) thread.stop_and_join();
   threads_.clear();
   for (std::size_t i = 0; i < camera_count_; ++i) cameras_[i].camera->stop();
-  io_.force_safe();
+  safe_write_errors_ = io_.force_safe();
+}
+
+OutputWriteCounters Sprayer::output_write_counters() const noexcept {
+  OutputWriteCounters counters;
+  const io::ValvePwmStats valves = pwm_driver_->stats();
+  const auto at = [](OutputRole role) { return static_cast<std::size_t>(role); };
+  counters.failed_writes[at(OutputRole::kValves)] = valves.write_errors;
+  counters.failed_writes[at(OutputRole::kHeartbeat)] = valves.heartbeat_write_errors;
+  counters.failed_writes[at(OutputRole::kPump)] = pressure_.read().pump_write_errors;
+  counters.failed_writes[at(OutputRole::kReturnValve)] = analog_io_->stats().dac_errors;
+  return counters;
 }
 
 void Sprayer::watch_pressure_loop(Nanos now) noexcept {
@@ -310,8 +321,13 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
 
     // A stalled valve thread may hold valves open or shut: no pump, return valve open.
     if (params.pump_enabled && status.sensor_ok && !status.tripped && !valves_stalled) {
-      if (io_.pump != nullptr && !status.pump_on) io_.pump->write(1);
-      status.pump_on = true;
+      // A refused write leaves the pump as it was: counted (output_write_failed), and tried
+      // again next cycle.
+      if (io_.pump != nullptr && !status.pump_on && io_.pump->write(1) != 0) {
+        ++status.pump_write_errors;
+      } else {
+        status.pump_on = true;
+      }
       outputs_safe = false;
       if (!controller_->enabled()) {
         controller_->enable(0.0, params.setpoint_mpa, status.pressure_mpa);
@@ -319,12 +335,14 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
       status.closure = controller_->update(params.setpoint_mpa, status.pressure_mpa, dt);
       analog_io_->command(io::dac_volts_from_valve_opening(1.0 - status.closure, io_.drive));
     } else if (!outputs_safe) {
-      if (io_.pump != nullptr) io_.pump->force_safe();
+      // A refused safe write is counted and tried again next cycle (outputs_safe stays false).
+      const bool pump_safe = io_.pump == nullptr || io_.pump->force_safe() == 0;
+      if (!pump_safe) ++status.pump_write_errors;
       analog_io_->command_safe();
       controller_->disable();
       status.pump_on = false;
       status.closure = 0.0;
-      outputs_safe = true;
+      outputs_safe = pump_safe;
     }
     status.cycles = loop.cycles();
     status.overruns = loop.overruns();
@@ -352,6 +370,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   status.nozzles = static_cast<std::uint32_t>(nozzles);
   Nanos last = io_.clock->now();
   Nanos next_record = last + record_period;
+  double volume_at_last_record = 0;
   std::uint64_t flow_count_start = io_.flow != nullptr ? io_.flow->snapshot().count : 0;
   Nanos flow_window_start = last;
   double fixed_distance = 0;
@@ -494,6 +513,8 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       record.speed_m_per_s = status.speed_m_per_s;
       record.pressure_mpa = pressure.pressure_mpa;
       record.flow_l_per_min = status.flow_l_per_min;
+      record.volume_l = status.volume_l - volume_at_last_record;
+      volume_at_last_record = status.volume_l;
       record.nozzles = status.nozzles;
       for (std::size_t n = 0; n < nozzles; ++n) {
         record.duty_pct[n] = static_cast<float>(status.duty_pct[n]);

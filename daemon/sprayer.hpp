@@ -67,6 +67,10 @@ class Sprayer {
   io::TankLevelSample tank() const noexcept { return tank_.read(); }
   io::ValvePwmStats pwm() const noexcept { return pwm_driver_->stats(); }
   io::AnalogIoStats analog_io() const noexcept { return analog_io_->stats(); }
+  // Failed output writes of the real-time threads (unsafe_error left 0).
+  OutputWriteCounters output_write_counters() const noexcept;
+  // -errno per output of the safe writes of the last start()/stop() (0: written).
+  const SafeWriteErrors& safe_write_errors() const noexcept { return safe_write_errors_; }
   // Lateness histograms of the real-time loops (readable from any thread).
   const LoopTiming& timing() const noexcept { return timing_; }
   // Times the valve thread found the pressure loop stalled with the pump on and switched it off.
@@ -116,6 +120,7 @@ class Sprayer {
 
   const Config config_;
   Backends& io_;
+  SafeWriteErrors safe_write_errors_{};
   io::LatestValue<LiveParams> params_;
   io::LatestValue<PressureStatus> pressure_;
   io::LatestValue<ControlStatus> control_;

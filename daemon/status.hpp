@@ -51,6 +51,8 @@ class CommandHandler {
   virtual CommandResult set_pressure_setpoint(double mpa) = 0;
   virtual CommandResult reload_config() = 0;
   virtual CommandResult clear_alarms() = 0;
+  // Simulation only (the soak, tests): a fault by name now (daemon/sim_faults.hpp).
+  virtual CommandResult inject_sim_fault(const std::string& name) = 0;
 };
 
 }  // namespace weedspray::daemon

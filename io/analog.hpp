@@ -3,8 +3,10 @@
 // physical quantities lives in io/signal_conversion.hpp.
 #pragma once
 
+#include <cerrno>
 #include <chrono>
 #include <cstdint>
+#include <string>
 
 #include "io/emergency_outputs.hpp"
 
@@ -30,12 +32,23 @@ class AnalogOutput {
   virtual ~AnalogOutput() = default;
   // Writes `volts` (clamped to [0, full_scale_volts()]). Returns 0 or -errno.
   virtual int write(double volts) noexcept = 0;
-  // Writes the declared safe voltage (return valve fully open = no line pressure).
-  virtual void force_safe() noexcept = 0;
+  // Writes the declared safe voltage (return valve fully open = no line pressure), retrying a
+  // failed write; returns 0 or -errno as write() does (see DigitalOutputBank::force_safe).
+  virtual int force_safe() noexcept = 0;
+  // The converter, for alarms and logs ("iio:device1 out_voltage0_raw").
+  virtual std::string describe() const { return {}; }
   virtual double full_scale_volts() const noexcept = 0;
   virtual std::uint64_t error_count() const noexcept = 0;
   // See DigitalOutputBank::emergency_write.
   virtual bool emergency_write(EmergencyWrite& /*out*/) const noexcept { return false; }
 };
+
+// write(volts) until it succeeds, at most `attempts` times; returns the last result (the
+// converters' force_safe()).
+inline int write_with_retries(AnalogOutput& output, double volts, int attempts) noexcept {
+  int result = -EIO;
+  for (int attempt = 0; attempt < attempts && result != 0; ++attempt) result = output.write(volts);
+  return result;
+}
 
 }  // namespace weedspray::io

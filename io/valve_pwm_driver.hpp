@@ -66,10 +66,11 @@ struct ValvePwmStats {
   std::uint64_t wakes = 0;  // loop iterations: advances at least every max_sleep while alive
   std::uint64_t heartbeat_toggles = 0;
   std::uint64_t edges_written = 0;
-  std::uint64_t late_edges = 0;     // written > late_threshold after their time
-  std::uint64_t missed_edges = 0;   // written > miss_tolerance after their time
-  std::uint64_t skipped_edges = 0;  // already a whole edge behind: state applied at once
-  std::uint64_t write_errors = 0;
+  std::uint64_t late_edges = 0;              // written > late_threshold after their time
+  std::uint64_t missed_edges = 0;            // written > miss_tolerance after their time
+  std::uint64_t skipped_edges = 0;           // already a whole edge behind: state applied at once
+  std::uint64_t write_errors = 0;            // valve bank writes refused (safe writes included)
+  std::uint64_t heartbeat_write_errors = 0;  // heartbeat output writes refused
   std::uint64_t commands_applied = 0;
   std::uint64_t deadman_expiries = 0;
   std::chrono::nanoseconds max_lateness{0};
@@ -167,10 +168,11 @@ class ValvePwmDriver {
       ++stats_.edges_written;
       publish_stats();
     }
-    bank_.force_safe();
+    if (bank_.force_safe() != 0) ++stats_.write_errors;
     stats_.last_mask = bank_.safe_mask();
     stats_.expired = true;
-    if (config_.heartbeat != nullptr) config_.heartbeat->force_safe();
+    if (config_.heartbeat != nullptr && config_.heartbeat->force_safe() != 0)
+      ++stats_.heartbeat_write_errors;
     publish_stats();
   }
 
@@ -191,7 +193,7 @@ class ValvePwmDriver {
     }
     if (now < next_beat_ && next_beat_ != std::chrono::nanoseconds::max()) return;
     beat_level_ = !beat_level_;
-    if (config_.heartbeat->write(beat_level_ ? 1U : 0U) != 0) ++stats_.write_errors;
+    if (config_.heartbeat->write(beat_level_ ? 1U : 0U) != 0) ++stats_.heartbeat_write_errors;
     ++stats_.heartbeat_toggles;
     next_beat_ = now + config_.heartbeat_half_period;
   }

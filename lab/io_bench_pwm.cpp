@@ -31,7 +31,10 @@ class TimestampingBank final : public io::DigitalOutputBank {
     if (writes_.size() < writes_.capacity()) writes_.push_back({now, mask});
     return 0;
   }
-  void force_safe() noexcept override { ++force_safe_calls_; }
+  int force_safe() noexcept override {
+    ++force_safe_calls_;
+    return 0;
+  }
   std::uint32_t safe_mask() const noexcept override { return 0; }
 
   struct Write {

@@ -113,16 +113,37 @@ int GpioOutputBank::write(std::uint32_t mask) noexcept {
   return 0;
 }
 
-void GpioOutputBank::force_safe() noexcept {
+int GpioOutputBank::force_safe() noexcept {
   // The raw ioctl with its own payload touches no shared buffer, so another thread may force a
   // line safe while its owner is stuck in write() (the loops' cross-watch does).
+  constexpr int kAttempts = 3;
   EmergencyWrite safe;
+  int result = -EIO;
   if (emergency_write(safe)) {
-    for (int attempt = 0; attempt < 2; ++attempt) {
-      if (::ioctl(safe.fd, safe.request, safe.payload.data()) >= 0) return;
+    for (int attempt = 0; attempt < kAttempts; ++attempt) {
+      if (::ioctl(safe.fd, safe.request, safe.payload.data()) >= 0) return 0;
+      result = -errno;
     }
   }
-  write(impl_->safe_mask);
+  // No handle found, or the kernel refused it: through libgpiod as a last try.
+  const int through_library = write(impl_->safe_mask);
+  return through_library == 0 ? 0 : (result != -EIO ? result : through_library);
+}
+
+std::string GpioOutputBank::describe() const {
+  std::string text = impl_->chip_name + (impl_->bulk.size() == 1 ? " line " : " lines ");
+  std::string names;
+  for (unsigned i = 0; i < impl_->bulk.size(); ++i) {
+    const gpiod::line line = impl_->bulk.get(i);
+    if (i > 0) {
+      text.push_back(',');
+      names.push_back(',');
+    }
+    text.append(std::to_string(line.offset()));
+    const std::string name = line.name();
+    names.append(name.empty() ? "?" : name);
+  }
+  return text + " (" + names + ")";
 }
 
 std::uint32_t GpioOutputBank::safe_mask() const noexcept {

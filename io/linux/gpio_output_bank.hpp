@@ -32,7 +32,8 @@ class GpioOutputBank final : public DigitalOutputBank {
 
   std::size_t size() const noexcept override;
   int write(std::uint32_t mask) noexcept override;
-  void force_safe() noexcept override;
+  int force_safe() noexcept override;
+  std::string describe() const override;
   std::uint32_t safe_mask() const noexcept override;
   // GPIOHANDLE_SET_LINE_VALUES on the line handle libgpiod holds, with the safe values.
   bool emergency_write(EmergencyWrite& out) const noexcept override;

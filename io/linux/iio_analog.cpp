@@ -131,8 +131,13 @@ int IioAnalogOutput::write(double volts) noexcept {
   return 0;
 }
 
-void IioAnalogOutput::force_safe() noexcept {
-  write(config_.safe_volts);
+int IioAnalogOutput::force_safe() noexcept {
+  return write_with_retries(*this, config_.safe_volts, 3);
+}
+
+std::string IioAnalogOutput::describe() const {
+  return "IIO " + config_.channel.device + " out_voltage" +
+         std::to_string(config_.channel.channel) + "_raw";
 }
 
 bool IioAnalogOutput::emergency_write(EmergencyWrite& out) const noexcept {

@@ -60,7 +60,8 @@ class IioAnalogOutput final : public AnalogOutput {
   IioAnalogOutput& operator=(const IioAnalogOutput&) = delete;
 
   int write(double volts) noexcept override;
-  void force_safe() noexcept override;
+  int force_safe() noexcept override;
+  std::string describe() const override;
   double full_scale_volts() const noexcept override { return config_.full_scale_volts; }
   bool emergency_write(EmergencyWrite& out) const noexcept override;
   std::uint64_t error_count() const noexcept override { return errors_; }

@@ -91,8 +91,14 @@ int ModbusAnalogOutput::write(double volts) noexcept {
   return 0;
 }
 
-void ModbusAnalogOutput::force_safe() noexcept {
-  write(config_.safe_volts);
+std::string ModbusAnalogOutput::describe() const {
+  return "Modbus " + config_.port.device + " slave " + std::to_string(config_.port.slave_id) +
+         " holding register " + std::to_string(config_.register_address);
+}
+
+int ModbusAnalogOutput::force_safe() noexcept {
+  // Two tries: each failed one already flushed the line (and at most once a second reopened it).
+  return write_with_retries(*this, config_.safe_volts, 2);
 }
 
 }  // namespace weedspray::io::hw

@@ -52,7 +52,8 @@ class ModbusAnalogOutput final : public AnalogOutput {
   explicit ModbusAnalogOutput(const ModbusAnalogOutputConfig& config);
   ~ModbusAnalogOutput() override;  // force_safe()
   int write(double volts) noexcept override;
-  void force_safe() noexcept override;
+  int force_safe() noexcept override;
+  std::string describe() const override;
   double full_scale_volts() const noexcept override { return config_.full_scale_volts; }
   std::uint64_t error_count() const noexcept override { return errors_; }
 

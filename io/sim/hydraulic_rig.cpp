@@ -104,27 +104,37 @@ nanoseconds HydraulicRig::plant_time() const noexcept {
   return plant_time_;
 }
 
+void HydraulicRig::fail_writes(Output output, int error) noexcept {
+  (output == Output::kValves ? valve_write_error_ : pump_write_error_).store(error);
+}
+
+int HydraulicRig::write_error(Output output) const noexcept {
+  return (output == Output::kValves ? valve_write_error_ : pump_write_error_).load();
+}
+
 std::size_t RigValveBank::size() const noexcept {
   return static_cast<std::size_t>(rig_.nozzle_count());
 }
 
 int RigValveBank::write(std::uint32_t mask) noexcept {
+  if (const int error = rig_.write_error(HydraulicRig::Output::kValves)) return -error;
   const std::uint32_t used = (1U << rig_.nozzle_count()) - 1U;
   rig_.set_valves(mask & used);
   return 0;
 }
 
-void RigValveBank::force_safe() noexcept {
-  rig_.set_valves(0);
+int RigValveBank::force_safe() noexcept {
+  return write(0);
 }
 
 int RigPumpRelay::write(std::uint32_t mask) noexcept {
+  if (const int error = rig_.write_error(HydraulicRig::Output::kPump)) return -error;
   rig_.set_pump((mask & 1U) != 0);
   return 0;
 }
 
-void RigPumpRelay::force_safe() noexcept {
-  rig_.set_pump(false);
+int RigPumpRelay::force_safe() noexcept {
+  return write(0);
 }
 
 PulseSnapshot RigPulseInput::snapshot() const noexcept {
@@ -148,8 +158,8 @@ int RigReturnValveDac::write(double volts) noexcept {
   return 0;
 }
 
-void RigReturnValveDac::force_safe() noexcept {
-  write(drive_.dac_full_scale_volts);
+int RigReturnValveDac::force_safe() noexcept {
+  return write(drive_.dac_full_scale_volts);
 }
 
 TankLevelSample RigTankLevel::read() noexcept {

@@ -8,6 +8,7 @@
 // never left waiting behind a preempted normal-priority holder.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -54,6 +55,12 @@ class HydraulicRig {
 
   std::chrono::nanoseconds plant_time() const noexcept;
 
+  // Fault injection: writes to the valve bank or the pump relay fail with -error and leave the
+  // plant's valves/pump as they were (a refused GPIO ioctl); 0 makes them work again.
+  enum class Output { kValves, kPump };
+  void fail_writes(Output output, int error) noexcept;
+  int write_error(Output output) const noexcept;
+
  private:
   void advance_locked() noexcept;
 
@@ -66,6 +73,8 @@ class HydraulicRig {
   std::chrono::nanoseconds plant_time_;
   std::uint32_t valve_mask_ = 0;
   bool pump_on_ = false;
+  std::atomic<int> valve_write_error_{0};
+  std::atomic<int> pump_write_error_{0};
   PulseSnapshot flow_{};
   PulseSnapshot wheel_{};
 };
@@ -76,8 +85,9 @@ class RigValveBank final : public DigitalOutputBank {
   explicit RigValveBank(HydraulicRig& rig) noexcept : rig_(rig) {}
   std::size_t size() const noexcept override;
   int write(std::uint32_t mask) noexcept override;
-  void force_safe() noexcept override;
+  int force_safe() noexcept override;
   std::uint32_t safe_mask() const noexcept override { return 0; }
+  std::string describe() const override { return "simulated valve bank"; }
   // What the plant's valves are commanded to now: a test checks it is 0 at the end.
   std::uint32_t mask() const noexcept { return rig_.valve_mask(); }
 
@@ -91,8 +101,9 @@ class RigPumpRelay final : public DigitalOutputBank {
   explicit RigPumpRelay(HydraulicRig& rig) noexcept : rig_(rig) {}
   std::size_t size() const noexcept override { return 1; }
   int write(std::uint32_t mask) noexcept override;
-  void force_safe() noexcept override;
+  int force_safe() noexcept override;
   std::uint32_t safe_mask() const noexcept override { return 0; }
+  std::string describe() const override { return "simulated pump relay"; }
 
  private:
   HydraulicRig& rig_;
@@ -126,7 +137,7 @@ class RigReturnValveDac final : public AnalogOutput {
  public:
   RigReturnValveDac(HydraulicRig& rig, const ValveDriveConfig& drive) noexcept;
   int write(double volts) noexcept override;
-  void force_safe() noexcept override;
+  int force_safe() noexcept override;
   double full_scale_volts() const noexcept override { return drive_.dac_full_scale_volts; }
   std::uint64_t error_count() const noexcept override { return 0; }
   double last_volts() const noexcept { return last_volts_; }
@@ -143,14 +154,14 @@ class RigTankLevel final : public TankLevelSensor {
  public:
   RigTankLevel(HydraulicRig& rig, const Clock& clock) noexcept : rig_(rig), clock_(clock) {}
   TankLevelSample read() noexcept override;
-  // The next `n` reads time out.
-  void inject_timeouts(int n) noexcept { pending_timeouts_ = n; }
+  // The next `n` reads time out (any thread).
+  void inject_timeouts(int n) noexcept { pending_timeouts_.store(n); }
 
  private:
   HydraulicRig& rig_;
   const Clock& clock_;
   TankLevelSample counters_;
-  int pending_timeouts_ = 0;
+  std::atomic<int> pending_timeouts_{0};
 };
 
 }  // namespace weedspray::io::sim

@@ -18,16 +18,24 @@ MemoryOutputBank::MemoryOutputBank(std::size_t lines, std::uint32_t safe_mask, c
 int MemoryOutputBank::write(std::uint32_t mask) noexcept {
   const std::uint32_t used = lines_ == 32 ? ~0U : ((1U << lines_) - 1U);
   std::lock_guard lock(mutex_);
+  if (fail_error_ != 0) return -fail_error_;
   mask_ = mask & used;
   ++writes_;
   if (history_.size() < history_.capacity()) history_.push_back({clock_.now(), mask_});
   return 0;
 }
 
-void MemoryOutputBank::force_safe() noexcept {
+int MemoryOutputBank::force_safe() noexcept {
   std::lock_guard lock(mutex_);
-  mask_ = safe_mask_;
   ++force_safe_count_;
+  if (fail_error_ != 0) return -fail_error_;
+  mask_ = safe_mask_;
+  return 0;
+}
+
+void MemoryOutputBank::fail_writes(int error) noexcept {
+  std::lock_guard lock(mutex_);
+  fail_error_ = error;
 }
 
 std::uint32_t MemoryOutputBank::mask() const noexcept {

@@ -25,7 +25,12 @@ class MemoryOutputBank final : public DigitalOutputBank {
 
   std::size_t size() const noexcept override { return lines_; }
   int write(std::uint32_t mask) noexcept override;
-  void force_safe() noexcept override;
+  int force_safe() noexcept override;
+  std::string describe() const override { return "memory bank"; }
+
+  // Fault injection: every later write and force_safe() fails with -error (0 = works again);
+  // a failed write leaves the lines as they were, as a refused ioctl does.
+  void fail_writes(int error) noexcept;
   std::uint32_t safe_mask() const noexcept override { return safe_mask_; }
 
   std::uint32_t mask() const noexcept;
@@ -42,6 +47,7 @@ class MemoryOutputBank final : public DigitalOutputBank {
   std::uint32_t mask_;
   std::uint64_t force_safe_count_ = 0;
   std::uint64_t writes_ = 0;
+  int fail_error_ = 0;
   std::vector<OutputWrite> history_;
 };
 

@@ -1,6 +1,7 @@
 #include "io/sim/replay_camera.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
@@ -45,6 +46,7 @@ struct ReplayCamera::Impl {
   std::uint64_t sequence = 0;
   nanoseconds next_due{};
   std::string error;
+  std::atomic<bool> unplugged{false};
   CameraCounters counters;
 
   Impl(ReplayCameraConfig c, Clock& k) : config(std::move(c)), clock(k) {}
@@ -139,6 +141,10 @@ bool ReplayCamera::start() {
   return true;
 }
 
+void ReplayCamera::set_unplugged(bool unplugged) noexcept {
+  impl_->unplugged.store(unplugged);
+}
+
 FrameStatus ReplayCamera::next_frame(Frame& frame, std::chrono::milliseconds timeout) {
   Impl& m = *impl_;
   if (!m.started) {
@@ -147,6 +153,11 @@ FrameStatus ReplayCamera::next_frame(Frame& frame, std::chrono::milliseconds tim
     return FrameStatus::kError;
   }
   const nanoseconds give_up = m.clock.now() + timeout;
+  if (m.unplugged.load()) {
+    m.clock.sleep_until(give_up);
+    ++m.counters.timeouts;
+    return FrameStatus::kTimeout;
+  }
   // Standing still: no new ground, no new frame; poll the speed until the timeout.
   while (true) {
     nanoseconds interval{};

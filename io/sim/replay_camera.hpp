@@ -41,6 +41,10 @@ class ReplayCamera final : public Camera {
   std::string last_error() const override;
   CameraCounters counters() const noexcept override;
 
+  // Fault injection (any thread): while unplugged, next_frame() delivers nothing and times
+  // out, as a camera whose cable came off does.
+  void set_unplugged(bool unplugged) noexcept;
+
   std::size_t image_count() const noexcept;  // images listed (0 for video)
   std::string current_source_name() const;   // file name of the last frame's image
 

@@ -37,9 +37,9 @@ class StallingBank final : public io::DigitalOutputBank {
     if (block()) return 0;
     return inner_.write(mask);
   }
-  void force_safe() noexcept override {
-    if (block()) return;
-    inner_.force_safe();
+  int force_safe() noexcept override {
+    if (block()) return 0;
+    return inner_.force_safe();
   }
   std::uint32_t safe_mask() const noexcept override { return inner_.safe_mask(); }
   std::atomic<bool> stall{false};

@@ -68,7 +68,8 @@ TEST(AsAppliedLog, WritesOneLinePerRecordAndRotates) {
   std::string header;
   std::getline(in, header);
   EXPECT_EQ(header,
-            "time_s,distance_m,speed_m_per_s,pressure_mpa,flow_l_per_min,duty_pct_0,duty_pct_1,"
+            "time_s,distance_m,speed_m_per_s,pressure_mpa,flow_l_per_min,volume_l,duty_pct_0,"
+            "duty_pct_1,"
             "duty_pct_2,duty_pct_3,density_0,density_1,density_2,density_3,crop_density_0,"
             "crop_density_1,crop_density_2,crop_density_3");
   std::string line;

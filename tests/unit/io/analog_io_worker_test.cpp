@@ -55,7 +55,10 @@ class RecordingDac final : public AnalogOutput {
     }
     return 0;
   }
-  void force_safe() noexcept override { writes.push_back({clock_.now(), kSafe}); }
+  int force_safe() noexcept override {
+    writes.push_back({clock_.now(), kSafe});
+    return 0;
+  }
   double full_scale_volts() const noexcept override { return 3.3; }
   std::uint64_t error_count() const noexcept override { return errors_; }
 

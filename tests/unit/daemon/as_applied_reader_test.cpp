@@ -1,0 +1,97 @@
+#include "daemon/as_applied_reader.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <fstream>
+
+#include "daemon/as_applied_log.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+
+class AsAppliedReaderTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ =
+        fs::temp_directory_path() /
+        ("weedspray-reader-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+         "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  // n records of 0.01 L each, 0.1 s apart, flushed; returns the file.
+  fs::path write_records(int n) {
+    AsAppliedLog log(dir_, 1 << 20, 5);
+    for (int i = 0; i < n; ++i) {
+      AppliedRecord r;
+      r.time = std::chrono::milliseconds(100 * i);
+      r.volume_l = 0.01;
+      r.nozzles = 2;
+      EXPECT_TRUE(log.write(r));
+    }
+    log.flush();
+    return log.current_file();
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(AsAppliedReaderTest, SumsEveryRecordsVolume) {
+  write_records(50);
+  const AsAppliedSummary s = read_as_applied_dir(dir_);
+  EXPECT_EQ(s.files, 1U);
+  EXPECT_EQ(s.records, 50U);
+  EXPECT_NEAR(s.volume_l, 0.5, 1e-9);
+  EXPECT_DOUBLE_EQ(s.first_time_s, 0.0);
+  EXPECT_NEAR(s.last_time_s, 4.9, 1e-9);
+  EXPECT_EQ(s.torn_tail_lines, 0U);
+  EXPECT_EQ(s.damaged_lines, 0U);
+}
+
+TEST_F(AsAppliedReaderTest, ATornLastLineIsSkippedAndCounted) {
+  const fs::path file = write_records(10);
+  // A power cut in the middle of a line: no newline, half the fields.
+  std::ofstream(file, std::ios::app) << "1.0000,0.5000,1.0";
+  const AsAppliedSummary s = read_as_applied_file(file);
+  EXPECT_EQ(s.records, 10U);
+  EXPECT_NEAR(s.volume_l, 0.1, 1e-9);
+  EXPECT_EQ(s.torn_tail_lines, 1U);
+  EXPECT_EQ(s.damaged_lines, 0U);
+}
+
+TEST_F(AsAppliedReaderTest, AllFieldsButNoNewlineIsTornToo) {
+  const fs::path file = write_records(3);
+  std::ofstream(file, std::ios::app) << "0.3000,0,0,0,0,0.0100000,0,0,0,0,0,0";
+  const AsAppliedSummary s = read_as_applied_file(file);
+  EXPECT_EQ(s.records, 3U);
+  EXPECT_EQ(s.torn_tail_lines, 1U);
+}
+
+TEST_F(AsAppliedReaderTest, DamageInsideTheFileIsCountedApart) {
+  const fs::path file = write_records(2);
+  std::ofstream(file, std::ios::app) << "garbage\n0.3000,0,0,0,0,0.0200000,0,0,0,0,0,0\n";
+  const AsAppliedSummary s = read_as_applied_file(file);
+  EXPECT_EQ(s.records, 3U);
+  EXPECT_NEAR(s.volume_l, 0.04, 1e-9);
+  EXPECT_EQ(s.damaged_lines, 1U);
+  EXPECT_EQ(s.torn_tail_lines, 0U);
+}
+
+TEST_F(AsAppliedReaderTest, ANonLogFileIsNamed) {
+  fs::create_directories(dir_);
+  const fs::path file = dir_ / "as-applied-x.csv";
+  std::ofstream(file) << "a,b\n1,2\n";
+  try {
+    read_as_applied_file(file);
+    FAIL() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace weedspray::daemon
