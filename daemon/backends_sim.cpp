@@ -121,11 +121,21 @@ Backends make_sim_backends(const Config& config, const Options& options) {
         break;  // the DAC's failures: see analog I/O tests
     }
   };
-  b.plant_truth = [rig]() {
+  const double nominal_ppl = config.flow.pulses_per_litre;
+  b.plant_truth = [rig, nominal_ppl]() {
     double delivered = 0;
-    rig->with_plant([&](control::plant::HydraulicPlant& p) { delivered = p.total_delivered_l(); });
-    char text[64];
-    std::snprintf(text, sizeof text, "sprayed_l=%.6f\n", delivered);
+    double metered = 0;
+    double meter_gain = 1;
+    rig->with_plant([&](control::plant::HydraulicPlant& p) {
+      delivered = p.total_delivered_l();
+      metered = static_cast<double>(p.flow_meter_pulses()) / nominal_ppl;
+      meter_gain = p.true_meter_pulses_per_l() / nominal_ppl;
+    });
+    // The true volume, what the meter's pulses say at the configured pulses/L, and the meter's
+    // real pulses/L over the configured one (its calibration error).
+    char text[160];
+    std::snprintf(text, sizeof text, "sprayed_l=%.6f\nmetered_l=%.6f\nmeter_gain=%.6f\n", delivered,
+                  metered, meter_gain);
     return std::string(text);
   };
   b.describe_outputs = [rig]() {

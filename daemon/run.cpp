@@ -520,20 +520,27 @@ class Daemon final : public CommandHandler {
   // here while in Fault, when every output is meant to be safe): "" when all is well, else a
   // message naming each output (the output_write_failed alarm).
   std::string check_outputs() {
-    if (state_.state() == SprayerState::kFault) {
-      for (std::size_t i = 0; i < kOutputRoleCount; ++i) {
-        if (unsafe_outputs_[i] == 0) continue;
-        unsafe_outputs_[i] = backends_.force_safe(static_cast<OutputRole>(i));
-        if (unsafe_outputs_[i] == 0)
-          spdlog::info("{} safe again after a failed safe write",
-                       output_role_name(static_cast<OutputRole>(i)));
-      }
-    }
     OutputWriteCounters counters = sprayer_->output_write_counters();
     for (std::size_t i = 0; i < kOutputRoleCount; ++i) {
       counters.failed_writes[i] += main_thread_write_failures_[i];
-      counters.unsafe_error[i] = -unsafe_outputs_[i];
+      // An output that refused a write may be left in any state (a valve stuck open): it is
+      // written safe again from here once in Fault, and until that succeeds.
+      if (counters.failed_writes[i] != failed_writes_seen_[i]) rewrite_safe_[i] = true;
+      failed_writes_seen_[i] = counters.failed_writes[i];
     }
+    if (state_.state() == SprayerState::kFault) {
+      for (std::size_t i = 0; i < kOutputRoleCount; ++i) {
+        if (!rewrite_safe_[i] && unsafe_outputs_[i] == 0) continue;
+        const bool was_unsafe = unsafe_outputs_[i] != 0;
+        unsafe_outputs_[i] = backends_.force_safe(static_cast<OutputRole>(i));
+        if (unsafe_outputs_[i] != 0) continue;
+        rewrite_safe_[i] = false;
+        if (was_unsafe)
+          spdlog::info("{} written safe again", output_role_name(static_cast<OutputRole>(i)));
+      }
+    }
+    for (std::size_t i = 0; i < kOutputRoleCount; ++i)
+      counters.unsafe_error[i] = -unsafe_outputs_[i];
     return output_watch_->update(counters);
   }
 
@@ -800,7 +807,9 @@ class Daemon final : public CommandHandler {
   std::optional<OutputWriteWatch> output_watch_;
   SafeWriteErrors unsafe_outputs_{};  // -errno of safe writes that failed and still do
   std::array<std::uint64_t, kOutputRoleCount> main_thread_write_failures_{};
-  bool start_when_ready_ = false;  // Start arrived while Starting
+  std::array<std::uint64_t, kOutputRoleCount> failed_writes_seen_{};
+  std::array<bool, kOutputRoleCount> rewrite_safe_{};  // refused a write: write it safe in Fault
+  bool start_when_ready_ = false;                      // Start arrived while Starting
 };
 
 }  // namespace

@@ -83,8 +83,8 @@ struct ControlStatus {
   std::array<double, io::kMaxValves> duty_pct{};
   std::array<double, io::kMaxValves> density{};       // pinned density under each nozzle now
   std::array<double, io::kMaxValves> crop_density{};  // pinned crop share, likewise
-  double volume_l = 0;          // measured by the flow meter while spraying (session)
-  double area_m2 = 0;           // ground covered while spraying (session)
+  double volume_l = 0;  // the flow meter's pulses at flow.pulses_per_litre, any state (session)
+  double area_m2 = 0;   // ground covered while spraying (session)
   double uniform_volume_l = 0;  // nominal dose x area: what uniform spraying would use
   double last_latency_ms = 0;   // frame capture -> scheduled, latest frame
   std::uint64_t frames_scheduled = 0;

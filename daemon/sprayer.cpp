@@ -372,6 +372,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   Nanos next_record = last + record_period;
   double volume_at_last_record = 0;
   std::uint64_t flow_count_start = io_.flow != nullptr ? io_.flow->snapshot().count : 0;
+  std::uint64_t volume_count = flow_count_start;
   Nanos flow_window_start = last;
   double fixed_distance = 0;
   std::uint64_t frames_lost = 0;
@@ -395,13 +396,19 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       fixed_distance += status.speed_m_per_s * dt;
       status.distance_m = fixed_distance;
     }
-    // Measured flow over a sliding window.
-    if (io_.flow != nullptr && now - flow_window_start >= kFlowWindow) {
+    if (io_.flow != nullptr) {
       const io::PulseSnapshot flow = io_.flow->snapshot();
-      status.flow_l_per_min = static_cast<double>(flow.count - flow_count_start) / flow_ppl /
-                              seconds(now - flow_window_start) * 60.0;
-      flow_count_start = flow.count;
-      flow_window_start = now;
+      // The volume is the meter's pulses themselves, counted in every state: integrating the
+      // windowed flow below would lag it and lose part of each start and stop.
+      status.volume_l += static_cast<double>(flow.count - volume_count) / flow_ppl;
+      volume_count = flow.count;
+      // Measured flow over a sliding window.
+      if (now - flow_window_start >= kFlowWindow) {
+        status.flow_l_per_min = static_cast<double>(flow.count - flow_count_start) / flow_ppl /
+                                seconds(now - flow_window_start) * 60.0;
+        flow_count_start = flow.count;
+        flow_window_start = now;
+      }
     }
     // New frames: pin their densities to the ground they imaged. Densities (not duties) are
     // pinned so the rate law uses the speed and pressure at the moment the patch is sprayed.
@@ -502,7 +509,6 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       const double area = status.speed_m_per_s * dt * boom_width_m;
       status.area_m2 += area;
       status.uniform_volume_l += control::nominal_dose_l_per_m2(params.law) * area;
-      status.volume_l += status.flow_l_per_min / 60.0 * dt;
     }
     if (now >= next_record) {
       next_record += record_period;

@@ -12,5 +12,7 @@ void add_vision_commands(CLI::App& app);
 void add_experiment_commands(CLI::App& app);
 // bench-pwm (lab/io_commands.cpp)
 void add_io_commands(CLI::App& app);
+// soak (lab/soak_command.cpp)
+void add_soak_command(CLI::App& app);
 
 }  // namespace weedspray::lab
