@@ -171,39 +171,33 @@ int DbusService::get_property(sd_bus*, const char*, const char*, const char* pro
 }
 
 int DbusService::method(sd_bus_message* message, void* userdata, sd_bus_error* error) {
-  // An exception must not cross sd-bus's C frames: it becomes the caller's error reply.
-  try {
-    return dispatch(message, userdata, error);
-  } catch (const std::exception& e) {
-    return sd_bus_error_setf(error, SD_BUS_ERROR_FAILED, "%s failed: %s",
-                             sd_bus_message_get_member(message), e.what());
-  } catch (...) {
-    return sd_bus_error_set(error, SD_BUS_ERROR_FAILED, "unknown error");
-  }
+  return handle_method_call(message, static_cast<DbusService*>(userdata)->handler_, error);
 }
 
-int DbusService::dispatch(sd_bus_message* message, void* userdata, sd_bus_error* error) {
-  auto& self = *static_cast<DbusService*>(userdata);
-  const std::string_view member(sd_bus_message_get_member(message));
+namespace {
+
+int dispatch(sd_bus_message* message, CommandHandler& handler, sd_bus_error* error) {
+  const char* member_name = sd_bus_message_get_member(message);
+  const std::string_view member(member_name != nullptr ? member_name : "");
   CommandResult result;
   if (member == "Start") {
-    result = self.handler_.start();
+    result = handler.start();
   } else if (member == "Stop") {
-    result = self.handler_.stop();
+    result = handler.stop();
   } else if (member == "SetPressureSetpoint") {
     double mpa = 0;
     const int r = sd_bus_message_read(message, "d", &mpa);
     if (r < 0) return r;
-    result = self.handler_.set_pressure_setpoint(mpa);
+    result = handler.set_pressure_setpoint(mpa);
   } else if (member == "ReloadConfig") {
-    result = self.handler_.reload_config();
+    result = handler.reload_config();
   } else if (member == "ClearAlarms") {
-    result = self.handler_.clear_alarms();
+    result = handler.clear_alarms();
   } else if (member == "InjectSimFault") {
     const char* name = nullptr;
     const int r = sd_bus_message_read(message, "s", &name);
     if (r < 0) return r;
-    result = self.handler_.inject_sim_fault(name);
+    result = handler.inject_sim_fault(name);
   } else {
     return sd_bus_error_setf(error, SD_BUS_ERROR_UNKNOWN_METHOD, "no method %s",
                              std::string(member).c_str());
@@ -212,6 +206,21 @@ int DbusService::dispatch(sd_bus_message* message, void* userdata, sd_bus_error*
     return sd_bus_error_set(error, result.error_name.c_str(), result.message.c_str());
   }
   return sd_bus_reply_method_return(message, "");
+}
+
+}  // namespace
+
+int handle_method_call(sd_bus_message* message, CommandHandler& handler, sd_bus_error* error) {
+  // An exception must not cross sd-bus's C frames: it becomes the caller's error reply.
+  try {
+    return dispatch(message, handler, error);
+  } catch (const std::exception& e) {
+    const char* member = sd_bus_message_get_member(message);
+    return sd_bus_error_setf(error, SD_BUS_ERROR_FAILED, "%s failed: %s",
+                             member != nullptr ? member : "call", e.what());
+  } catch (...) {
+    return sd_bus_error_set(error, SD_BUS_ERROR_FAILED, "unknown error");
+  }
 }
 
 }  // namespace weedspray::daemon

@@ -4,7 +4,8 @@
 //     Speed d (m/s), Distance d (m), NozzleDuty ad (%), ZoneDensity ad, Alarms as,
 //     VolumeSprayed d (L), AreaCovered d (m^2), SavingsPercent d, FrameRate d (Hz),
 //     VisionLatencyMs d, VisionLatencyP99Ms d, ControlOverruns t, Mode s
-//   methods: Start(), Stop(), SetPressureSetpoint(d), ReloadConfig(), ClearAlarms()
+//   methods: Start(), Stop(), SetPressureSetpoint(d), ReloadConfig(), ClearAlarms(),
+//     InjectSimFault(s) (simulation only)
 //   signals: AlarmRaised(s), AlarmCleared(s)
 #pragma once
 
@@ -37,7 +38,6 @@ class DbusService {
                           const char* property, sd_bus_message* reply, void* userdata,
                           sd_bus_error* error);
   static int method(sd_bus_message* message, void* userdata, sd_bus_error* error);
-  static int dispatch(sd_bus_message* message, void* userdata, sd_bus_error* error);
 
  private:
   sd_bus* bus_ = nullptr;
@@ -47,5 +47,11 @@ class DbusService {
   Status emitted_;
   bool emitted_once_ = false;
 };
+
+// One method call of org.weedspray.Sprayer1 on `handler`: reads the arguments, calls the
+// command, replies. An exception from the handler never crosses sd-bus's C frames: it becomes
+// the caller's error reply ("Start failed: ...") and the daemon stays up. Free (no bus of its
+// own) so tests and the fuzz target can call it with messages they build.
+int handle_method_call(sd_bus_message* message, CommandHandler& handler, sd_bus_error* error);
 
 }  // namespace weedspray::daemon

@@ -37,6 +37,11 @@ ModbusContext open_modbus_rtu(const ModbusRtuSettings& c, const std::string& wha
   const auto us = std::chrono::duration_cast<std::chrono::microseconds>(c.response_timeout).count();
   modbus_set_response_timeout(ctx.get(), static_cast<std::uint32_t>(us / 1'000'000),
                               static_cast<std::uint32_t>(us % 1'000'000));
+  const auto byte_us =
+      std::chrono::duration_cast<std::chrono::microseconds>(c.byte_timeout).count();
+  if (byte_us > 0)
+    modbus_set_byte_timeout(ctx.get(), static_cast<std::uint32_t>(byte_us / 1'000'000),
+                            static_cast<std::uint32_t>(byte_us % 1'000'000));
   // After a bad frame, wait out the line and flush, so garbage does not poison the next read.
   modbus_set_error_recovery(ctx.get(), recovery == ModbusRecovery::kWaitAndFlush
                                            ? MODBUS_ERROR_RECOVERY_PROTOCOL

@@ -23,6 +23,10 @@ struct ModbusRtuSettings {
   int stop_bits = 1;
   int slave_id = 1;
   std::chrono::milliseconds response_timeout{500};
+  // Longest silence inside a reply before it counts as cut off. libmodbus's default is 500 ms,
+  // which holds a reader that long on every torn frame; 50 ms is over three times a USB-RS485
+  // adapter's 16 ms latency timer (the longest gap a healthy reply shows).
+  std::chrono::milliseconds byte_timeout{50};
 };
 
 namespace detail {

@@ -13,9 +13,10 @@ ModbusTankLevel::ModbusTankLevel(const ModbusTankLevelConfig& config, const Cloc
   if (config_.register_address < 0 || config_.register_address > 0xFFFF)
     throw std::runtime_error("modbus tank level (" + config_.device +
                              "): register_address must be 0..65535");
-  ctx_ = detail::open_modbus_rtu({config_.device, config_.baud, config_.parity, config_.data_bits,
-                                  config_.stop_bits, config_.slave_id, config_.response_timeout},
-                                 "modbus tank level");
+  ctx_ = detail::open_modbus_rtu(
+      {config_.device, config_.baud, config_.parity, config_.data_bits, config_.stop_bits,
+       config_.slave_id, config_.response_timeout, config_.byte_timeout},
+      "modbus tank level");
 }
 
 ModbusTankLevel::~ModbusTankLevel() = default;

@@ -28,6 +28,7 @@ struct ModbusTankLevelConfig {
   double offset_pct = 0.0;
   double max_valid_pct = 100.0;  // above this (after scaling) the answer is invalid
   std::chrono::milliseconds response_timeout{500};
+  std::chrono::milliseconds byte_timeout{50};  // see ModbusRtuSettings::byte_timeout
 };
 
 class ModbusTankLevel final : public TankLevelSensor {

@@ -1,0 +1,84 @@
+// libFuzzer target: arbitrary D-Bus method calls on the daemon's dispatch
+// (handle_method_call): any member name, argument signature and values, with a handler that
+// does what the daemon's does with the strings it gets (parse_sim_fault on InjectSimFault's
+// name). A call must come back as a reply or an error, never a crash or an escaped exception.
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <string>
+
+#include "daemon/dbus_service.hpp"
+#include "daemon/sim_faults.hpp"
+#include "tests/fuzz/offline_bus.hpp"
+
+namespace {
+
+using weedspray::daemon::CommandResult;
+
+class Handler final : public weedspray::daemon::CommandHandler {
+ public:
+  CommandResult start() override { return {}; }
+  CommandResult stop() override { return {}; }
+  CommandResult set_pressure_setpoint(double mpa) override {
+    if (!(mpa >= 0.05 && mpa < 1.0))
+      return {weedspray::daemon::kErrorInvalidArgument, "out of range"};
+    return {};
+  }
+  CommandResult reload_config() override { return {}; }
+  CommandResult clear_alarms() override { return {}; }
+  CommandResult inject_sim_fault(const std::string& name) override {
+    if (!weedspray::daemon::parse_sim_fault(name + "@0"))
+      return {weedspray::daemon::kErrorInvalidArgument, "unknown fault"};
+    return {};
+  }
+};
+
+constexpr const char* kMembers[] = {"Start",        "Stop",        "SetPressureSetpoint",
+                                    "ReloadConfig", "ClearAlarms", "InjectSimFault",
+                                    "Get",          "SetPressure"};
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  static weedspray::testing::OfflineBus bus;
+  static Handler handler;
+  if (size < 2) return 0;
+  const char* member = kMembers[data[0] % (sizeof kMembers / sizeof *kMembers)];
+  const std::uint8_t shape = data[1];
+  data += 2;
+  size -= 2;
+  sd_bus_message* m = bus.call(member);
+  // Arguments of any of the kinds a client could send, built from the rest of the input.
+  double number = 0;
+  std::int32_t integer = 0;
+  if (size >= sizeof number) std::memcpy(&number, data, sizeof number);
+  if (size >= sizeof integer) std::memcpy(&integer, data, sizeof integer);
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  const std::string utf8_safe = text.substr(0, text.find('\0'));
+  switch (shape % 6) {
+    case 0:
+      break;
+    case 1:
+      sd_bus_message_append(m, "d", number);
+      break;
+    case 2:
+      sd_bus_message_append(m, "s", utf8_safe.c_str());
+      break;  // sd-bus refuses bad UTF-8
+    case 3:
+      sd_bus_message_append(m, "i", integer);
+      break;
+    case 4:
+      sd_bus_message_append(m, "ds", number, utf8_safe.c_str());
+      break;
+    case 5:
+      sd_bus_message_append(m, "as", 2, utf8_safe.c_str(), "x");
+      break;
+  }
+  if (weedspray::testing::OfflineBus::seal(m) >= 0) {
+    sd_bus_error error = SD_BUS_ERROR_NULL;
+    handle_method_call(m, handler, &error);
+    sd_bus_error_free(&error);
+  }
+  sd_bus_message_unref(m);
+  return 0;
+}

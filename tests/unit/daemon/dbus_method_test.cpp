@@ -1,0 +1,101 @@
+#include <gtest/gtest.h>
+
+#include <cstdarg>
+#include <stdexcept>
+
+#include "daemon/dbus_service.hpp"
+#include "tests/fuzz/offline_bus.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+class RecordingHandler final : public CommandHandler {
+ public:
+  CommandResult start() override {
+    ++starts;
+    if (throw_on_start) throw std::runtime_error("boom");
+    return {};
+  }
+  CommandResult stop() override { return {}; }
+  CommandResult set_pressure_setpoint(double mpa) override {
+    setpoint = mpa;
+    return mpa > 0 ? CommandResult{} : CommandResult{kErrorInvalidArgument, "not positive"};
+  }
+  CommandResult reload_config() override { throw 42; }  // not even a std::exception
+  CommandResult clear_alarms() override { return {}; }
+  CommandResult inject_sim_fault(const std::string& name) override {
+    fault = name;
+    return {};
+  }
+  int starts = 0;
+  bool throw_on_start = false;
+  double setpoint = -1;
+  std::string fault;
+};
+
+class DbusMethodTest : public ::testing::Test {
+ protected:
+  int call(const char* member, const char* types = "", ...) {
+    sd_bus_message* m = bus_.call(member);
+    if (*types != '\0') {
+      va_list args;
+      va_start(args, types);
+      EXPECT_GE(sd_bus_message_appendv(m, types, args), 0);
+      va_end(args);
+    }
+    EXPECT_GE(testing::OfflineBus::seal(m), 0);
+    sd_bus_error_free(&error_);
+    const int r = handle_method_call(m, handler_, &error_);
+    sd_bus_message_unref(m);
+    return r;
+  }
+  std::string error_name() const { return error_.name != nullptr ? error_.name : ""; }
+  std::string error_message() const { return error_.message != nullptr ? error_.message : ""; }
+  void TearDown() override { sd_bus_error_free(&error_); }
+
+  testing::OfflineBus bus_;
+  RecordingHandler handler_;
+  sd_bus_error error_ = SD_BUS_ERROR_NULL;
+};
+
+TEST_F(DbusMethodTest, CallsTheHandlerWithItsArgument) {
+  call("SetPressureSetpoint", "d", 0.35);
+  EXPECT_DOUBLE_EQ(handler_.setpoint, 0.35);
+  call("InjectSimFault", "s", "sensor_open");
+  EXPECT_EQ(handler_.fault, "sensor_open");
+}
+
+TEST_F(DbusMethodTest, ARefusalBecomesTheNamedError) {
+  EXPECT_LT(call("SetPressureSetpoint", "d", -1.0), 0);
+  EXPECT_EQ(error_name(), kErrorInvalidArgument);
+  EXPECT_EQ(error_message(), "not positive");
+}
+
+TEST_F(DbusMethodTest, AWrongArgumentTypeIsAnErrorNotACall) {
+  EXPECT_LT(call("SetPressureSetpoint", "s", "0.3"), 0);
+  EXPECT_DOUBLE_EQ(handler_.setpoint, -1) << "the handler ran on an argument it never got";
+  EXPECT_LT(call("SetPressureSetpoint"), 0);
+}
+
+TEST_F(DbusMethodTest, AnExceptionInTheHandlerBecomesTheCallersErrorAndGoesNoFurther) {
+  handler_.throw_on_start = true;
+  EXPECT_LT(call("Start"), 0);
+  EXPECT_EQ(handler_.starts, 1);
+  EXPECT_EQ(error_name(), SD_BUS_ERROR_FAILED);
+  EXPECT_EQ(error_message(), "Start failed: boom");
+  EXPECT_LT(call("ReloadConfig"), 0);  // throws an int
+  EXPECT_EQ(error_message(), "unknown error");
+  // The service goes on answering.
+  handler_.throw_on_start = false;
+  call("Start");
+  EXPECT_EQ(handler_.starts, 2);
+}
+
+TEST_F(DbusMethodTest, AnUnknownMethodIsNamed) {
+  EXPECT_LT(call("Explode"), 0);
+  EXPECT_EQ(error_name(), SD_BUS_ERROR_UNKNOWN_METHOD);
+  EXPECT_EQ(error_message(), "no method Explode");
+}
+
+}  // namespace
+}  // namespace weedspray::daemon
