@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "control/experiments/experiments.hpp"
+#include "control/experiments/fair_tuning.hpp"
 #include "lab/commands.hpp"
 #include "lab/experiment_field.hpp"
 #include "lab/experiment_plot.hpp"
@@ -28,7 +29,9 @@ struct ExperimentOptions {
   std::string plot;
   bool raw = false;
   bool tune = false;
+  int tune_budget = 150;
   std::uint64_t seed = 1;
+  int plants = 0;  // > 0: over this many drawn machines (control/experiments/machines.hpp)
   std::string images_dir;
   std::string masks_dir;
   std::string stems_file;
@@ -78,7 +81,97 @@ void print_metrics_json(const char* key, const ex::StepRun& run, const control::
   std::printf("}%s", comma ? ", " : "");
 }
 
+void print_spread_json(const char* key, const ex::Spread& s, bool comma = true) {
+  std::printf("\"%s\": {\"mean\": %.6g, \"sd\": %.6g, \"worst\": %.6g, \"n\": %d}%s", key, s.mean,
+              s.sd, s.worst, s.count, comma ? ", " : "");
+}
+
+void print_spread_row(const char* name, const ex::Spread& s, const char* format) {
+  std::printf("%-34s", name);
+  for (double v : {s.mean, s.sd, s.worst}) std::printf(format, v);
+  std::printf("\n");
+}
+
+void print_gains(const char* name, const control::FuzzyPidConfig& c) {
+  std::fprintf(stderr, "  %-9s Kp=%.4g Ki=%.4g Kd=%.4g Cp=%.4g Ci=%.4g Cd=%.4g\n", name,
+               c.base.gains.kp, c.base.gains.ki, c.base.gains.kd, c.correction_weights.kp,
+               c.correction_weights.ki, c.correction_weights.kd);
+}
+
+int run_step_fleet_command(const ExperimentOptions& o) {
+  control::FuzzyPidConfig pid = ex::fair_tuned_pid_config();
+  control::FuzzyPidConfig fuzzy = ex::fair_tuned_fuzzy_pid_config();
+  if (o.tune) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const ex::FairTuningResult t = ex::tune_fair(ex::training_set(o.seed), o.tune_budget);
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::fprintf(stderr,
+                 "fair tuning (compass search, %d + %d evaluations, %.1f s): training ITAE PID "
+                 "%.6f%s, fuzzy PID %.6f%s\n",
+                 t.pid.evaluations, t.fuzzy_pid.evaluations, wall, t.pid.training_itae,
+                 t.pid.on_bound ? " (ON A BOUND)" : "", t.fuzzy_pid.training_itae,
+                 t.fuzzy_pid.on_bound ? " (ON A BOUND)" : "");
+    pid = t.pid.config;
+    fuzzy = t.fuzzy_pid.config;
+  }
+  print_gains("PID", pid);
+  print_gains("fuzzy PID", fuzzy);
+  const ex::StepFleetResult r = ex::run_step_fleet({o.seed, o.plants, false}, pid, fuzzy);
+  if (o.json) {
+    std::printf(
+        "{\"plants\": %d, \"seed\": %llu, \"control_period_s\": 0.01, "
+        "\"converter_lead_s\": 0.0025, \"converter_lag_s\": 0.001, ",
+        o.plants, static_cast<unsigned long long>(o.seed));
+    for (const auto* c : {&r.pid, &r.fuzzy_pid}) {
+      const bool is_pid = c == &r.pid;
+      const auto& g = is_pid ? pid : fuzzy;
+      std::printf(
+          "\"%s\": {\"kp\": %.5g, \"ki\": %.5g, \"kd\": %.5g, \"cp\": %.5g, "
+          "\"ci\": %.5g, \"cd\": %.5g, ",
+          is_pid ? "pid" : "fuzzy_pid", g.base.gains.kp, g.base.gains.ki, g.base.gains.kd,
+          g.correction_weights.kp, g.correction_weights.ki, g.correction_weights.kd);
+      print_spread_json("operating_points_itae", c->operating_points_itae);
+      std::printf("\"setpoints\": [");
+      for (std::size_t i = 0; i < c->rows.size(); ++i) {
+        const auto& row = c->rows[i];
+        std::printf("%s{\"setpoint_mpa\": %.2f, \"unsettled\": %d, ", i ? ", " : "",
+                    row.setpoint_mpa, row.unsettled);
+        print_spread_json("overshoot_pct", row.overshoot_pct);
+        print_spread_json("settle_s", row.settle_s);
+        print_spread_json("itae", row.itae, false);
+        std::printf("}");
+      }
+      std::printf("]}%s", is_pid ? ", " : "");
+    }
+    std::printf("}\n");
+  } else {
+    std::printf(
+        "start-up with 4 nozzles open on %d held-out machines (seed %llu), the daemon's loop: "
+        "100 Hz, ADC 2.5 ms before / DAC 1 ms after each tick; gains from the fair search\n",
+        o.plants, static_cast<unsigned long long>(o.seed));
+    std::printf("%-10s %5s %17s %17s %21s %9s\n", "controller", "MPa", "overshoot% mean/max",
+                "settle_s mean/max", "ITAE mean/max", "unsettled");
+    for (std::size_t i = 0; i < r.pid.rows.size(); ++i)
+      for (const auto* c : {&r.pid, &r.fuzzy_pid}) {
+        const auto& row = c->rows[i];
+        std::printf("%-10s %5.2f %8.2f %8.2f %8.3f %8.3f %10.6f %10.6f %9d\n",
+                    c == &r.pid ? "PID" : "fuzzy PID", row.setpoint_mpa, row.overshoot_pct.mean,
+                    row.overshoot_pct.worst, row.settle_s.mean, row.settle_s.worst, row.itae.mean,
+                    row.itae.worst, row.unsettled);
+      }
+    std::printf(
+        "mean ITAE over 0.2-0.5 MPa x 1-4 nozzles, per machine: PID %.6f (sd %.6f, worst "
+        "%.6f), fuzzy PID %.6f (sd %.6f, worst %.6f)\n",
+        r.pid.operating_points_itae.mean, r.pid.operating_points_itae.sd,
+        r.pid.operating_points_itae.worst, r.fuzzy_pid.operating_points_itae.mean,
+        r.fuzzy_pid.operating_points_itae.sd, r.fuzzy_pid.operating_points_itae.worst);
+  }
+  return 0;
+}
+
 int run_step_command(const ExperimentOptions& o) {
+  if (o.plants > 0) return run_step_fleet_command(o);
   ex::StepOptions options;
   options.seed = o.seed;
   options.control_period_s = o.control_period_ms / 1e3;
@@ -131,7 +224,72 @@ int run_step_command(const ExperimentOptions& o) {
   return 0;
 }
 
+int run_ripple_fleet_command(const ExperimentOptions& o) {
+  ex::FleetOptions fleet{o.seed, o.plants, false};
+  const ex::RippleOptions options;
+  const ex::RippleFleetResult r = ex::run_ripple_fleet(fleet, options);
+  if (o.json) {
+    std::printf("{\"plants\": %d, \"seed\": %llu, ", o.plants,
+                static_cast<unsigned long long>(o.seed));
+    print_spread_json("synchronous_pp_mpa", r.synchronous_pp_mpa);
+    print_spread_json("staggered_pp_mpa", r.staggered_pp_mpa);
+    print_spread_json("ratio", r.ratio);
+    print_spread_json("synchronous_boom_pp_mpa", r.synchronous_boom_pp_mpa);
+    print_spread_json("staggered_boom_pp_mpa", r.staggered_boom_pp_mpa);
+    std::printf("\"duty_pct\": %.0f, \"frequency_hz\": %.1f}\n", options.duty_pct,
+                options.frequency_hz);
+  } else {
+    std::printf(
+        "4 nozzles at %.0f %% duty, %.0f Hz, fuzzy PID at 0.2 MPa, %d drawn machines (seed %llu): "
+        "pump pulsation, hose inertia, valve spreads on\n",
+        options.duty_pct, options.frequency_hz, o.plants, static_cast<unsigned long long>(o.seed));
+    std::printf("%-34s%12s%12s%12s\n", "pressure p-p [MPa]", "mean", "sd", "worst");
+    print_spread_row("synchronous, manifold (sensor)", r.synchronous_pp_mpa, "%12.5f");
+    print_spread_row("staggered, manifold (sensor)", r.staggered_pp_mpa, "%12.5f");
+    print_spread_row("synchronous, boom", r.synchronous_boom_pp_mpa, "%12.5f");
+    print_spread_row("staggered, boom", r.staggered_boom_pp_mpa, "%12.5f");
+    print_spread_row("ratio sync/stag (worst = lowest)", r.ratio, "%12.2f");
+  }
+  return 0;
+}
+
+void print_orthogonal_row_json(const char* key, const ex::OrthogonalFleetRow& row, bool comma) {
+  std::printf("\"%s\": {", key);
+  print_spread_json("mean_error_pct", row.mean_error_pct);
+  print_spread_json("max_error_pct", row.max_error_pct);
+  print_spread_json("pressure_band_mpa", row.pressure_band_mpa, false);
+  std::printf("}%s", comma ? ", " : "");
+}
+
+int run_orthogonal_fleet_command(const ExperimentOptions& o) {
+  const ex::FleetOptions fleet{o.seed, o.plants, true};
+  const ex::OrthogonalFleetResult r = ex::run_orthogonal_fleet(fleet);
+  if (o.json) {
+    std::printf("{\"plants\": %d, \"seed\": %llu, \"changed_after_calibration\": true, ", o.plants,
+                static_cast<unsigned long long>(o.seed));
+    print_orthogonal_row_json("trim_on", r.trim_on, true);
+    print_orthogonal_row_json("trim_off", r.trim_off, false);
+    std::printf("}\n");
+  } else {
+    std::printf(
+        "L16 orthogonal test, 0.2 MPa, 3 Hz, %d drawn machines (seed %llu), each calibrated as "
+        "made, then changed (wear, a partial blockage, valve ageing, meter drift, supply and "
+        "speed ramps)\n",
+        o.plants, static_cast<unsigned long long>(o.seed));
+    std::printf("%-34s%12s%12s%12s\n", "over the machines", "mean", "sd", "worst");
+    for (const auto* row : {&r.trim_on, &r.trim_off}) {
+      const bool on = row == &r.trim_on;
+      std::printf("-- online flow trim %s\n", on ? "ON" : "OFF");
+      print_spread_row("mean error [%]", row->mean_error_pct, "%12.3f");
+      print_spread_row("max error [%]", row->max_error_pct, "%12.3f");
+      print_spread_row("pressure band [MPa]", row->pressure_band_mpa, "%12.4f");
+    }
+  }
+  return 0;
+}
+
 int run_ripple_command(const ExperimentOptions& o) {
+  if (o.plants > 0) return run_ripple_fleet_command(o);
   ex::RippleOptions options;
   options.seed = o.seed;
   const ex::RippleResult r = ex::run_ripple(options);
@@ -275,6 +433,7 @@ int run_linearity_command(const ExperimentOptions& o) {
 }
 
 int run_orthogonal_command(const ExperimentOptions& o) {
+  if (o.plants > 0) return run_orthogonal_fleet_command(o);
   ex::SprayRunOptions options;
   options.seed = o.seed;
   options.raw = o.raw;
@@ -508,6 +667,13 @@ void add_experiment_commands(CLI::App& app) {
                 "synchronous PWM");
   cmd->add_flag("--tune", options->tune, "step: rerun the gain search before the comparison");
   cmd->add_option("--seed", options->seed, "plant seed (nozzle spread, valve delays, noise)");
+  cmd->add_option("--tune-budget", options->tune_budget,
+                  "step --plants --tune: evaluations per controller (same for both)")
+      ->check(CLI::Range(10, 100000));
+  cmd->add_option("--plants", options->plants,
+                  "step/orthogonal/ripple: over N machines drawn from documented spreads (seed "
+                  "--seed); prints mean, sd and worst")
+      ->check(CLI::Range(1, 1000));
   cmd->add_option("--control-period-ms", options->control_period_ms,
                   "step: pressure loop period (the daemon's default is 10 ms)")
       ->check(CLI::Range(0.1, 100.0));

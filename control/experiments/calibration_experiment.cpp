@@ -19,6 +19,7 @@ RigConfig calibration_rig(const CalibrationOptions& options) {
   config.pwm_frequency_hz = options.frequency_hz;
   config.fixes = {true, false, false};
   config.record_period_s = 0.0;
+  config.plant = options.plant;
   return config;
 }
 
@@ -90,7 +91,8 @@ const CalibrationResult& cached_calibration(const CalibrationOptions& options) {
   auto same = [](const CalibrationOptions& a, const CalibrationOptions& b) {
     return a.seed == b.seed && a.pressure_mpa == b.pressure_mpa &&
            a.frequency_hz == b.frequency_hz && a.catch_test_s == b.catch_test_s &&
-           a.duties_pct == b.duties_pct && a.settle_s == b.settle_s && a.measure_s == b.measure_s;
+           a.duties_pct == b.duties_pct && a.settle_s == b.settle_s && a.measure_s == b.measure_s &&
+           a.plant == b.plant;
   };
   static std::mutex mutex;
   // deque: references handed out stay valid as entries are added.

@@ -233,9 +233,9 @@ void ClosedLoopRig::run_for(double duration_s) {
       next_control_s_ += config_.control_period_s;
     }
     if (config_.record_period_s > 0.0 && next_record_s_ <= now + kEps) {
-      trace_.push_back({now, plant_.line_pressure_mpa(), measured_pressure_mpa_,
-                        plant_.total_nozzle_flow_l_per_min(), 10.0 * (1.0 - controller_.output()),
-                        applied_mask_});
+      trace_.push_back({now, plant_.line_pressure_mpa(), plant_.boom_pressure_mpa(),
+                        measured_pressure_mpa_, plant_.total_nozzle_flow_l_per_min(),
+                        10.0 * (1.0 - controller_.output()), applied_mask_});
       next_record_s_ += config_.record_period_s;
     }
     if (now >= end - kEps) break;

@@ -70,7 +70,8 @@ struct RigConfig {
 
 struct TraceSample {
   double time_s = 0.0;
-  double pressure_mpa = 0.0;           // true line pressure
+  double pressure_mpa = 0.0;           // true line pressure (manifold, where the sensor is)
+  double boom_pressure_mpa = 0.0;      // true pressure at the boom's first tap
   double measured_pressure_mpa = 0.0;  // what the controller saw
   double total_flow_l_per_min = 0.0;   // true nozzle total
   double return_valve_volts = 0.0;
