@@ -93,7 +93,7 @@ void print_spread_row(const char* name, const ex::Spread& s, const char* format)
 }
 
 void print_gains(const char* name, const control::FuzzyPidConfig& c) {
-  std::fprintf(stderr, "  %-9s Kp=%.4g Ki=%.4g Kd=%.4g Cp=%.4g Ci=%.4g Cd=%.4g\n", name,
+  std::fprintf(stderr, "  %-9s Kp=%.6g Ki=%.6g Kd=%.6g Cp=%.6g Ci=%.6g Cd=%.6g\n", name,
                c.base.gains.kp, c.base.gains.ki, c.base.gains.kd, c.correction_weights.kp,
                c.correction_weights.ki, c.correction_weights.kd);
 }
@@ -284,6 +284,50 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
       print_spread_row("max error [%]", row->max_error_pct, "%12.3f");
       print_spread_row("pressure band [MPa]", row->pressure_band_mpa, "%12.4f");
     }
+  }
+  return 0;
+}
+
+int run_blockage_command(const ExperimentOptions& o) {
+  const ex::FleetOptions fleet{o.seed, o.plants > 0 ? o.plants : 20, false};
+  const ex::BlockageOptions options;
+  const ex::BlockageFleetResult r = ex::run_blockage_fleet(fleet, options);
+  if (o.json) {
+    std::printf(
+        "{\"plants\": %d, \"seed\": %llu, \"blockage\": %.2f, \"limit_s\": %.1f, "
+        "\"named_within_limit\": %d, \"false_alarms\": %d, \"healthy_minutes\": %.1f, ",
+        fleet.plants, static_cast<unsigned long long>(o.seed), options.blockage,
+        options.detect_limit_s, r.named_within_limit, r.false_alarms, r.healthy_minutes);
+    print_spread_json("detect_s", r.detect_s);
+    std::printf("\"machines\": [");
+    for (std::size_t i = 0; i < r.machines.size(); ++i) {
+      const auto& m = r.machines[i];
+      std::printf(
+          "%s{\"blocked\": %d, \"named\": %d, \"detect_s\": %.2f, "
+          "\"false_alarm\": %s}",
+          i ? ", " : "", m.blocked_nozzle + 1, m.named_nozzle + 1, m.detect_s,
+          m.false_alarm ? "true" : "false");
+    }
+    std::printf("]}\n");
+  } else {
+    std::printf(
+        "per-nozzle health from the line meter, %d drawn machines (seed %llu), variable-rate "
+        "spraying at %.1f MPa / %.0f Hz, staggered, trim on: %.0f s baseline + %.0f min healthy, "
+        "then one nozzle %.0f %% blocked\n",
+        fleet.plants, static_cast<unsigned long long>(o.seed), options.pressure_mpa,
+        options.frequency_hz, options.health.baseline_s, options.healthy_s / 60.0,
+        options.blockage * 100.0);
+    std::printf("%8s %8s %8s %10s %12s\n", "machine", "blocked", "named", "after_s", "false_alarm");
+    for (std::size_t i = 0; i < r.machines.size(); ++i) {
+      const auto& m = r.machines[i];
+      std::printf("%8zu %8d %8d %10.2f %12s\n", i + 1, m.blocked_nozzle + 1, m.named_nozzle + 1,
+                  m.detect_s, m.false_alarm ? "YES" : "no");
+    }
+    std::printf(
+        "named within %.0f s: %d of %d; false alarms: %d in %.0f healthy machine-minutes; "
+        "time to name: mean %.2f s, sd %.2f, worst %.2f\n",
+        options.detect_limit_s, r.named_within_limit, fleet.plants, r.false_alarms,
+        r.healthy_minutes, r.detect_s.mean, r.detect_s.sd, r.detect_s.worst);
   }
   return 0;
 }
@@ -641,6 +685,8 @@ int run_experiment(const ExperimentOptions& o) {
     rc = run_orthogonal_command(o);
   else if (o.name == "dose")
     rc = run_dose_command(o);
+  else if (o.name == "blockage")
+    rc = run_blockage_command(o);
   else if (o.name == "savings")
     rc = run_savings_command(o);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -656,10 +702,10 @@ void add_experiment_commands(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "experiment", "rerun a paper's experiment on the simulated sprayer (hydraulic plant model)");
   cmd->add_option("name", options->name,
-                  "step | ripple | linearity | orthogonal | dose | calibrate | savings")
+                  "step | ripple | linearity | orthogonal | dose | calibrate | savings | blockage")
       ->required()
-      ->check(CLI::IsMember(
-          {"step", "ripple", "linearity", "orthogonal", "dose", "calibrate", "savings"}));
+      ->check(CLI::IsMember({"step", "ripple", "linearity", "orthogonal", "dose", "calibrate",
+                             "savings", "blockage"}));
   cmd->add_flag("--json", options->json, "print one JSON object instead of a table");
   cmd->add_option("--plot", options->plot, "write the figure to this PNG file");
   cmd->add_flag("--raw", options->raw,
@@ -670,9 +716,10 @@ void add_experiment_commands(CLI::App& app) {
   cmd->add_option("--tune-budget", options->tune_budget,
                   "step --plants --tune: evaluations per controller (same for both)")
       ->check(CLI::Range(10, 100000));
-  cmd->add_option("--plants", options->plants,
-                  "step/orthogonal/ripple: over N machines drawn from documented spreads (seed "
-                  "--seed); prints mean, sd and worst")
+  cmd->add_option(
+         "--plants", options->plants,
+         "step/orthogonal/ripple/blockage: over N machines drawn from documented spreads (seed "
+         "--seed); prints mean, sd and worst")
       ->check(CLI::Range(1, 1000));
   cmd->add_option("--control-period-ms", options->control_period_ms,
                   "step: pressure loop period (the daemon's default is 10 ms)")

@@ -307,6 +307,37 @@ struct RippleFleetResult {
 };
 RippleFleetResult run_ripple_fleet(const FleetOptions& fleet, const RippleOptions& base = {});
 
+// ---------- blockage: per-nozzle health from the line meter (control/nozzle_health.hpp) ----------
+// Each machine is calibrated as made, then sprays variable-rate (every nozzle's requested flow
+// redrawn every redraw_s between 30 and 90 % of its calibrated full-open flow, staggered PWM,
+// online trim on) for baseline + healthy_s with no fault (any alarm = a false alarm), then one
+// drawn nozzle is blocked by `blockage` and the time until the detector names a nozzle is
+// measured (up to detect_limit_s x 3).
+struct BlockageOptions {
+  double pressure_mpa = 0.2;
+  double frequency_hz = 3.0;
+  double blockage = 0.2;
+  double healthy_s = 600.0;
+  double detect_limit_s = 10.0;
+  double redraw_s = 1.0;
+  NozzleHealthConfig health{};
+};
+struct BlockageMachine {
+  int blocked_nozzle = -1;
+  int named_nozzle = -1;     // -1: none named
+  double detect_s = -1.0;    // from the blockage to the alarm; < 0: none in the record
+  bool false_alarm = false;  // an alarm during the healthy part
+};
+struct BlockageFleetResult {
+  std::vector<BlockageMachine> machines;
+  int named_within_limit = 0;  // the blocked nozzle named within detect_limit_s
+  int false_alarms = 0;
+  Spread detect_s;  // over the machines that named the right nozzle
+  double healthy_minutes = 0.0;
+};
+BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet,
+                                       const BlockageOptions& options = {});
+
 // Calibration runs are deterministic for given options, so the spray experiments share one
 // per process (several tests of one binary, or both savings runs, calibrate once).
 const CalibrationResult& cached_calibration(const CalibrationOptions& options);
