@@ -25,10 +25,10 @@ inline constexpr std::size_t kMaxHealthNozzles = 8;
 
 struct NozzleHealthConfig {
   std::size_t nozzles = 4;
-  double baseline_s = 20.0;      // spraying time the baselines are learned over
+  double baseline_s = 60.0;      // spraying time the baselines are learned over
   double time_constant_s = 6.0;  // forgetting of the running estimate
   double alarm_fraction = 0.12;  // |c / baseline - 1| above this is a fault...
-  double alarm_hold_s = 1.5;     // ...once it lasted this long
+  double alarm_hold_s = 1.0;     // ...once it lasted this long
   double min_open_s = 0.5;       // a nozzle open less than this (weighted) is not judged
 };
 

@@ -70,5 +70,17 @@ TEST(FleetRipple, StaggeringCutsThePressureSwingOnEveryMachine) {
   EXPECT_GT(r.staggered_pp_mpa.mean, 0.0);
 }
 
+// One drawn machine, trim on: a minute healthy without an alarm, then a nozzle 20 % blocked is
+// named (the right one) within 10 s.
+TEST(FleetBlockage, ABlockedNozzleIsNamedAndAHealthyMinuteIsQuiet) {
+  BlockageOptions options;
+  options.healthy_s = 60.0;
+  const BlockageFleetResult r = run_blockage_fleet({1, 1, false}, options);
+  ASSERT_EQ(r.machines.size(), 1U);
+  EXPECT_FALSE(r.machines[0].false_alarm);
+  EXPECT_EQ(r.machines[0].named_nozzle, r.machines[0].blocked_nozzle);
+  EXPECT_EQ(r.named_within_limit, 1);
+}
+
 }  // namespace
 }  // namespace weedspray::control::experiments

@@ -78,7 +78,7 @@ TEST(NozzleHealth, LearnsTheBaselineThenNamesTheBlockedNozzle) {
 // nozzle can be told from another.
 bool separable(bool staggered, double duty) {
   NozzleHealth h(NozzleHealthConfig{});
-  for (int k = 0; k < 600; ++k) {
+  for (int k = 0; k < 1200; ++k) {  // 100 s: past the 60 s baseline
     std::array<double, 4> open{};
     const int w = k % 4;
     for (int i = 0; i < 4; ++i)
