@@ -301,6 +301,21 @@ struct OrthogonalFleetResult {
 };
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet,
                                            const SprayRunOptions& base = {});
+struct LinearityFleetResult {
+  Spread r2;  // worst = lowest
+  Spread mean_error_pct, max_error_pct;
+};
+// Calibrated as made, tested after the drawn change, trim on.
+LinearityFleetResult run_linearity_fleet(const FleetOptions& fleet,
+                                         const SprayRunOptions& base = {});
+struct CalibrationFleetResult {
+  Spread meter_error_pct;      // |calibrated K - true K| / true K (as made)
+  Spread full_open_error_pct;  // per machine: worst nozzle |metered - true| full-open flow
+  Spread line_error_pct;       // per machine: worst nozzle |fitted - true| flow at 20-80 % duty
+  Spread r2;                   // per machine: lowest nozzle R^2 (worst = lowest)
+};
+CalibrationFleetResult run_calibration_fleet(const FleetOptions& fleet,
+                                             const CalibrationOptions& base = {});
 struct RippleFleetResult {
   Spread synchronous_pp_mpa, staggered_pp_mpa, ratio;
   Spread synchronous_boom_pp_mpa, staggered_boom_pp_mpa;

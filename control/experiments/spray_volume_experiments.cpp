@@ -158,6 +158,24 @@ OrthogonalFleetRow summarise(std::vector<OrthogonalResult> machines) {
 
 }  // namespace
 
+LinearityFleetResult run_linearity_fleet(const FleetOptions& fleet, const SprayRunOptions& base) {
+  std::vector<double> r2, mean, max;
+  const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
+  for (std::size_t i = 0; i < machines.size(); ++i) {
+    SprayRunOptions options = base;
+    options.seed = machines[i].seed;
+    options.plant = machines[i].params;
+    options.raw = false;
+    options.change = fleet.changed ? draw_change(machines[i], fleet.seed, static_cast<int>(i))
+                                   : no_change(machines[i]);
+    const LinearityResult r = run_linearity(options);
+    r2.push_back(r.r2);
+    mean.push_back(r.mean_error_pct);
+    max.push_back(r.max_error_pct);
+  }
+  return {spread_of(r2, true), spread_of(mean), spread_of(max)};
+}
+
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const SprayRunOptions& base) {
   std::vector<OrthogonalResult> on, off;
   const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
