@@ -29,7 +29,7 @@ struct ExperimentOptions {
   std::string plot;
   bool raw = false;
   bool tune = false;
-  int tune_budget = 150;
+  int tune_budget = 300;
   std::uint64_t seed = 1;
   int plants = 0;  // > 0: over this many drawn machines (control/experiments/machines.hpp)
   std::string images_dir;

@@ -59,7 +59,7 @@ struct FairTuningResult {
   TunedController pid;
   TunedController fuzzy_pid;
 };
-FairTuningResult tune_fair(const TuningSet& set, int budget = 150);
+FairTuningResult tune_fair(const TuningSet& set, int budget = 300);
 
 // Both controllers judged on held-out machines (draw_machines(seed, plants): indices 0..N-1)
 // with the daemon's timing: a start-up with 4 nozzles open at each set-point, and the mean ITAE
@@ -81,7 +81,7 @@ StepFleetResult run_step_fleet(const FleetOptions& fleet, const FuzzyPidConfig& 
                                const FuzzyPidConfig& fuzzy_pid,
                                const std::vector<double>& setpoints_mpa = {0.2, 0.4});
 
-// The result of tune_fair(training_set(1), 150), recorded (`weedspray-lab experiment step
+// The result of tune_fair(training_set(1), 300), recorded (`weedspray-lab experiment step
 // --plants N --tune` reruns it). Controller output u in [0, 1] closes the return valve.
 FuzzyPidConfig fair_tuned_pid_config();
 FuzzyPidConfig fair_tuned_fuzzy_pid_config();
