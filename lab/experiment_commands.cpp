@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "control/experiments/experiments.hpp"
+#include "control/experiments/fair_tuning.hpp"
 #include "lab/commands.hpp"
 #include "lab/experiment_field.hpp"
 #include "lab/experiment_plot.hpp"
@@ -28,7 +29,9 @@ struct ExperimentOptions {
   std::string plot;
   bool raw = false;
   bool tune = false;
+  int tune_budget = 300;
   std::uint64_t seed = 1;
+  int plants = 0;  // > 0: over this many drawn machines (control/experiments/machines.hpp)
   std::string images_dir;
   std::string masks_dir;
   std::string stems_file;
@@ -78,7 +81,97 @@ void print_metrics_json(const char* key, const ex::StepRun& run, const control::
   std::printf("}%s", comma ? ", " : "");
 }
 
+void print_spread_json(const char* key, const ex::Spread& s, bool comma = true) {
+  std::printf("\"%s\": {\"mean\": %.6g, \"sd\": %.6g, \"worst\": %.6g, \"n\": %d}%s", key, s.mean,
+              s.sd, s.worst, s.count, comma ? ", " : "");
+}
+
+void print_spread_row(const char* name, const ex::Spread& s, const char* format) {
+  std::printf("%-34s", name);
+  for (double v : {s.mean, s.sd, s.worst}) std::printf(format, v);
+  std::printf("\n");
+}
+
+void print_gains(const char* name, const control::FuzzyPidConfig& c) {
+  std::fprintf(stderr, "  %-9s Kp=%.6g Ki=%.6g Kd=%.6g Cp=%.6g Ci=%.6g Cd=%.6g\n", name,
+               c.base.gains.kp, c.base.gains.ki, c.base.gains.kd, c.correction_weights.kp,
+               c.correction_weights.ki, c.correction_weights.kd);
+}
+
+int run_step_fleet_command(const ExperimentOptions& o) {
+  control::FuzzyPidConfig pid = ex::fair_tuned_pid_config();
+  control::FuzzyPidConfig fuzzy = ex::fair_tuned_fuzzy_pid_config();
+  if (o.tune) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const ex::FairTuningResult t = ex::tune_fair(ex::training_set(o.seed), o.tune_budget);
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::fprintf(stderr,
+                 "fair tuning (compass search, %d + %d evaluations, %.1f s): training ITAE PID "
+                 "%.6f%s, fuzzy PID %.6f%s\n",
+                 t.pid.evaluations, t.fuzzy_pid.evaluations, wall, t.pid.training_itae,
+                 t.pid.on_bound ? " (ON A BOUND)" : "", t.fuzzy_pid.training_itae,
+                 t.fuzzy_pid.on_bound ? " (ON A BOUND)" : "");
+    pid = t.pid.config;
+    fuzzy = t.fuzzy_pid.config;
+  }
+  print_gains("PID", pid);
+  print_gains("fuzzy PID", fuzzy);
+  const ex::StepFleetResult r = ex::run_step_fleet({o.seed, o.plants, false}, pid, fuzzy);
+  if (o.json) {
+    std::printf(
+        "{\"plants\": %d, \"seed\": %llu, \"control_period_s\": 0.01, "
+        "\"converter_lead_s\": 0.0025, \"converter_lag_s\": 0.001, ",
+        o.plants, static_cast<unsigned long long>(o.seed));
+    for (const auto* c : {&r.pid, &r.fuzzy_pid}) {
+      const bool is_pid = c == &r.pid;
+      const auto& g = is_pid ? pid : fuzzy;
+      std::printf(
+          "\"%s\": {\"kp\": %.5g, \"ki\": %.5g, \"kd\": %.5g, \"cp\": %.5g, "
+          "\"ci\": %.5g, \"cd\": %.5g, ",
+          is_pid ? "pid" : "fuzzy_pid", g.base.gains.kp, g.base.gains.ki, g.base.gains.kd,
+          g.correction_weights.kp, g.correction_weights.ki, g.correction_weights.kd);
+      print_spread_json("operating_points_itae", c->operating_points_itae);
+      std::printf("\"setpoints\": [");
+      for (std::size_t i = 0; i < c->rows.size(); ++i) {
+        const auto& row = c->rows[i];
+        std::printf("%s{\"setpoint_mpa\": %.2f, \"unsettled\": %d, ", i ? ", " : "",
+                    row.setpoint_mpa, row.unsettled);
+        print_spread_json("overshoot_pct", row.overshoot_pct);
+        print_spread_json("settle_s", row.settle_s);
+        print_spread_json("itae", row.itae, false);
+        std::printf("}");
+      }
+      std::printf("]}%s", is_pid ? ", " : "");
+    }
+    std::printf("}\n");
+  } else {
+    std::printf(
+        "start-up with 4 nozzles open on %d held-out machines (seed %llu), the daemon's loop: "
+        "100 Hz, ADC 2.5 ms before / DAC 1 ms after each tick; gains from the fair search\n",
+        o.plants, static_cast<unsigned long long>(o.seed));
+    std::printf("%-10s %5s %17s %17s %21s %9s\n", "controller", "MPa", "overshoot% mean/max",
+                "settle_s mean/max", "ITAE mean/max", "unsettled");
+    for (std::size_t i = 0; i < r.pid.rows.size(); ++i)
+      for (const auto* c : {&r.pid, &r.fuzzy_pid}) {
+        const auto& row = c->rows[i];
+        std::printf("%-10s %5.2f %8.2f %8.2f %8.3f %8.3f %10.6f %10.6f %9d\n",
+                    c == &r.pid ? "PID" : "fuzzy PID", row.setpoint_mpa, row.overshoot_pct.mean,
+                    row.overshoot_pct.worst, row.settle_s.mean, row.settle_s.worst, row.itae.mean,
+                    row.itae.worst, row.unsettled);
+      }
+    std::printf(
+        "mean ITAE over 0.2-0.5 MPa x 1-4 nozzles, per machine: PID %.6f (sd %.6f, worst "
+        "%.6f), fuzzy PID %.6f (sd %.6f, worst %.6f)\n",
+        r.pid.operating_points_itae.mean, r.pid.operating_points_itae.sd,
+        r.pid.operating_points_itae.worst, r.fuzzy_pid.operating_points_itae.mean,
+        r.fuzzy_pid.operating_points_itae.sd, r.fuzzy_pid.operating_points_itae.worst);
+  }
+  return 0;
+}
+
 int run_step_command(const ExperimentOptions& o) {
+  if (o.plants > 0) return run_step_fleet_command(o);
   ex::StepOptions options;
   options.seed = o.seed;
   options.control_period_s = o.control_period_ms / 1e3;
@@ -131,7 +224,162 @@ int run_step_command(const ExperimentOptions& o) {
   return 0;
 }
 
+int run_ripple_fleet_command(const ExperimentOptions& o) {
+  ex::FleetOptions fleet{o.seed, o.plants, false};
+  const ex::RippleOptions options;
+  const ex::RippleFleetResult r = ex::run_ripple_fleet(fleet, options);
+  if (o.json) {
+    std::printf("{\"plants\": %d, \"seed\": %llu, ", o.plants,
+                static_cast<unsigned long long>(o.seed));
+    print_spread_json("synchronous_pp_mpa", r.synchronous_pp_mpa);
+    print_spread_json("staggered_pp_mpa", r.staggered_pp_mpa);
+    print_spread_json("ratio", r.ratio);
+    print_spread_json("synchronous_boom_pp_mpa", r.synchronous_boom_pp_mpa);
+    print_spread_json("staggered_boom_pp_mpa", r.staggered_boom_pp_mpa);
+    std::printf("\"duty_pct\": %.0f, \"frequency_hz\": %.1f}\n", options.duty_pct,
+                options.frequency_hz);
+  } else {
+    std::printf(
+        "4 nozzles at %.0f %% duty, %.0f Hz, fuzzy PID at 0.2 MPa, %d drawn machines (seed %llu): "
+        "pump pulsation, hose inertia, valve spreads on\n",
+        options.duty_pct, options.frequency_hz, o.plants, static_cast<unsigned long long>(o.seed));
+    std::printf("%-34s%12s%12s%12s\n", "pressure p-p [MPa]", "mean", "sd", "worst");
+    print_spread_row("synchronous, manifold (sensor)", r.synchronous_pp_mpa, "%12.5f");
+    print_spread_row("staggered, manifold (sensor)", r.staggered_pp_mpa, "%12.5f");
+    print_spread_row("synchronous, boom", r.synchronous_boom_pp_mpa, "%12.5f");
+    print_spread_row("staggered, boom", r.staggered_boom_pp_mpa, "%12.5f");
+    print_spread_row("ratio sync/stag (worst = lowest)", r.ratio, "%12.2f");
+  }
+  return 0;
+}
+
+void print_orthogonal_row_json(const char* key, const ex::OrthogonalFleetRow& row, bool comma) {
+  std::printf("\"%s\": {", key);
+  print_spread_json("mean_error_pct", row.mean_error_pct);
+  print_spread_json("max_error_pct", row.max_error_pct);
+  print_spread_json("pressure_band_mpa", row.pressure_band_mpa, false);
+  std::printf("}%s", comma ? ", " : "");
+}
+
+int run_orthogonal_fleet_command(const ExperimentOptions& o) {
+  const ex::FleetOptions fleet{o.seed, o.plants, true};
+  const ex::OrthogonalFleetResult r = ex::run_orthogonal_fleet(fleet);
+  if (o.json) {
+    std::printf("{\"plants\": %d, \"seed\": %llu, \"changed_after_calibration\": true, ", o.plants,
+                static_cast<unsigned long long>(o.seed));
+    print_orthogonal_row_json("trim_on", r.trim_on, true);
+    print_orthogonal_row_json("trim_off", r.trim_off, false);
+    std::printf("}\n");
+  } else {
+    std::printf(
+        "L16 orthogonal test, 0.2 MPa, 3 Hz, %d drawn machines (seed %llu), each calibrated as "
+        "made, then changed (wear, a partial blockage, valve ageing, meter drift, supply and "
+        "speed ramps)\n",
+        o.plants, static_cast<unsigned long long>(o.seed));
+    std::printf("%-34s%12s%12s%12s\n", "over the machines", "mean", "sd", "worst");
+    for (const auto* row : {&r.trim_on, &r.trim_off}) {
+      const bool on = row == &r.trim_on;
+      std::printf("-- online flow trim %s\n", on ? "ON" : "OFF");
+      print_spread_row("mean error [%]", row->mean_error_pct, "%12.3f");
+      print_spread_row("max error [%]", row->max_error_pct, "%12.3f");
+      print_spread_row("pressure band [MPa]", row->pressure_band_mpa, "%12.4f");
+    }
+  }
+  return 0;
+}
+
+int run_blockage_command(const ExperimentOptions& o) {
+  const ex::FleetOptions fleet{o.seed, o.plants > 0 ? o.plants : 20, false};
+  const ex::BlockageOptions options;
+  const ex::BlockageFleetResult r = ex::run_blockage_fleet(fleet, options);
+  if (o.json) {
+    std::printf(
+        "{\"plants\": %d, \"seed\": %llu, \"blockage\": %.2f, \"limit_s\": %.1f, "
+        "\"named_within_limit\": %d, \"false_alarms\": %d, \"healthy_minutes\": %.1f, ",
+        fleet.plants, static_cast<unsigned long long>(o.seed), options.blockage,
+        options.detect_limit_s, r.named_within_limit, r.false_alarms, r.healthy_minutes);
+    print_spread_json("detect_s", r.detect_s);
+    std::printf("\"machines\": [");
+    for (std::size_t i = 0; i < r.machines.size(); ++i) {
+      const auto& m = r.machines[i];
+      std::printf(
+          "%s{\"blocked\": %d, \"named\": %d, \"detect_s\": %.2f, "
+          "\"false_alarm\": %s}",
+          i ? ", " : "", m.blocked_nozzle + 1, m.named_nozzle + 1, m.detect_s,
+          m.false_alarm ? "true" : "false");
+    }
+    std::printf("]}\n");
+  } else {
+    std::printf(
+        "per-nozzle health from the line meter, %d drawn machines (seed %llu), variable-rate "
+        "spraying at %.1f MPa / %.0f Hz, staggered, trim on: %.0f s baseline + %.0f min healthy, "
+        "then one nozzle %.0f %% blocked\n",
+        fleet.plants, static_cast<unsigned long long>(o.seed), options.pressure_mpa,
+        options.frequency_hz, options.health.baseline_s, options.healthy_s / 60.0,
+        options.blockage * 100.0);
+    std::printf("%8s %8s %8s %10s %12s\n", "machine", "blocked", "named", "after_s", "false_alarm");
+    for (std::size_t i = 0; i < r.machines.size(); ++i) {
+      const auto& m = r.machines[i];
+      std::printf("%8zu %8d %8d %10.2f %12s\n", i + 1, m.blocked_nozzle + 1, m.named_nozzle + 1,
+                  m.detect_s, m.false_alarm ? "YES" : "no");
+    }
+    std::printf(
+        "named within %.0f s: %d of %d; false alarms: %d in %.0f healthy machine-minutes; "
+        "time to name: mean %.2f s, sd %.2f, worst %.2f\n",
+        options.detect_limit_s, r.named_within_limit, fleet.plants, r.false_alarms,
+        r.healthy_minutes, r.detect_s.mean, r.detect_s.sd, r.detect_s.worst);
+  }
+  return 0;
+}
+
+int run_linearity_fleet_command(const ExperimentOptions& o) {
+  const ex::LinearityFleetResult r = ex::run_linearity_fleet({o.seed, o.plants, true});
+  if (o.json) {
+    std::printf("{\"plants\": %d, \"seed\": %llu, \"changed_after_calibration\": true, ", o.plants,
+                static_cast<unsigned long long>(o.seed));
+    print_spread_json("r2", r.r2);
+    print_spread_json("mean_error_pct", r.mean_error_pct);
+    print_spread_json("max_error_pct", r.max_error_pct, false);
+    std::printf("}\n");
+  } else {
+    std::printf(
+        "nozzle 1 swept 10-100 %%, 0.2 MPa, 3 Hz, %d drawn machines (seed %llu), "
+        "calibrated as made, then changed; trim on\n",
+        o.plants, static_cast<unsigned long long>(o.seed));
+    std::printf("%-34s%12s%12s%12s\n", "over the machines", "mean", "sd", "worst");
+    print_spread_row("R2 (worst = lowest)", r.r2, "%12.5f");
+    print_spread_row("mean error [%]", r.mean_error_pct, "%12.3f");
+    print_spread_row("max error [%]", r.max_error_pct, "%12.3f");
+  }
+  return 0;
+}
+
+int run_calibrate_fleet_command(const ExperimentOptions& o) {
+  const ex::CalibrationFleetResult r = ex::run_calibration_fleet({o.seed, o.plants, false});
+  if (o.json) {
+    std::printf("{\"plants\": %d, \"seed\": %llu, ", o.plants,
+                static_cast<unsigned long long>(o.seed));
+    print_spread_json("meter_error_pct", r.meter_error_pct);
+    print_spread_json("full_open_error_pct", r.full_open_error_pct);
+    print_spread_json("line_error_pct", r.line_error_pct);
+    print_spread_json("r2", r.r2, false);
+    std::printf("}\n");
+  } else {
+    std::printf(
+        "catch test + per-nozzle lines (each nozzle alone, one line meter), 0.2 MPa, 3 Hz, "
+        "%d drawn machines as made (seed %llu)\n",
+        o.plants, static_cast<unsigned long long>(o.seed));
+    std::printf("%-34s%12s%12s%12s\n", "over the machines", "mean", "sd", "worst");
+    print_spread_row("meter K error after catch [%]", r.meter_error_pct, "%12.4f");
+    print_spread_row("worst nozzle full-open error [%]", r.full_open_error_pct, "%12.3f");
+    print_spread_row("worst nozzle line error 20-80 [%]", r.line_error_pct, "%12.3f");
+    print_spread_row("lowest nozzle R2", r.r2, "%12.5f");
+  }
+  return 0;
+}
+
 int run_ripple_command(const ExperimentOptions& o) {
+  if (o.plants > 0) return run_ripple_fleet_command(o);
   ex::RippleOptions options;
   options.seed = o.seed;
   const ex::RippleResult r = ex::run_ripple(options);
@@ -167,6 +415,7 @@ int run_ripple_command(const ExperimentOptions& o) {
 }
 
 int run_calibrate_command(const ExperimentOptions& o) {
+  if (o.plants > 0) return run_calibrate_fleet_command(o);
   ex::CalibrationOptions options;
   options.seed = o.seed;
   const ex::CalibrationResult r = ex::run_calibration(options);
@@ -236,6 +485,7 @@ void print_duty_point_json(const ex::DutyPoint& p) {
 }
 
 int run_linearity_command(const ExperimentOptions& o) {
+  if (o.plants > 0) return run_linearity_fleet_command(o);
   ex::SprayRunOptions options;
   options.seed = o.seed;
   options.raw = o.raw;
@@ -275,6 +525,7 @@ int run_linearity_command(const ExperimentOptions& o) {
 }
 
 int run_orthogonal_command(const ExperimentOptions& o) {
+  if (o.plants > 0) return run_orthogonal_fleet_command(o);
   ex::SprayRunOptions options;
   options.seed = o.seed;
   options.raw = o.raw;
@@ -468,6 +719,8 @@ int run_savings_command(const ExperimentOptions& o) {
 }
 
 int run_experiment(const ExperimentOptions& o) {
+  if (o.plants > 0 && (o.name == "dose" || o.name == "savings"))
+    throw std::runtime_error("--plants: dose and savings do not run over drawn machines yet");
   const auto t0 = std::chrono::steady_clock::now();
   int rc = 0;
   if (o.name == "step")
@@ -482,6 +735,8 @@ int run_experiment(const ExperimentOptions& o) {
     rc = run_orthogonal_command(o);
   else if (o.name == "dose")
     rc = run_dose_command(o);
+  else if (o.name == "blockage")
+    rc = run_blockage_command(o);
   else if (o.name == "savings")
     rc = run_savings_command(o);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -497,10 +752,10 @@ void add_experiment_commands(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "experiment", "rerun a paper's experiment on the simulated sprayer (hydraulic plant model)");
   cmd->add_option("name", options->name,
-                  "step | ripple | linearity | orthogonal | dose | calibrate | savings")
+                  "step | ripple | linearity | orthogonal | dose | calibrate | savings | blockage")
       ->required()
-      ->check(CLI::IsMember(
-          {"step", "ripple", "linearity", "orthogonal", "dose", "calibrate", "savings"}));
+      ->check(CLI::IsMember({"step", "ripple", "linearity", "orthogonal", "dose", "calibrate",
+                             "savings", "blockage"}));
   cmd->add_flag("--json", options->json, "print one JSON object instead of a table");
   cmd->add_option("--plot", options->plot, "write the figure to this PNG file");
   cmd->add_flag("--raw", options->raw,
@@ -508,6 +763,14 @@ void add_experiment_commands(CLI::App& app) {
                 "synchronous PWM");
   cmd->add_flag("--tune", options->tune, "step: rerun the gain search before the comparison");
   cmd->add_option("--seed", options->seed, "plant seed (nozzle spread, valve delays, noise)");
+  cmd->add_option("--tune-budget", options->tune_budget,
+                  "step --plants --tune: evaluations per controller (same for both)")
+      ->check(CLI::Range(10, 100000));
+  cmd->add_option("--plants", options->plants,
+                  "step/orthogonal/ripple/linearity/calibrate/blockage: over N machines drawn from "
+                  "documented spreads (seed "
+                  "--seed); prints mean, sd and worst")
+      ->check(CLI::Range(1, 1000));
   cmd->add_option("--control-period-ms", options->control_period_ms,
                   "step: pressure loop period (the daemon's default is 10 ms)")
       ->check(CLI::Range(0.1, 100.0));

@@ -1,6 +1,7 @@
 // The two calibrations on the simulated machine: the flow meter's pulses per litre from a catch
 // test, and each nozzle's line q = A s + b from runs of that nozzle alone measured with the
 // ONE line flow meter (the way a user does it on the real boom).
+#include <algorithm>
 #include <cmath>
 #include <deque>
 #include <mutex>
@@ -19,6 +20,7 @@ RigConfig calibration_rig(const CalibrationOptions& options) {
   config.pwm_frequency_hz = options.frequency_hz;
   config.fixes = {true, false, false};
   config.record_period_s = 0.0;
+  config.plant = options.plant;
   return config;
 }
 
@@ -90,7 +92,8 @@ const CalibrationResult& cached_calibration(const CalibrationOptions& options) {
   auto same = [](const CalibrationOptions& a, const CalibrationOptions& b) {
     return a.seed == b.seed && a.pressure_mpa == b.pressure_mpa &&
            a.frequency_hz == b.frequency_hz && a.catch_test_s == b.catch_test_s &&
-           a.duties_pct == b.duties_pct && a.settle_s == b.settle_s && a.measure_s == b.measure_s;
+           a.duties_pct == b.duties_pct && a.settle_s == b.settle_s && a.measure_s == b.measure_s &&
+           a.plant == b.plant;
   };
   static std::mutex mutex;
   // deque: references handed out stay valid as entries are added.
@@ -100,6 +103,34 @@ const CalibrationResult& cached_calibration(const CalibrationOptions& options) {
     if (same(key, options)) return result;
   cache.emplace_back(options, run_calibration(options));
   return cache.back().second;
+}
+
+CalibrationFleetResult run_calibration_fleet(const FleetOptions& fleet,
+                                             const CalibrationOptions& base) {
+  std::vector<double> meter, full, line, r2;
+  for (const Machine& m : draw_machines(fleet.seed, fleet.plants)) {
+    CalibrationOptions options = base;
+    options.seed = m.seed;
+    options.plant = m.params;
+    const CalibrationResult r = run_calibration(options);
+    meter.push_back(std::abs(r.meter_calibration_error_pct));
+    double worst_full = 0.0, worst_line = 0.0, lowest_r2 = 1.0;
+    for (const auto& n : r.nozzles) {
+      worst_full = std::max(
+          worst_full, std::abs(n.full_open_l_per_min / n.true_full_open_l_per_min - 1.0) * 100.0);
+      for (double duty : {20.0, 50.0, 80.0}) {
+        const double fitted =
+            n.fitted.slope_l_per_min_per_pct * duty + n.fitted.intercept_l_per_min;
+        const double truth = n.truth.slope_l_per_min_per_pct * duty + n.truth.intercept_l_per_min;
+        worst_line = std::max(worst_line, std::abs(fitted / truth - 1.0) * 100.0);
+      }
+      lowest_r2 = std::min(lowest_r2, n.r_squared);
+    }
+    full.push_back(worst_full);
+    line.push_back(worst_line);
+    r2.push_back(lowest_r2);
+  }
+  return {spread_of(meter), spread_of(full), spread_of(line), spread_of(r2, true)};
 }
 
 std::vector<double> calibrated_full_flows(const CalibrationResult& calibration) {

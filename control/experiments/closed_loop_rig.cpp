@@ -60,6 +60,14 @@ ClosedLoopRig::ClosedLoopRig(const RigConfig& config)
     throw std::invalid_argument("RigConfig.flow_trim_window_s must be > 0");
   if (config.duty_clamp) validate(*config.duty_clamp);
   for (auto& line : lines_) line = NozzleLine{};
+  if (config.nozzle_health) {
+    NozzleHealthConfig h = *config.nozzle_health;
+    h.nozzles = static_cast<std::size_t>(config.plant.nozzle_count);
+    health_.emplace(h);
+    health_window_s_ = 1.0 / (config.pwm_frequency_hz * config.plant.nozzle_count);
+    if (!(config.health_flow_lag_s >= 0.0 && config.health_flow_lag_s < health_window_s_))
+      throw std::invalid_argument("RigConfig.health_flow_lag_s must be in [0, one PWM phase)");
+  }
   plant_.set_ground_speed(config.ground_speed_m_per_s);
   plant_.set_return_valve_volts(10.0);  // fully open: the safe state, no pressure
 }
@@ -145,6 +153,30 @@ void ClosedLoopRig::start() {
   next_trim_s_ = now + config_.flow_trim_window_s;
   trim_pulses_ = plant_.flow_meter_pulses();
   trim_pressure_error_ = 0.0;
+  if (health_) {
+    next_health_window_s_ = now + health_window_s_;
+    next_health_meter_s_ = -1.0;
+    health_open_s_.fill(0.0);
+    health_pulses_ = plant_.flow_meter_pulses();
+  }
+}
+
+void ClosedLoopRig::health_window_closed() {
+  health_pending_open_s_ = health_open_s_;
+  health_open_s_.fill(0.0);
+  next_health_meter_s_ = next_health_window_s_ + config_.health_flow_lag_s;
+  next_health_window_s_ += health_window_s_;
+  if (config_.health_flow_lag_s <= 0.0) health_meter_window_closed();
+}
+
+void ClosedLoopRig::health_meter_window_closed() {
+  const std::uint64_t pulses = plant_.flow_meter_pulses();
+  const double litres = static_cast<double>(pulses - health_pulses_) / config_.meter_pulses_per_l;
+  health_pulses_ = pulses;
+  health_->add_window(std::span<const double>(health_pending_open_s_.data(),
+                                              static_cast<std::size_t>(plant_.nozzle_count())),
+                      litres, health_window_s_);
+  next_health_meter_s_ = -1.0;
 }
 
 double ClosedLoopRig::read_pressure_mpa() const {
@@ -212,9 +244,22 @@ void ClosedLoopRig::run_for(double duration_s) {
     if (config_.record_period_s > 0.0) next = std::min(next, next_record_s_);
     if (config_.converter_lead_s > 0.0) next = std::min(next, next_sample_s_);
     if (dac_due_s_ >= 0.0) next = std::min(next, dac_due_s_);
-    if (next > plant_.time_s()) plant_.step(next - plant_.time_s());
+    if (health_) {
+      next = std::min(next, next_health_window_s_);
+      if (next_health_meter_s_ >= 0.0) next = std::min(next, next_health_meter_s_);
+    }
+    if (next > plant_.time_s()) {
+      if (health_)
+        for (int i = 0; i < plant_.nozzle_count(); ++i)
+          if ((applied_mask_ >> i) & 1U)
+            health_open_s_[static_cast<std::size_t>(i)] += next - plant_.time_s();
+      plant_.step(next - plant_.time_s());
+    }
     const double now = plant_.time_s();
     constexpr double kEps = 1e-9;
+    if (health_ && next_health_meter_s_ >= 0.0 && next_health_meter_s_ <= now + kEps)
+      health_meter_window_closed();
+    if (health_ && next_health_window_s_ <= now + kEps) health_window_closed();
     while (next_edge_time_s() <= now + kEps) {
       plant_.set_valves(pending_edge_.valve_mask);
       applied_mask_ = pending_edge_.valve_mask;
@@ -233,9 +278,9 @@ void ClosedLoopRig::run_for(double duration_s) {
       next_control_s_ += config_.control_period_s;
     }
     if (config_.record_period_s > 0.0 && next_record_s_ <= now + kEps) {
-      trace_.push_back({now, plant_.line_pressure_mpa(), measured_pressure_mpa_,
-                        plant_.total_nozzle_flow_l_per_min(), 10.0 * (1.0 - controller_.output()),
-                        applied_mask_});
+      trace_.push_back({now, plant_.line_pressure_mpa(), plant_.boom_pressure_mpa(),
+                        measured_pressure_mpa_, plant_.total_nozzle_flow_l_per_min(),
+                        10.0 * (1.0 - controller_.output()), applied_mask_});
       next_record_s_ += config_.record_period_s;
     }
     if (now >= end - kEps) break;

@@ -17,6 +17,7 @@
 
 #include "control/calibration.hpp"
 #include "control/flow_feedback.hpp"
+#include "control/nozzle_health.hpp"
 #include "control/plant/hydraulic_plant.hpp"
 #include "control/pressure_controller.hpp"
 #include "control/pwm_schedule.hpp"
@@ -66,11 +67,18 @@ struct RigConfig {
   double compensation_filter_s = 0.1;
   double ground_speed_m_per_s = 1.0;
   double record_period_s = 0.005;  // 0 = no trace
+  // Per-nozzle health from the line meter, fed one window per PWM phase (period / nozzles,
+  // aligned to the PWM start). The meter's window lags the commanded one by health_flow_lag_s:
+  // the valves' mean dead time (flow starts 15 ms after the open command, stops 25 ms after
+  // the close command).
+  std::optional<NozzleHealthConfig> nozzle_health{};
+  double health_flow_lag_s = 0.03;
 };
 
 struct TraceSample {
   double time_s = 0.0;
-  double pressure_mpa = 0.0;           // true line pressure
+  double pressure_mpa = 0.0;           // true line pressure (manifold, where the sensor is)
+  double boom_pressure_mpa = 0.0;      // true pressure at the boom's first tap
   double measured_pressure_mpa = 0.0;  // what the controller saw
   double total_flow_l_per_min = 0.0;   // true nozzle total
   double return_valve_volts = 0.0;
@@ -107,9 +115,13 @@ class ClosedLoopRig {
   double flow_trim_correction() const { return trim_.correction(); }
   std::array<double, plant::kMaxNozzles> commanded_duties_pct() const { return duties_; }
   const RigConfig& config() const { return config_; }
+  // The detector (config.nozzle_health set), else nullptr.
+  const NozzleHealth* nozzle_health() const { return health_ ? &*health_ : nullptr; }
 
  private:
   void control_tick();
+  void health_window_closed();
+  void health_meter_window_closed();
   void apply_flow_requests();
   double read_pressure_mpa() const;
   double next_edge_time_s() const;
@@ -141,6 +153,13 @@ class ClosedLoopRig {
   std::uint64_t trim_pulses_ = 0;
   double trim_pressure_error_ = 0.0;  // worst |P - P_set| / P_set of the current trim window
   std::vector<TraceSample> trace_;
+  std::optional<NozzleHealth> health_;
+  double health_window_s_ = 0.0;
+  double next_health_window_s_ = -1.0;  // end of the commanded-open window
+  double next_health_meter_s_ = -1.0;   // end of the lagged meter window (< 0: none pending)
+  std::array<double, plant::kMaxNozzles> health_open_s_{};
+  std::array<double, plant::kMaxNozzles> health_pending_open_s_{};
+  std::uint64_t health_pulses_ = 0;
 };
 
 }  // namespace weedspray::control::experiments

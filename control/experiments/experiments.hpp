@@ -6,10 +6,12 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "control/experiments/closed_loop_rig.hpp"
+#include "control/experiments/machines.hpp"
 #include "control/experiments/metrics.hpp"
 #include "control/spray_rate_law.hpp"
 
@@ -38,6 +40,9 @@ struct StepOptions {
   double control_period_s = 0.005;
   double converter_lead_s = 0.0;
   double converter_lag_s = 0.0;
+  // The machine (PlantParams{} = the ideal bench) and how many nozzles spray (< 0: all).
+  plant::PlantParams plant{};
+  int nozzles_open = -1;
 };
 StepResult run_step(const StepOptions& options);
 StepRun run_step_once(PressureControlMode mode, const FuzzyPidConfig& config,
@@ -57,7 +62,8 @@ TuningResult tune_step_controllers(const StepOptions& options);
 
 // ---------- ripple: 4 nozzles 50 %, 3 Hz, synchronous vs staggered (UGV Fig. 8) ----------
 struct RippleRun {
-  double pp_mpa = 0.0;  // peak-to-peak true line pressure after settling
+  double pp_mpa = 0.0;       // peak-to-peak true line pressure (manifold) after settling
+  double boom_pp_mpa = 0.0;  // the same at the boom (water hammer of closing valves)
   std::vector<TraceSample> trace;
 };
 struct RippleResult {
@@ -70,6 +76,7 @@ struct RippleOptions {
   double frequency_hz = 3.0;
   double settle_s = 5.0;
   double measure_s = 5.0;
+  plant::PlantParams plant{};  // PlantParams{} = the ideal bench (smooth pump)
 };
 RippleResult run_ripple(const RippleOptions& options);
 
@@ -98,6 +105,7 @@ struct CalibrationOptions {
   std::vector<double> duties_pct{20, 30, 40, 50, 60, 70, 80};
   double settle_s = 2.0;
   double measure_s = 20.0;
+  plant::PlantParams plant{};  // the machine calibrated (PlantParams{} = the ideal bench)
 };
 CalibrationResult run_calibration(const CalibrationOptions& options);
 
@@ -125,6 +133,11 @@ struct SprayRunOptions {
   // raw: no calibration (duty commanded as asked), no pressure compensation, no flow
   // feedback, synchronous PWM. Otherwise the machine is calibrated first (run_calibration).
   bool raw = false;
+  // The machine (PlantParams{} = the ideal bench), calibrated as made; `change` is applied
+  // after the calibration, before each test run (ramps over the measured window).
+  plant::PlantParams plant{};
+  std::optional<MachineChange> change{};
+  bool flow_feedback = true;  // online flow trim (not raw)
 };
 LinearityResult run_linearity(const SprayRunOptions& options);
 
@@ -269,6 +282,76 @@ struct TruthTally {
 TruthTally tally_against_truth(const SavingsRun& run,
                                const std::vector<std::array<ZoneTruth, 4>>& truth,
                                double weedy_share = 0.005);
+
+// ---------- fleets: the same experiments over N drawn machines (machines.hpp) ----------
+struct FleetOptions {
+  std::uint64_t seed = 1;
+  int plants = 20;
+  bool changed = true;  // apply the drawn change after calibration
+};
+struct OrthogonalFleetRow {
+  Spread mean_error_pct;  // per machine: mean over its 64 nozzle-runs
+  Spread max_error_pct;   // per machine: its worst nozzle-run
+  Spread pressure_band_mpa;
+  std::vector<OrthogonalResult> machines;
+};
+struct OrthogonalFleetResult {
+  OrthogonalFleetRow trim_on;
+  OrthogonalFleetRow trim_off;
+};
+OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet,
+                                           const SprayRunOptions& base = {});
+struct LinearityFleetResult {
+  Spread r2;  // worst = lowest
+  Spread mean_error_pct, max_error_pct;
+};
+// Calibrated as made, tested after the drawn change, trim on.
+LinearityFleetResult run_linearity_fleet(const FleetOptions& fleet,
+                                         const SprayRunOptions& base = {});
+struct CalibrationFleetResult {
+  Spread meter_error_pct;      // |calibrated K - true K| / true K (as made)
+  Spread full_open_error_pct;  // per machine: worst nozzle |metered - true| full-open flow
+  Spread line_error_pct;       // per machine: worst nozzle |fitted - true| flow at 20-80 % duty
+  Spread r2;                   // per machine: lowest nozzle R^2 (worst = lowest)
+};
+CalibrationFleetResult run_calibration_fleet(const FleetOptions& fleet,
+                                             const CalibrationOptions& base = {});
+struct RippleFleetResult {
+  Spread synchronous_pp_mpa, staggered_pp_mpa, ratio;
+  Spread synchronous_boom_pp_mpa, staggered_boom_pp_mpa;
+};
+RippleFleetResult run_ripple_fleet(const FleetOptions& fleet, const RippleOptions& base = {});
+
+// ---------- blockage: per-nozzle health from the line meter (control/nozzle_health.hpp) ----------
+// Each machine is calibrated as made, then sprays variable-rate (every nozzle's requested flow
+// redrawn every redraw_s between 30 and 90 % of its calibrated full-open flow, staggered PWM,
+// online trim on) for baseline + healthy_s with no fault (any alarm = a false alarm), then one
+// drawn nozzle is blocked by `blockage` and the time until the detector names a nozzle is
+// measured (up to detect_limit_s x 3).
+struct BlockageOptions {
+  double pressure_mpa = 0.2;
+  double frequency_hz = 3.0;
+  double blockage = 0.2;
+  double healthy_s = 600.0;
+  double detect_limit_s = 10.0;
+  double redraw_s = 1.0;
+  NozzleHealthConfig health{};
+};
+struct BlockageMachine {
+  int blocked_nozzle = -1;
+  int named_nozzle = -1;     // -1: none named
+  double detect_s = -1.0;    // from the blockage to the alarm; < 0: none in the record
+  bool false_alarm = false;  // an alarm during the healthy part
+};
+struct BlockageFleetResult {
+  std::vector<BlockageMachine> machines;
+  int named_within_limit = 0;  // the blocked nozzle named within detect_limit_s
+  int false_alarms = 0;
+  Spread detect_s;  // over the machines that named the right nozzle
+  double healthy_minutes = 0.0;
+};
+BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet,
+                                       const BlockageOptions& options = {});
 
 // Calibration runs are deterministic for given options, so the spray experiments share one
 // per process (several tests of one binary, or both savings runs, calibrate once).

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "control/experiments/experiments.hpp"
@@ -15,21 +16,22 @@
 namespace weedspray::control::experiments {
 namespace {
 
-struct Machine {
+struct PreparedMachine {
   RigConfig config;
   std::vector<NozzleLine> lines;
   std::vector<double> full_flows;  // requested reference per nozzle [L/min]
 };
 
-Machine prepare_machine(const SprayRunOptions& options) {
-  Machine m;
+PreparedMachine prepare_machine(const SprayRunOptions& options) {
+  PreparedMachine m;
   m.config.seed = options.seed;
   m.config.setpoint_mpa = options.pressure_mpa;
   m.config.pwm_frequency_hz = options.frequency_hz;
   m.config.record_period_s = 0.0;
+  m.config.plant = options.plant;
   if (options.raw) {
     m.config.fixes = {false, false, false};
-    const plant::HydraulicPlant probe(m.config.plant, options.seed);
+    const plant::HydraulicPlant probe(m.config.plant, options.seed);  // as made
     for (int i = 0; i < probe.nozzle_count(); ++i)
       m.full_flows.push_back(probe.nozzle_full_open_flow_l_per_min(i, options.pressure_mpa));
     return m;
@@ -38,8 +40,9 @@ Machine prepare_machine(const SprayRunOptions& options) {
   cal_options.seed = options.seed;
   cal_options.pressure_mpa = options.pressure_mpa;
   cal_options.frequency_hz = options.frequency_hz;
+  cal_options.plant = options.plant;
   const CalibrationResult& cal = cached_calibration(cal_options);
-  m.config.fixes = {true, true, true};
+  m.config.fixes = {true, true, options.flow_feedback};
   m.config.meter_pulses_per_l = cal.meter.pulses_per_litre;
   for (const auto& n : cal.nozzles) m.lines.push_back(n.fitted);
   m.full_flows = calibrated_full_flows(cal);
@@ -52,7 +55,7 @@ struct RunOutcome {
 };
 
 // One fresh run: start-up, settle, then run_s measured.
-RunOutcome spray_run(const Machine& m, std::span<const double> duty_pct,
+RunOutcome spray_run(const PreparedMachine& m, std::span<const double> duty_pct,
                      const SprayRunOptions& options) {
   ClosedLoopRig rig(m.config);
   const std::size_t n = duty_pct.size();
@@ -65,6 +68,7 @@ RunOutcome spray_run(const Machine& m, std::span<const double> duty_pct,
     for (std::size_t i = 0; i < n; ++i) flows[i] = duty_pct[i] / 100.0 * m.full_flows[i];
     rig.request_flows(flows);
   }
+  if (options.change) apply_change(rig.plant(), *options.change);
   rig.start();
   rig.run_for(options.settle_s);
   std::vector<double> v0(n);
@@ -73,6 +77,7 @@ RunOutcome spray_run(const Machine& m, std::span<const double> duty_pct,
   // Pressure band sampled every control period of the measured window.
   const double dt = m.config.control_period_s;
   for (double t = 0.0; t < options.run_s - 1e-9; t += dt) {
+    if (options.change) apply_change_progress(rig.plant(), *options.change, t / options.run_s);
     rig.run_for(dt);
     out.pressure_band_mpa = std::max(
         out.pressure_band_mpa, std::abs(rig.plant().line_pressure_mpa() - options.pressure_mpa));
@@ -94,7 +99,7 @@ RunOutcome spray_run(const Machine& m, std::span<const double> duty_pct,
 }  // namespace
 
 LinearityResult run_linearity(const SprayRunOptions& options) {
-  const Machine m = prepare_machine(options);
+  const PreparedMachine m = prepare_machine(options);
   LinearityResult result;
   result.raw = options.raw;
   std::vector<double> x, y;
@@ -115,7 +120,7 @@ LinearityResult run_linearity(const SprayRunOptions& options) {
 }
 
 OrthogonalResult run_orthogonal(const SprayRunOptions& options) {
-  const Machine m = prepare_machine(options);
+  const PreparedMachine m = prepare_machine(options);
   OrthogonalResult result;
   result.raw = options.raw;
   int count = 0;
@@ -134,6 +139,59 @@ OrthogonalResult run_orthogonal(const SprayRunOptions& options) {
   }
   result.mean_error_pct /= count;
   return result;
+}
+
+}  // namespace weedspray::control::experiments
+
+namespace weedspray::control::experiments {
+namespace {
+
+OrthogonalFleetRow summarise(std::vector<OrthogonalResult> machines) {
+  std::vector<double> mean, max, band;
+  for (const auto& r : machines) {
+    mean.push_back(r.mean_error_pct);
+    max.push_back(r.max_error_pct);
+    band.push_back(r.pressure_band_mpa);
+  }
+  return {spread_of(mean), spread_of(max), spread_of(band), std::move(machines)};
+}
+
+}  // namespace
+
+LinearityFleetResult run_linearity_fleet(const FleetOptions& fleet, const SprayRunOptions& base) {
+  std::vector<double> r2, mean, max;
+  const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
+  for (std::size_t i = 0; i < machines.size(); ++i) {
+    SprayRunOptions options = base;
+    options.seed = machines[i].seed;
+    options.plant = machines[i].params;
+    options.raw = false;
+    options.change = fleet.changed ? draw_change(machines[i], fleet.seed, static_cast<int>(i))
+                                   : no_change(machines[i]);
+    const LinearityResult r = run_linearity(options);
+    r2.push_back(r.r2);
+    mean.push_back(r.mean_error_pct);
+    max.push_back(r.max_error_pct);
+  }
+  return {spread_of(r2, true), spread_of(mean), spread_of(max)};
+}
+
+OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const SprayRunOptions& base) {
+  std::vector<OrthogonalResult> on, off;
+  const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
+  for (std::size_t i = 0; i < machines.size(); ++i) {
+    const Machine& m = machines[i];
+    SprayRunOptions options = base;
+    options.seed = m.seed;
+    options.plant = m.params;
+    options.raw = false;
+    options.change = fleet.changed ? draw_change(m, fleet.seed, static_cast<int>(i)) : no_change(m);
+    options.flow_feedback = true;
+    on.push_back(run_orthogonal(options));
+    options.flow_feedback = false;
+    off.push_back(run_orthogonal(options));
+  }
+  return {summarise(std::move(on)), summarise(std::move(off))};
 }
 
 }  // namespace weedspray::control::experiments

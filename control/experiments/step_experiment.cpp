@@ -51,9 +51,14 @@ StepRun run_step_once(PressureControlMode mode, const FuzzyPidConfig& config,
   rig_config.control_period_s = options.control_period_s;
   rig_config.converter_lead_s = options.converter_lead_s;
   rig_config.converter_lag_s = options.converter_lag_s;
+  rig_config.plant = options.plant;
   ClosedLoopRig rig(rig_config);
-  // Start-up with the boom spraying: every nozzle open (100 % duty) as in the paper's bench.
-  const std::vector<double> full(static_cast<std::size_t>(rig.plant().nozzle_count()), 100.0);
+  // Start-up with the boom spraying: every nozzle open (100 % duty) as in the paper's bench,
+  // or the first nozzles_open of them.
+  const int n = rig.plant().nozzle_count();
+  const int open = options.nozzles_open < 0 ? n : std::min(options.nozzles_open, n);
+  std::vector<double> full(static_cast<std::size_t>(n), 0.0);
+  std::fill_n(full.begin(), open, 100.0);
   rig.command_duties(full);
   rig.start();
   rig.run_for(options.duration_s);

@@ -48,6 +48,29 @@ void validate(const PlantParams& p) {
   require(p.tank.initial_level_l >= 0 && p.tank.initial_level_l <= p.tank.capacity_l,
           "tank.initial_level_l", "in [0, capacity_l]");
   require(p.tank.suction_loss_below_l > 0, "tank.suction_loss_below_l", "> 0");
+  require(p.pump.chambers >= 0 && p.pump.chambers <= 8, "pump.chambers", "in [0, 8]");
+  require(p.pump.rated_rpm > 0, "pump.rated_rpm", "> 0");
+  require(p.pump.nominal_supply_volts > 0 && p.pump.supply_volts >= 0, "pump.*supply_volts",
+          "> 0 (nominal), >= 0");
+  require(p.pump.load_speed_sag >= 0 && p.pump.load_speed_sag < 1, "pump.load_speed_sag",
+          "in [0, 1)");
+  require(p.boom.inertance_mpa_s2_per_l >= 0, "boom.inertance_mpa_s2_per_l", ">= 0");
+  require(p.boom.friction_mpa_per_l_per_s_sq >= 0, "boom.friction_mpa_per_l_per_s_sq", ">= 0");
+  require(p.boom.boom_compliance_l_per_mpa > 0, "boom.boom_compliance_l_per_mpa", "> 0");
+  require(p.boom.section_loss_mpa_per_l_per_s_sq >= 0, "boom.section_loss_mpa_per_l_per_s_sq",
+          ">= 0");
+  require(p.boom.valve_k_l_per_min_sqrt_mpa >= 0, "boom.valve_k_l_per_min_sqrt_mpa", ">= 0");
+  require(p.boom.valve_k_spread_sigma >= 0 && p.boom.valve_k_spread_sigma < 0.3,
+          "boom.valve_k_spread_sigma", "in [0, 0.3)");
+  require(p.nozzle.travel_spread_sigma >= 0 && p.nozzle.travel_spread_sigma < 0.3,
+          "nozzle.travel_spread_sigma", "in [0, 0.3)");
+  require(p.nozzle.delay_drift_per_hour_sigma >= 0, "nozzle.delay_drift_per_hour_sigma", ">= 0");
+  require(p.flow_meter.low_flow_error >= 0 && p.flow_meter.low_flow_error < 0.5,
+          "flow_meter.low_flow_error", "in [0, 0.5)");
+  require(p.flow_meter.low_flow_knee_l_per_min > 0, "flow_meter.low_flow_knee_l_per_min", "> 0");
+  require(p.flow_meter.pulse_jitter >= 0 && p.flow_meter.pulse_jitter < 0.5,
+          "flow_meter.pulse_jitter", "in [0, 0.5)");
+  require(p.wheel.slip > -0.5 && p.wheel.slip < 0.5, "wheel.slip", "in (-0.5, 0.5)");
   require(p.integration_step_s > 0 && p.integration_step_s <= 1e-3, "integration_step_s",
           "in (0, 1e-3] (>= 1 kHz)");
 }
@@ -74,10 +97,38 @@ std::pair<double, double> ramp_mean_and_end(double from, double to, double rate,
   return {integral / dt, end_of_move};
 }
 
+// Outlet flow of an n-chamber single-acting pump at shaft angle theta, relative to its mean:
+// (pi / n) sum_k max(0, sin(theta - 2 pi k / n)); the mean of each half-sine is 1 / pi.
+double pulsation_factor(int chambers, double theta) {
+  if (chambers <= 0) return 1.0;
+  constexpr double kPi = 3.14159265358979323846;
+  double sum = 0.0;
+  for (int k = 0; k < chambers; ++k)
+    sum += std::max(0.0, std::sin(theta - 2.0 * kPi * k / chambers));
+  return kPi / chambers * sum;
+}
+
 }  // namespace
 
+PlantParams realistic_plant_params() {
+  PlantParams p;
+  p.pump.chambers = 3;
+  p.pump.load_speed_sag = 0.2;
+  p.boom.inertance_mpa_s2_per_l = 0.038;
+  p.boom.friction_mpa_per_l_per_s_sq = 0.9;
+  p.boom.section_loss_mpa_per_l_per_s_sq = 0.3;
+  p.boom.valve_k_l_per_min_sqrt_mpa = 7.9;
+  p.boom.valve_k_spread_sigma = 0.10;
+  p.nozzle.travel_spread_sigma = 0.15;
+  p.nozzle.delay_drift_per_hour_sigma = 0.05;
+  p.flow_meter.low_flow_error = 0.15;
+  p.flow_meter.pulse_jitter = 0.3;
+  p.wheel.slip = 0.02;
+  return p;
+}
+
 HydraulicPlant::HydraulicPlant(const PlantParams& params, std::uint64_t seed)
-    : params_(params), rng_(seed) {
+    : params_(params), rng_(seed), realism_rng_(seed ^ 0x9e3779b97f4a7c15ULL) {
   validate(params_);
   for (int i = 0; i < params_.nozzle_count; ++i) {
     NozzleTruth& t = truth_[static_cast<std::size_t>(i)];
@@ -88,7 +139,56 @@ HydraulicPlant::HydraulicPlant(const PlantParams& params, std::uint64_t seed)
     t.close_delay_s = params_.nozzle.close_delay_s *
                       clipped_factor(rng_, unit_normal_, params_.nozzle.delay_spread_sigma);
   }
+  for (int i = 0; i < params_.nozzle_count; ++i) {
+    NozzleTruth& t = truth_[static_cast<std::size_t>(i)];
+    const double travel =
+        clipped_factor(realism_rng_, realism_normal_, params_.nozzle.travel_spread_sigma);
+    t.open_travel_s = params_.nozzle.open_travel_s * travel;
+    t.close_travel_s = params_.nozzle.close_travel_s * travel;
+    t.valve_k_l_per_min_sqrt_mpa =
+        params_.boom.valve_k_l_per_min_sqrt_mpa *
+        clipped_factor(realism_rng_, realism_normal_, params_.boom.valve_k_spread_sigma);
+    t.delay_drift_per_hour = params_.nozzle.delay_drift_per_hour_sigma *
+                             std::clamp(realism_normal_(realism_rng_), -2.5, 2.5);
+  }
   tank_level_l_ = params_.tank.initial_level_l;
+  supply_volts_ = params_.pump.supply_volts;
+  wheel_slip_ = params_.wheel.slip;
+  std::uniform_real_distribution<double> jitter(-params_.flow_meter.pulse_jitter,
+                                                params_.flow_meter.pulse_jitter);
+  next_pulse_at_ = 1.0 + jitter(realism_rng_);
+}
+
+double HydraulicPlant::delay_scale(int i) const {
+  const auto& v = valves_[static_cast<std::size_t>(i)];
+  const double drift =
+      1.0 + truth_[static_cast<std::size_t>(i)].delay_drift_per_hour * time_s_ / 3600.0;
+  return v.ageing * std::max(0.1, drift);
+}
+
+double HydraulicPlant::series_k(int i) const {
+  const auto& v = valves_[static_cast<std::size_t>(i)];
+  const NozzleTruth& t = truth_[static_cast<std::size_t>(i)];
+  const double kn = t.k_l_per_min_sqrt_mpa * (1.0 + v.wear) * (1.0 - v.blockage);
+  const double kv = t.valve_k_l_per_min_sqrt_mpa;
+  if (kv <= 0.0 || kn <= 0.0) return kn;
+  // Two orifices in series: 1 / k^2 = 1 / kn^2 + 1 / kv^2.
+  return kn * kv / std::sqrt(kn * kn + kv * kv);
+}
+
+double HydraulicPlant::pump_rpm() const {
+  const auto& pp = params_.pump;
+  const double load = std::clamp(pressure_mpa_ / pp.shutoff_pressure_mpa, 0.0, 1.0);
+  return pp.rated_rpm * pump_speed_ * supply_volts_ / pp.nominal_supply_volts *
+         (1.0 - pp.load_speed_sag * load);
+}
+
+double HydraulicPlant::metered_pulses_per_l(double line_flow_l_per_s) const {
+  const auto& m = params_.flow_meter;
+  const double q = std::abs(line_flow_l_per_s) * 60.0;
+  const double low =
+      m.low_flow_error > 0.0 ? m.low_flow_error * std::exp(-q / m.low_flow_knee_l_per_min) : 0.0;
+  return true_meter_pulses_per_l() * (1.0 - low);
 }
 
 void HydraulicPlant::set_pump(bool on) {
@@ -111,7 +211,7 @@ void HydraulicPlant::set_valves(std::uint32_t mask) {
     const bool travelling = v.motion_start_s <= time_s_ && v.position != v.motion_target;
     v.coast_target = travelling ? v.motion_target : v.position;
     v.motion_target = cmd ? 1.0 : 0.0;
-    v.motion_start_s = time_s_ + (cmd ? t.open_delay_s : t.close_delay_s);
+    v.motion_start_s = time_s_ + (cmd ? t.open_delay_s : t.close_delay_s) * delay_scale(i);
   }
 }
 
@@ -153,9 +253,15 @@ double HydraulicPlant::line_compliance_l_per_mpa(double pressure_mpa) const {
 }
 
 double HydraulicPlant::advance_valve(Valve& v, double t0, double dt) const {
+  const auto i = static_cast<std::size_t>(&v - valves_.data());
+  const NozzleTruth& t = truth_[i];
+  // Travel from the drawn per-valve times (0 drawn = the params' value: ideal bench).
+  const double open_s =
+      (t.open_travel_s > 0 ? t.open_travel_s : params_.nozzle.open_travel_s) * v.ageing;
+  const double close_s =
+      (t.close_travel_s > 0 ? t.close_travel_s : params_.nozzle.close_travel_s) * v.ageing;
   auto rate_toward = [&](double target) {
-    return target > v.position ? 1.0 / params_.nozzle.open_travel_s
-                               : 1.0 / params_.nozzle.close_travel_s;
+    return target > v.position ? 1.0 / open_s : 1.0 / close_s;
   };
   const bool coasting = v.motion_start_s > t0 && v.coast_target != v.position;
   if (!coasting) {
@@ -180,16 +286,24 @@ double HydraulicPlant::advance_valve(Valve& v, double t0, double dt) const {
 void HydraulicPlant::substep(double dt) {
   const double t0 = time_s_;
   const double p = pressure_mpa_;
+  const auto& pp = params_.pump;
 
-  // Pump: motor speed lags the relay; flow falls linearly with pressure to shut-off; a
-  // blocked filter or an almost empty tank starves it.
+  // Pump: motor speed lags the relay; flow falls linearly with pressure to shut-off and scales
+  // with supply voltage; a blocked filter or an almost empty tank starves it; an n-chamber
+  // pump delivers it in pulses.
   const double speed_target = pump_on_ ? 1.0 : 0.0;
-  pump_speed_ +=
-      (speed_target - pump_speed_) * (1.0 - std::exp(-dt / params_.pump.spin_time_constant_s));
-  const double curve = std::max(0.0, 1.0 - p / params_.pump.shutoff_pressure_mpa);
+  pump_speed_ += (speed_target - pump_speed_) * (1.0 - std::exp(-dt / pp.spin_time_constant_s));
+  const double curve = std::max(0.0, 1.0 - p / pp.shutoff_pressure_mpa);
   const double suction = std::clamp(tank_level_l_ / params_.tank.suction_loss_below_l, 0.0, 1.0);
-  pump_flow_l_per_s_ = pump_speed_ * params_.pump.open_flow_l_per_min / 60.0 * curve *
-                       (1.0 - filter_blockage_) * suction;
+  const double volts = supply_volts_ / pp.nominal_supply_volts;
+  double pulsation = 1.0;
+  if (pp.chambers > 0) {
+    constexpr double kTwoPi = 6.28318530717958647692;
+    pump_angle_rad_ = std::fmod(pump_angle_rad_ + pump_rpm() / 60.0 * kTwoPi * dt, kTwoPi);
+    pulsation = pulsation_factor(pp.chambers, pump_angle_rad_);
+  }
+  pump_flow_l_per_s_ = pump_speed_ * pp.open_flow_l_per_min / 60.0 * curve * volts *
+                       (1.0 - filter_blockage_) * suction * pulsation;
 
   // Return valve: first-order lag toward the commanded opening.
   const auto& rv = params_.return_valve;
@@ -198,31 +312,67 @@ void HydraulicPlant::substep(double dt) {
   return_opening_ += (open_cmd - return_opening_) * (1.0 - std::exp(-dt / rv.time_constant_s));
   return_flow_l_per_s_ = orifice_flow_l_per_s(rv.k_l_per_min_sqrt_mpa * return_opening_, p);
 
-  // Nozzles: mean spool opening over the sub-step (exact for the piecewise-linear motion).
+  // Nozzles along the boom: each tap sees the boom pressure less the section losses up to it
+  // (flows of the previous sub-step: the losses are small and slow next to the step).
+  const bool inertia = inertance_on();
+  const double boom_p = inertia ? boom_pressure_mpa_ : p;
+  const double r_section = params_.boom.section_loss_mpa_per_l_per_s_sq;
+  double downstream = 0.0;
+  if (r_section > 0.0)
+    for (int i = 0; i < params_.nozzle_count; ++i)
+      downstream += valves_[static_cast<std::size_t>(i)].flow_l_per_s;
+  double tap_p = boom_p;
   double nozzle_flow = 0.0;
   for (int i = 0; i < params_.nozzle_count; ++i) {
     Valve& v = valves_[static_cast<std::size_t>(i)];
+    if (r_section > 0.0 && i > 0) tap_p -= r_section * downstream * downstream;
     const double opening = advance_valve(v, t0, dt);
-    const double k = truth_[static_cast<std::size_t>(i)].k_l_per_min_sqrt_mpa * (1.0 - v.blockage);
-    v.flow_l_per_s = orifice_flow_l_per_s(k * opening, p);
+    const double previous = v.flow_l_per_s;
+    v.flow_l_per_s = orifice_flow_l_per_s(series_k(i) * opening, tap_p);
     v.delivered_l += v.flow_l_per_s * dt;
     nozzle_flow += v.flow_l_per_s;
+    downstream -= previous;
   }
 
-  // Line pressure: volume balance on the line's compliance.
+  // Pressures: volume balance on the compliances. With inertance the feed hose's flow is a
+  // state (L dq/dt = P - P_boom - R q|q|), updated first (semi-implicit Euler: stable for the
+  // hose's LC resonance at this step).
+  double line_flow = nozzle_flow;
+  if (inertia) {
+    const auto& b = params_.boom;
+    const double q = line_flow_l_per_s_;
+    line_flow_l_per_s_ +=
+        (p - boom_pressure_mpa_ - b.friction_mpa_per_l_per_s_sq * q * std::abs(q)) * dt /
+        b.inertance_mpa_s2_per_l;
+    line_flow = line_flow_l_per_s_;
+    boom_pressure_mpa_ = std::max(
+        0.0, boom_pressure_mpa_ + (line_flow - nozzle_flow) * dt / b.boom_compliance_l_per_mpa);
+  }
   const double dp =
-      (pump_flow_l_per_s_ - return_flow_l_per_s_ - nozzle_flow) * dt / line_compliance_l_per_mpa(p);
+      (pump_flow_l_per_s_ - return_flow_l_per_s_ - line_flow) * dt / line_compliance_l_per_mpa(p);
   pressure_mpa_ = std::max(0.0, p + dp);
 
-  // The flow meter sits in the spray line: it sees the nozzles' total flow.
-  metered_l_ += nozzle_flow * dt;
-  flow_pulses_ = static_cast<std::uint64_t>(metered_l_ * true_meter_pulses_per_l());
+  // The flow meter sits in the feed line: it sees the nozzles' total flow (the hose's flow
+  // with inertance), under-reads at low flow and places each pulse edge with some jitter.
+  metered_l_ += line_flow * dt;
+  meter_phase_ += line_flow * dt * metered_pulses_per_l(line_flow);
+  if (params_.flow_meter.pulse_jitter > 0.0 || params_.flow_meter.low_flow_error > 0.0) {
+    std::uniform_real_distribution<double> jitter(-params_.flow_meter.pulse_jitter,
+                                                  params_.flow_meter.pulse_jitter);
+    while (meter_phase_ >= next_pulse_at_) {
+      ++flow_pulses_;
+      next_pulse_at_ = static_cast<double>(flow_pulses_) + 1.0 + jitter(realism_rng_);
+    }
+  } else {
+    flow_pulses_ = static_cast<std::uint64_t>(metered_l_ * true_meter_pulses_per_l());
+  }
   tank_level_l_ = std::max(0.0, tank_level_l_ - nozzle_flow * dt);
 
   distance_m_ += speed_m_per_s_ * dt;
+  wheel_distance_m_ += speed_m_per_s_ * (1.0 + wheel_slip_) * dt;
   const double true_pulses_per_m =
       params_.wheel.nominal_pulses_per_m / (1.0 + params_.wheel.circumference_error);
-  wheel_pulses_ = static_cast<std::uint64_t>(distance_m_ * true_pulses_per_m);
+  wheel_pulses_ = static_cast<std::uint64_t>(wheel_distance_m_ * true_pulses_per_m);
 
   const double tau = params_.pressure_sensor.time_constant_s;
   sensor_pressure_mpa_ +=
@@ -261,7 +411,11 @@ const NozzleTruth& HydraulicPlant::nozzle_truth(int i) const {
 }
 
 double HydraulicPlant::nozzle_full_open_flow_l_per_min(int i, double pressure_mpa) const {
-  return orifice_flow_l_per_s(nozzle_truth(i).k_l_per_min_sqrt_mpa, pressure_mpa) * 60.0;
+  const NozzleTruth& t = nozzle_truth(i);
+  const double kn = t.k_l_per_min_sqrt_mpa;
+  const double kv = t.valve_k_l_per_min_sqrt_mpa;
+  const double k = kv > 0.0 ? kn * kv / std::sqrt(kn * kn + kv * kv) : kn;
+  return orifice_flow_l_per_s(k, pressure_mpa) * 60.0;
 }
 
 double HydraulicPlant::sensor_current_ma() const {
@@ -279,7 +433,8 @@ double HydraulicPlant::pressure_sensor_volts() const {
 }
 
 double HydraulicPlant::true_meter_pulses_per_l() const {
-  return params_.flow_meter.nominal_pulses_per_l * (1.0 + params_.flow_meter.k_factor_error);
+  return params_.flow_meter.nominal_pulses_per_l * (1.0 + params_.flow_meter.k_factor_error) *
+         (1.0 + meter_drift_);
 }
 
 void HydraulicPlant::set_nozzle_blockage(int i, double fraction) {
@@ -300,6 +455,28 @@ void HydraulicPlant::set_sensor_shorted(bool shorted) {
 
 void HydraulicPlant::set_tank_level_l(double litres) {
   tank_level_l_ = std::clamp(litres, 0.0, params_.tank.capacity_l);
+}
+
+void HydraulicPlant::set_nozzle_wear(int i, double fraction) {
+  (void)nozzle_truth(i);
+  valves_[static_cast<std::size_t>(i)].wear = std::clamp(fraction, -0.5, 1.0);
+}
+
+void HydraulicPlant::set_valve_ageing(int i, double factor) {
+  (void)nozzle_truth(i);
+  valves_[static_cast<std::size_t>(i)].ageing = std::clamp(factor, 0.5, 5.0);
+}
+
+void HydraulicPlant::set_meter_drift(double fraction) {
+  meter_drift_ = std::clamp(fraction, -0.2, 0.2);
+}
+
+void HydraulicPlant::set_supply_volts(double volts) {
+  supply_volts_ = std::max(0.0, volts);
+}
+
+void HydraulicPlant::set_wheel_slip(double slip) {
+  wheel_slip_ = std::clamp(slip, -0.49, 0.49);
 }
 
 }  // namespace weedspray::control::plant

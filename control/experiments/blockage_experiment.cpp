@@ -1,0 +1,95 @@
+// A nozzle blocked while spraying, found from the line flow meter (issue 12).
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "control/experiments/experiments.hpp"
+
+namespace weedspray::control::experiments {
+namespace {
+
+BlockageMachine blockage_once(const Machine& machine, std::uint64_t fleet_seed, int index,
+                              const BlockageOptions& options) {
+  CalibrationOptions cal_options;
+  cal_options.seed = machine.seed;
+  cal_options.pressure_mpa = options.pressure_mpa;
+  cal_options.frequency_hz = options.frequency_hz;
+  cal_options.plant = machine.params;
+  const CalibrationResult& cal = cached_calibration(cal_options);
+
+  RigConfig config;
+  config.seed = machine.seed;
+  config.plant = machine.params;
+  config.setpoint_mpa = options.pressure_mpa;
+  config.pwm_frequency_hz = options.frequency_hz;
+  config.record_period_s = 0.0;
+  config.fixes = {true, true, true};
+  config.meter_pulses_per_l = cal.meter.pulses_per_litre;
+  config.nozzle_health = options.health;
+  ClosedLoopRig rig(config);
+  std::vector<NozzleLine> lines;
+  for (const auto& n : cal.nozzles) lines.push_back(n.fitted);
+  rig.set_nozzle_lines(lines);
+  const std::vector<double> full = calibrated_full_flows(cal);
+  rig.set_full_open_flows(full);
+
+  std::seed_seq seq{static_cast<std::uint32_t>(fleet_seed), static_cast<std::uint32_t>(index), 3U};
+  std::mt19937_64 rng(seq);
+  std::uniform_real_distribution<double> share(0.3, 0.9);
+  auto redraw = [&] {
+    std::vector<double> flows(full.size());
+    for (std::size_t i = 0; i < full.size(); ++i) flows[i] = share(rng) * full[i];
+    rig.request_flows(flows);
+  };
+  BlockageMachine out;
+  out.blocked_nozzle = std::uniform_int_distribution<int>(0, rig.plant().nozzle_count() - 1)(rng);
+  redraw();
+  rig.start();
+  const NozzleHealth& health = *rig.nozzle_health();
+  const double healthy_end = options.health.baseline_s + options.healthy_s;
+  while (rig.time_s() < healthy_end - 1e-9) {
+    rig.run_for(options.redraw_s);
+    redraw();
+  }
+  out.false_alarm = health.alarmed_nozzle() >= 0;
+  if (out.false_alarm) return out;
+  rig.plant().set_nozzle_blockage(out.blocked_nozzle, options.blockage);
+  const double blocked_at = rig.time_s();
+  const double step = 0.05;
+  double next_redraw = blocked_at + options.redraw_s;
+  while (rig.time_s() < blocked_at + 3.0 * options.detect_limit_s) {
+    rig.run_for(step);
+    if (health.alarmed_nozzle() >= 0) {
+      out.named_nozzle = health.alarmed_nozzle();
+      out.detect_s = rig.time_s() - blocked_at;
+      break;
+    }
+    if (rig.time_s() >= next_redraw - 1e-9) {
+      redraw();
+      next_redraw += options.redraw_s;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet, const BlockageOptions& options) {
+  BlockageFleetResult r;
+  const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
+  std::vector<double> detect;
+  for (std::size_t i = 0; i < machines.size(); ++i) {
+    const BlockageMachine m = blockage_once(machines[i], fleet.seed, static_cast<int>(i), options);
+    r.false_alarms += m.false_alarm ? 1 : 0;
+    const bool right = m.named_nozzle == m.blocked_nozzle && m.detect_s >= 0.0;
+    if (right) detect.push_back(m.detect_s);
+    if (right && m.detect_s <= options.detect_limit_s) ++r.named_within_limit;
+    r.machines.push_back(m);
+  }
+  r.detect_s = spread_of(detect);
+  r.healthy_minutes = static_cast<double>(machines.size()) * options.healthy_s / 60.0;
+  return r;
+}
+
+}  // namespace weedspray::control::experiments
