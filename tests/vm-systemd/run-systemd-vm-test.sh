@@ -17,8 +17,9 @@
 # WEEDSPRAY_VM_KEEP_WORK=1 keeps the work dir (rootfs image, initramfs).
 # After guest-test.sh the guest runs hil-scenario.sh (hardware in the loop against
 # tools/hil/weedspray-hil); its WEEDSPRAY-HIL figures must meet the targets below.
-# --selftest-no-failsafe: the harness's self-test. The package is built (in its own tree) with
-# WEEDSPRAY_SELFTEST_NO_FAILSAFE and the guest removes ExecStopPost=; the run succeeds only if
+# --selftest-no-failsafe: the harness's self-test. The package tree is switched to
+# WEEDSPRAY_SELFTEST_NO_FAILSAFE=ON (a later normal run switches it back) and the guest removes
+# ExecStopPost=; the run succeeds only if
 # every fail-safe step of the scenario then FAILS (kill9, abort, segv, watchdog).
 set -Eeuo pipefail
 
@@ -27,7 +28,7 @@ source_dir=""
 build_root="${WEEDSPRAY_BUILD_DIR:-$PWD}"
 cache_dir="${WEEDSPRAY_VM_CACHE:-$build_root/vm-cache}"
 log_file=""
-boot_timeout_s=480
+boot_timeout_s=900 # the HIL scenario restarts the daemon five times
 selftest=""
 
 die() {
@@ -52,11 +53,9 @@ done
 [ -f "$source_dir/CMakeLists.txt" ] || die "'$source_dir' is not the weedspray checkout"
 source_dir="$(cd "$source_dir" && pwd)"
 pkg_build="${WEEDSPRAY_VM_SYSTEMD_PKG_BUILD:-$build_root/vm-systemd/pkg-build}"
-pkg_options=()
-if [ -n "$selftest" ]; then
-  pkg_build="$pkg_build-no-failsafe"
-  pkg_options=(-DWEEDSPRAY_SELFTEST_NO_FAILSAFE=ON)
-fi
+# The self-test's build differs in one definition on weedsprayd: the same tree, switched.
+no_failsafe=OFF
+[ -z "$selftest" ] || no_failsafe=ON
 [ "$(id -u)" -eq 0 ] || die "needs root: debootstrap and dpkg -i in the guest's rootfs"
 mkdir -p "$cache_dir" || die "cannot create the cache directory '$cache_dir'"
 cache_dir="$(cd "$cache_dir" && pwd)"
@@ -91,11 +90,14 @@ build_package() { # -> $deb
   if [ ! -f "$pkg_build/CMakeCache.txt" ]; then
     note "configuring $pkg_build (Release, CMAKE_INSTALL_PREFIX=/usr, BUILD_TESTING=OFF)"
     cmake -S "$source_dir" -B "$pkg_build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
-      -DCMAKE_INSTALL_PREFIX=/usr -DBUILD_TESTING=OFF "${pkg_options[@]}" \
-      >"$pkg_build.configure.log" 2>&1 || {
+      -DCMAKE_INSTALL_PREFIX=/usr -DBUILD_TESTING=OFF >"$pkg_build.configure.log" 2>&1 || {
       cat "$pkg_build.configure.log" >&2
       die "configuring the package tree failed"
     }
+  fi
+  if ! grep -qx "WEEDSPRAY_SELFTEST_NO_FAILSAFE:BOOL=$no_failsafe" "$pkg_build/CMakeCache.txt"; then
+    cmake -DWEEDSPRAY_SELFTEST_NO_FAILSAFE="$no_failsafe" "$pkg_build" >>"$pkg_build.configure.log" 2>&1 ||
+      die "cannot set WEEDSPRAY_SELFTEST_NO_FAILSAFE=$no_failsafe in $pkg_build"
   fi
   cmake --build "$pkg_build" -j"$(nproc)" >"$pkg_build.build.log" 2>&1 || {
     tail -n 50 "$pkg_build.build.log" >&2

@@ -56,6 +56,7 @@ struct Options {
   double tank_capacity_l = 200;
   double tank_level_l = 150;
   double wheel_pulses_per_m = 100;
+  double flow_pulses_per_l = 8500;
   double adc_volts_per_count = 0.001;
   double dac_volts_per_count = 0.001;
   double tank_pct_per_count = 0.1;
@@ -107,7 +108,9 @@ void write_status(const Options& o, const control::plant::HydraulicPlant& plant,
     << "\nnozzle_flow_l_per_min=" << plant.total_nozzle_flow_l_per_min()
     << "\ntank_pct=" << plant.tank_level_l() / o.tank_capacity_l * 100
     << "\ndistance_m=" << plant.distance_m() << "\nflow_sent=" << m.flow_sent
-    << "\nwheel_sent=" << m.wheel_sent;
+    << "\nwheel_sent=" << m.wheel_sent
+    << "\nflow_backlog=" << plant.flow_meter_pulses() - m.flow_sent
+    << "\nwheel_backlog=" << plant.wheel_pulses() - m.wheel_sent;
   for (std::size_t i = 0; i < m.valve_open_s.size(); ++i)
     s << "\nvalve" << i << "_open_s=" << m.valve_open_s[i];
   {
@@ -133,9 +136,11 @@ void print_truth(const control::plant::HydraulicPlant& plant, const Measured& m)
                 plant.nozzle_delivered_l(i), m.valve_open_s[static_cast<std::size_t>(i)]);
   std::printf("WEEDSPRAY-HIL-TRUTH distance_m=%.3f\n", plant.distance_m());
   std::printf("WEEDSPRAY-HIL-TRUTH tank_l=%.3f\n", plant.tank_level_l());
-  std::printf("WEEDSPRAY-HIL-TRUTH flow_pulses=%llu wheel_pulses=%llu\n",
+  std::printf("WEEDSPRAY-HIL-TRUTH flow_pulses=%llu of %llu wheel_pulses=%llu of %llu\n",
               static_cast<unsigned long long>(m.flow_sent),
-              static_cast<unsigned long long>(m.wheel_sent));
+              static_cast<unsigned long long>(plant.flow_meter_pulses()),
+              static_cast<unsigned long long>(m.wheel_sent),
+              static_cast<unsigned long long>(plant.wheel_pulses()));
   std::printf("WEEDSPRAY-HIL-TRUTH samples=%llu sample_hz=%.0f max_gap_ms=%.2f\n",
               static_cast<unsigned long long>(m.samples),
               m.sampled_s > 0 ? static_cast<double>(m.samples) / m.sampled_s : 0.0,
@@ -170,6 +175,7 @@ int run(const Options& o) {
   control::plant::PlantParams params;
   params.nozzle_count = static_cast<int>(o.valve_lines.size());
   params.wheel.nominal_pulses_per_m = o.wheel_pulses_per_m;
+  params.flow_meter.nominal_pulses_per_l = o.flow_pulses_per_l;
   params.tank.capacity_l = o.tank_capacity_l;
   params.tank.initial_level_l = o.tank_level_l;
   control::plant::HydraulicPlant plant(params, o.seed);
@@ -240,11 +246,15 @@ int run(const Options& o) {
     }
     m.valve_mask = mask;
     m.pump = lines.pump && lines.pump->high();
-    m.buzzer = lines.buzzer && lines.buzzer->high();
-    m.lamp = lines.lamp && lines.lamp->high();
-    const bool heartbeat = lines.heartbeat && lines.heartbeat->high();
-    if (heartbeat != m.heartbeat) ++m.heartbeat_edges;
-    m.heartbeat = heartbeat;
+    // The signalling lines change slowly (the heartbeat at up to 250 Hz): every 4th sample, so
+    // the emulated CPU's time goes to the valves.
+    if (m.samples % 4 == 0) {
+      m.buzzer = lines.buzzer && lines.buzzer->high();
+      m.lamp = lines.lamp && lines.lamp->high();
+      const bool heartbeat = lines.heartbeat && lines.heartbeat->high();
+      if (heartbeat != m.heartbeat) ++m.heartbeat_edges;
+      m.heartbeat = heartbeat;
+    }
     ++m.samples;
     m.sampled_s += dt;
     m.max_gap_s = std::max(m.max_gap_s, dt);
@@ -265,10 +275,15 @@ int run(const Options& o) {
       board.tank_counts =
           counts(plant.tank_level_l() / o.tank_capacity_l * 100, o.tank_pct_per_count);
     }
-    // Its sensors pulse.
-    for (; lines.flow && m.flow_sent < plant.flow_meter_pulses(); ++m.flow_sent)
-      lines.flow->pulse();
-    for (; lines.wheel && m.wheel_sent < plant.wheel_pulses(); ++m.wheel_sent) lines.wheel->pulse();
+    // Its sensors pulse (at most one edge each per sample: half the sampling rate in pulses).
+    if (lines.flow) {
+      lines.flow->step(plant.flow_meter_pulses());
+      m.flow_sent = lines.flow->sent();
+    }
+    if (lines.wheel) {
+      lines.wheel->step(plant.wheel_pulses());
+      m.wheel_sent = lines.wheel->sent();
+    }
 
     if (t >= next_status) {
       next_status = t + 0.05;
@@ -304,6 +319,7 @@ int main(int argc, char** argv) {
   app.add_option("--tank-capacity-l", o.tank_capacity_l);
   app.add_option("--tank-level-l", o.tank_level_l);
   app.add_option("--wheel-pulses-per-m", o.wheel_pulses_per_m);
+  app.add_option("--flow-pulses-per-l", o.flow_pulses_per_l, "the flow meter's label value");
   app.add_option("--seed", o.seed);
   CLI11_PARSE(app, argc, argv);
   std::signal(SIGTERM, [](int) { weedspray::hil::g_quit = true; });

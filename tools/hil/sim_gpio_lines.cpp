@@ -48,9 +48,15 @@ void SimInputLine::write_pull(bool up) {
     throw std::runtime_error(std::string("gpio-sim pull write failed: ") + std::strerror(errno));
 }
 
-void SimInputLine::pulse() {
-  write_pull(true);
-  write_pull(false);
+void SimInputLine::step(std::uint64_t wanted) {
+  if (high_) {
+    write_pull(false);
+    high_ = false;
+  } else if (sent_ < wanted) {
+    write_pull(true);
+    high_ = true;
+    ++sent_;
+  }
 }
 
 }  // namespace weedspray::hil

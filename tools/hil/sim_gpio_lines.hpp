@@ -4,6 +4,7 @@
 // pulse is one pread/pwrite.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 namespace weedspray::hil {
@@ -20,17 +21,25 @@ class SimOutputLine {  // a line the daemon drives: read its level
   int fd_ = -1;
 };
 
-class SimInputLine {  // a line the daemon reads: make pulses with the pull
+// A line the daemon reads: pulses made with the pull, one edge per call of step(), so the two
+// edges of a pulse are a sampling period apart (a sensor's square wave; back-to-back edges
+// would be merged by the kernel's threaded edge-event handler, which is not what a wheel does).
+class SimInputLine {
  public:
   SimInputLine(const std::string& chip_dir, int offset);
   ~SimInputLine();
   SimInputLine(const SimInputLine&) = delete;
   SimInputLine& operator=(const SimInputLine&) = delete;
-  void pulse();  // pull-up then pull-down: one rising and one falling edge
+  // Makes the next edge toward `wanted` pulses: a rising edge when low and behind (the pulse
+  // counts as sent), a falling edge when high.
+  void step(std::uint64_t wanted);
+  std::uint64_t sent() const { return sent_; }
 
  private:
   void write_pull(bool up);
   int fd_ = -1;
+  bool high_ = false;
+  std::uint64_t sent_ = 0;
 };
 
 }  // namespace weedspray::hil
