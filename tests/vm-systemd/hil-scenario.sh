@@ -123,12 +123,12 @@ counter = "interrupt-cnt"
 # emulated CPU samples at well under 2 kHz when busy.
 pulses_per_litre = 2000
 
-# The emulated CPU answers a Modbus transaction in 10-50 ms: a 50 Hz loop keeps most pressure
-# samples inside their freshness limit (3 periods). Not slower: the valve thread's cross-watch
-# takes a pressure loop that has not advanced for 50 ms (fixed, daemon/sprayer.hpp) as stalled
-# and switches the pump off - at 20 Hz it did so every few hundred ms.
+# The emulated CPU answers a Modbus transaction in 10-50 ms: a 20 Hz loop keeps the pressure
+# samples inside their freshness limit (3 periods; at 50 Hz they went stale and raised
+# pressure_sensor_fault). The valve thread's cross-watch waits 3 periods too (daemon/sprayer.cpp;
+# a fixed 50 ms took the 20 Hz loop for stalled and stopped the pump every few hundred ms).
 [pressure]
-loop_hz = 50
+loop_hz = 20
 
 # The plant's wheel: 20 magnets a metre, so the wheel's edges are 40 ms apart at 0.6 m/s (the
 # kernel's threaded edge handler merges edges closer than it gets the emulated CPU).
