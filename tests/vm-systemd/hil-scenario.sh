@@ -268,7 +268,7 @@ info "spraying: Speed $(bus_value Speed) m/s, ZoneDensity $(bus_value ZoneDensit
 traced_error="$(awk -v m="$traced" -v d="$duty_after" 'BEGIN { split(m, mm, " "); n = split(d, dd, " "); e = 0;
   for (i = 2; i <= n; i++) { x = mm[i - 1] - dd[i]; if (x < 0) x = -x; if (x > e) e = x }; printf "%.2f", e }')"
 figure duty_error_traced_pct_max "$traced_error"
-step duty_matches "$ok" "traced edges: ${traced}% (max error $traced_error); sampled on the lines (${measured}%) vs NozzleDuty ($duty_after) over $(awk -v a="$t1" -v b="$t2" 'BEGIN { printf "%.1f", b - a }') s: max error $duty_error points; sampled at $(hil sample_hz) Hz, longest gap $(hil max_gap_ms) ms"
+step duty_matches "$ok" "traced edges: ${traced}% (max error $traced_error); sampled on the lines (${measured}%) vs NozzleDuty ($duty_before at the start, $duty_after at the end) over $(awk -v a="$t1" -v b="$t2" 'BEGIN { printf "%.1f", b - a }') s: max error $duty_error points; sampled at $(hil sample_hz) Hz, longest gap $(hil max_gap_ms) ms"
 
 # --- pulses: sent by the plant vs counted ---------------------------------------------------------
 # The wheel stops (so do the valves and the flow): then both counts are final.
