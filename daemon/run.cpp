@@ -29,6 +29,7 @@
 #include "daemon/sprayer.hpp"
 #include "daemon/state_machine.hpp"
 #include "daemon/status.hpp"
+#include "daemon/test_crash_hook.hpp"
 #include "daemon/totals.hpp"
 #include "io/emergency_outputs.hpp"
 #include "io/linux/cpu_latency_qos.hpp"
@@ -321,6 +322,7 @@ class Daemon final : public CommandHandler {
   }
 
   void tick() {
+    run_requested_test_fault();
     const Nanos now = backends_.clock->now();
     const double t = seconds(now - start_time_);
     if (backends_.drive_world) backends_.drive_world(t);
@@ -833,7 +835,9 @@ int write_safe_outputs(const Options& options) {
 int run_daemon(const Options& options) {
   // Before any thread or output exists: a fatal signal or std::terminate from here on writes
   // the registered outputs safe (io/emergency_outputs.hpp).
+#ifndef WEEDSPRAY_SELFTEST_NO_FAILSAFE  // only the HIL harness's self-test builds without it
   io::install_fatal_exit_handlers();
+#endif
   Config config;
   try {
     config = load_with_overrides(options);
@@ -842,6 +846,8 @@ int run_daemon(const Options& options) {
     return 1;
   }
   setup_logging(config.daemon.log_level);
+  if (install_test_crash_hook())
+    spdlog::warn("test crash hook enabled (WEEDSPRAY_TEST_CRASH_HOOK)");
   if (options.sim && !options.config_given && !std::filesystem::exists(options.config_path)) {
     spdlog::info("simulating on the built-in defaults ({} not found; --config FILE to use one)",
                  options.config_path);

@@ -96,6 +96,9 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
           controller_config(config))),
       schedule_(std::make_unique<control::PwmSchedule>(pwm_config(config))),
       flow_trim_(control::FlowTrimConfig{}) {
+  // pressure.loop_hz goes down to 10 Hz: the watch waits three of the loop's periods, never less
+  // than 50 ms (at 20 Hz a fixed 50 ms took the running loop for stalled and stopped the pump).
+  pressure_watch_ = io::LoopWatch(std::max(kCrossWatchTimeout, 3 * pressure_period()));
   io::ValvePwmDriverConfig driver;
   driver.command_expiry = from_seconds(config.pwm.dead_man_s);
   // The driver notices a new command only when it wakes: at most 2 ms late (5 mm at 2.5 m/s).

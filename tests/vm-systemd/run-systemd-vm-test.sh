@@ -4,6 +4,7 @@
 # drivers: gpio-sim, interrupt-cnt, vivid and the IIO dummy (ADC + DAC). See README.md.
 #
 #   run-systemd-vm-test.sh --source DIR [--cache DIR] [--log FILE] [--timeout SECONDS]
+#                          [--hil] [--selftest-no-failsafe]
 #
 # --source: the weedspray checkout. The package is built the way the README says a user
 # builds it: a Release tree configured with -DCMAKE_INSTALL_PREFIX=/usr (tests off), then
@@ -14,6 +15,14 @@
 # Needs root (debootstrap, chroot dpkg -i). Exits 0 only when the guest reports every check
 # passed; a missing prerequisite, download, build or boot problem is an error, never a skip.
 # WEEDSPRAY_VM_KEEP_WORK=1 keeps the work dir (rootfs image, initramfs).
+# --hil: after guest-test.sh the guest runs hil-scenario.sh (hardware in the loop against
+# tools/hil/weedspray-hil); its WEEDSPRAY-HIL figures must meet the targets below. Not in
+# ./dev test (ctest's vm_systemd_guest runs without it): three of its targets are not met on
+# the emulated CPU yet and it adds 5-7 minutes; see README.md "Hardware in the loop".
+# --selftest-no-failsafe: the harness's self-test. The package tree is switched to
+# WEEDSPRAY_SELFTEST_NO_FAILSAFE=ON (a later normal run switches it back) and the guest removes
+# ExecStopPost=; the run succeeds only if
+# every fail-safe step of the scenario then FAILS (kill9, abort, segv, watchdog).
 set -Eeuo pipefail
 
 script_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -21,7 +30,9 @@ source_dir=""
 build_root="${WEEDSPRAY_BUILD_DIR:-$PWD}"
 cache_dir="${WEEDSPRAY_VM_CACHE:-$build_root/vm-cache}"
 log_file=""
-boot_timeout_s=480
+boot_timeout_s=""
+selftest=""
+hil=""
 
 die() {
   echo "run-systemd-vm-test: error: $*" >&2
@@ -36,14 +47,21 @@ while (($#)); do
     --cache) cache_dir="${2:?--cache needs a directory}"; shift 2 ;;
     --log) log_file="${2:?--log needs a file}"; shift 2 ;;
     --timeout) boot_timeout_s="${2:?--timeout needs seconds}"; shift 2 ;;
-    -h | --help) sed -n '2,17p' "$0"; exit 0 ;;
+    --hil) hil=1; shift ;;
+    --selftest-no-failsafe) selftest=1; hil=1; shift ;;
+    -h | --help) sed -n '2,23p' "$0"; exit 0 ;;
     *) die "unknown argument '$1' (see --help)" ;;
   esac
 done
 [ -n "$source_dir" ] || die "--source is required (see --help)"
+# The HIL scenario restarts the daemon five times under emulation.
+[ -n "$boot_timeout_s" ] || boot_timeout_s=$([ -n "$hil" ] && echo 900 || echo 480)
 [ -f "$source_dir/CMakeLists.txt" ] || die "'$source_dir' is not the weedspray checkout"
 source_dir="$(cd "$source_dir" && pwd)"
 pkg_build="${WEEDSPRAY_VM_SYSTEMD_PKG_BUILD:-$build_root/vm-systemd/pkg-build}"
+# The self-test's build differs in one definition on weedsprayd: the same tree, switched.
+no_failsafe=OFF
+[ -z "$selftest" ] || no_failsafe=ON
 [ "$(id -u)" -eq 0 ] || die "needs root: debootstrap and dpkg -i in the guest's rootfs"
 mkdir -p "$cache_dir" || die "cannot create the cache directory '$cache_dir'"
 cache_dir="$(cd "$cache_dir" && pwd)"
@@ -82,6 +100,10 @@ build_package() { # -> $deb
       cat "$pkg_build.configure.log" >&2
       die "configuring the package tree failed"
     }
+  fi
+  if ! grep -qx "WEEDSPRAY_SELFTEST_NO_FAILSAFE:BOOL=$no_failsafe" "$pkg_build/CMakeCache.txt"; then
+    cmake -DWEEDSPRAY_SELFTEST_NO_FAILSAFE="$no_failsafe" "$pkg_build" >>"$pkg_build.configure.log" 2>&1 ||
+      die "cannot set WEEDSPRAY_SELFTEST_NO_FAILSAFE=$no_failsafe in $pkg_build"
   fi
   cmake --build "$pkg_build" -j"$(nproc)" >"$pkg_build.build.log" 2>&1 || {
     tail -n 50 "$pkg_build.build.log" >&2
@@ -157,6 +179,10 @@ build_disk() { # -> $work_dir/rootfs.ext4
   # The test: a oneshot unit after multi-user.target that powers the guest off in any case.
   install -D -m 755 "$script_dir/guest-test.sh" "$root/usr/local/lib/weedspray-vm-test/guest-test.sh"
   install -m 644 "$script_dir/../vm/gpio-sim-chip.sh" "$root/usr/local/lib/weedspray-vm-test/"
+  install -m 755 "$script_dir/hil-scenario.sh" "$root/usr/local/lib/weedspray-vm-test/"
+  # The simulated machine: built in the package tree, never part of the package.
+  [ -x "$pkg_build/tools/hil/weedspray-hil" ] || die "no weedspray-hil in $pkg_build/tools/hil"
+  install -m 755 "$pkg_build/tools/hil/weedspray-hil" "$root/usr/local/bin/weedspray-hil"
   unit_dir="$root/etc/systemd/system"
   install -D -m 644 "$script_dir/weedspray-vm-test.service" "$unit_dir/weedspray-vm-test.service"
   mkdir -p "$unit_dir/multi-user.target.wants"
@@ -194,7 +220,7 @@ run_guest() { # returns QEMU's status
     -m 1536 -nographic -no-reboot -nodefaults -serial stdio \
     -kernel "$vmlinux" -initrd "$work_dir/stage1.cpio" \
     -drive "file=$work_dir/rootfs.ext4,format=raw,if=virtio" -snapshot \
-    -append "console=ttyS0 quiet loglevel=3 panic=-1 oops=panic systemd.show_status=0 systemd.firstboot=off" \
+    -append "console=ttyS0 quiet loglevel=3 panic=-1 oops=panic systemd.show_status=0 systemd.firstboot=off${hil:+ weedspray.hil=1}${selftest:+ weedspray.hil_selftest=1}" \
     </dev/null >"$guest_log" 2>&1 || status=$?
   return "$status"
 }
@@ -219,9 +245,55 @@ note "guest ran for $((SECONDS - boot_started)) s (QEMU status $qemu_status); wh
 sed -i 's/\r$//' "$guest_log" # the serial console ends lines with CR LF
 
 grep -a '^WEEDSPRAY-SD-\(CHECK\|INFO\)' "$guest_log" | sed 's/^WEEDSPRAY-SD-/run-systemd-vm-test: /' >&2 || true
-if grep -qaxE 'WEEDSPRAY-SD-RESULT PASS checks=[0-9]+ failed=0' "$guest_log" &&
-  ! grep -qa '^WEEDSPRAY-SD-CHECK .* FAIL' "$guest_log"; then
+grep -a '^WEEDSPRAY-HIL' "$guest_log" >&2 || true
+
+# The HIL figures against the issue's targets (the guest's steps check them too; this is the
+# host's own verdict on the printed numbers).
+hil_figure() { grep -a "^WEEDSPRAY-HIL $1=" "$guest_log" | tail -n1 | cut -d= -f2; }
+hil_targets_met() {
+  awk -v p="$(hil_figure pressure_mpa)" -v s="$(hil_figure setpoint_mpa)" \
+    -v d="$(hil_figure duty_error_pct_max)" -v fs="$(hil_figure flow_pulses_sent)" \
+    -v fc="$(hil_figure flow_pulses_counted)" -v k9="$(hil_figure kill9_unsafe_ms)" \
+    -v ab="$(hil_figure abort_unsafe_ms)" -v sg="$(hil_figure segv_unsafe_ms)" \
+    -v wd="$(hil_figure watchdog_unsafe_ms)" -v rs="$(hil_figure restart_s)" \
+    -v failed="$(hil_figure steps_failed)" -v passed="$(hil_figure steps_passed)" '
+    function bad(why) { print "run-systemd-vm-test: HIL target missed: " why > "/dev/stderr"; n++ }
+    function abs(x) { return x < 0 ? -x : x }
+    function unsafe(name, v, limit) { if (v == "" || v < 0 || v > limit) bad(name " = " v " ms (limit " limit ")") }
+    BEGIN {
+      if (p == "" || s == "" || abs(p - s) > 0.02) bad("pressure " p " MPa vs set-point " s)
+      if (d == "" || d > 2) bad("duty error " d " points (limit 2)")
+      if (fs == "" || fs <= 0 || abs(fs - fc) > 0.005 * fs) bad("flow pulses sent " fs " counted " fc)
+      unsafe("kill9_unsafe_ms", k9, 100); unsafe("abort_unsafe_ms", ab, 10)
+      unsafe("segv_unsafe_ms", sg, 10); unsafe("watchdog_unsafe_ms", wd, 100)
+      if (rs == "") bad("no restart_s")
+      if (failed != "0" || passed == "" || passed < 1) bad("steps_failed = " failed)
+      exit n > 0
+    }'
+}
+guest_passed() {
+  grep -qaxE 'WEEDSPRAY-SD-RESULT PASS checks=[0-9]+ failed=0' "$guest_log" &&
+    ! grep -qa '^WEEDSPRAY-SD-CHECK .* FAIL' "$guest_log" &&
+    { [ -z "$hil" ] ||
+      { grep -qaxE 'WEEDSPRAY-HIL-RESULT PASS steps=[0-9]+ failed=0' "$guest_log" && hil_targets_met; }; }
+}
+selftest_passed() { # every fail-safe step failed, and the scenario got that far
+  local step ok=0
+  for step in kill9_safe abort_safe segv_safe watchdog_safe; do
+    if grep -qa "^WEEDSPRAY-HIL-STEP $step FAIL" "$guest_log"; then
+      note "self-test: $step failed, as it must without the fail-safe paths"
+    else
+      note "self-test: $step did NOT fail without the fail-safe paths"
+      ok=1
+    fi
+  done
+  return "$ok"
+}
+if [ -n "$selftest" ]; then
+  selftest_passed && { note "self-test PASS: the scenario catches a daemon without its fail-safe paths"; exit 0; }
+elif guest_passed; then
   note "$(grep -a '^WEEDSPRAY-SD-RESULT' "$guest_log")"
+  [ -z "$hil" ] || note "$(grep -a '^WEEDSPRAY-HIL-RESULT' "$guest_log")"
   exit 0
 fi
 echo "===== guest console =====" >&2
@@ -229,5 +301,8 @@ cat -v "$guest_log" >&2
 echo "===== end of guest console =====" >&2
 grep -qa '^WEEDSPRAY-SD-RESULT' "$guest_log" ||
   note "FAIL: the guest test did not finish (QEMU status $qemu_status, 124 = timeout after $boot_timeout_s s)"
+[ -z "$hil" ] || grep -qa '^WEEDSPRAY-HIL-RESULT' "$guest_log" ||
+  note "FAIL: the HIL scenario did not finish"
 grep -a '^WEEDSPRAY-SD-CHECK .* FAIL' "$guest_log" | sed 's/^WEEDSPRAY-SD-CHECK /run-systemd-vm-test: FAIL /' >&2 || true
+grep -a '^WEEDSPRAY-HIL-STEP .* FAIL' "$guest_log" | sed 's/^WEEDSPRAY-HIL-STEP /run-systemd-vm-test: FAIL /' >&2 || true
 exit 1

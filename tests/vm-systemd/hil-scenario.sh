@@ -1,0 +1,434 @@
+#!/bin/bash
+# Hardware in the loop (issue 11), run in the systemd guest after guest-test.sh (same unit, as
+# root). weedspray-hil plays the sprayer behind the wires (tools/hil): it samples the valve,
+# pump, buzzer, lamp and heartbeat lines of the gpio-sim chip guest-test.sh made, pulses the
+# flow meter (interrupt-cnt chip) and wheel lines, and serves the pressure ADC, return-valve DAC
+# and tank level as Modbus RTU slaves on ptys, all driven by the hydraulic plant model. The
+# installed weedsprayd.service runs against it with [adc]/[dac] source = "modbus".
+#
+# Safety figures come from the kernel's own record: tracefs events gpio_value (every value
+# written to a line, by anyone, with its time), signal_generate (the fatal signal: kill -9,
+# abort, SIGSEGV, the watchdog's SIGABRT) and sched_process_exit. A line keeps the value last
+# written to it, as a board's output latch does when a process lets go of it (gpio-sim itself
+# falls back to its pull on release, which would hide an unsafe exit): so "unsafe" is the time
+# from the fatal signal until every valve and the pump have been written 0, and a daemon whose
+# fail-safe paths do nothing stays unsafe until its restart writes them.
+#
+# Prints WEEDSPRAY-HIL-STEP name PASS|FAIL: detail, WEEDSPRAY-HIL key=value figures and, last,
+# WEEDSPRAY-HIL-RESULT PASS|FAIL steps=N failed=M on /dev/ttyS0.
+set -uo pipefail
+
+exec >/dev/ttyS0 2>&1
+export SYSTEMD_PAGER='' SYSTEMD_COLORS=0 LC_ALL=C.UTF-8
+# Only when the host asked for it (run-systemd-vm-test.sh --hil): it is not in ./dev test yet.
+if ! grep -qE 'weedspray\.hil(_selftest)?=1' /proc/cmdline; then
+  echo "WEEDSPRAY-HIL skipped (no weedspray.hil=1 on the kernel command line)"
+  exit 0
+fi
+
+steps_passed=0
+steps_failed=0
+step() { # NAME OK(0|1) DETAIL
+  if [ "$2" -eq 0 ]; then
+    echo "WEEDSPRAY-HIL-STEP $1 PASS: $3"
+    steps_passed=$((steps_passed + 1))
+  else
+    echo "WEEDSPRAY-HIL-STEP $1 FAIL: $3"
+    steps_failed=$((steps_failed + 1))
+  fi
+}
+figure() { echo "WEEDSPRAY-HIL $1=$2"; }
+info() { echo "WEEDSPRAY-HIL-INFO $*"; }
+finish() {
+  [ -n "${hil_pid:-}" ] && { echo quit >"$run_dir/control"; wait "$hil_pid"; }
+  figure steps_passed "$steps_passed"
+  figure steps_failed "$steps_failed"
+  local verdict=PASS
+  [ "$steps_failed" -eq 0 ] || verdict=FAIL
+  echo "WEEDSPRAY-HIL-RESULT $verdict steps=$((steps_passed + steps_failed)) failed=$steps_failed"
+  exit 0
+}
+setup_failed() {
+  step setup 1 "$*"
+  finish
+}
+now() { cut -d' ' -f1 /proc/uptime; } # CLOCK_BOOTTIME, fine for step durations
+elapsed() { awk -v a="$1" -v b="$(now)" 'BEGIN { printf "%.2f", b - a }'; }
+
+# --- the hardware guest-test.sh made -----------------------------------------------------------
+sim_dir=/sys/kernel/config/gpio-sim/weedspray
+count_dir=/sys/kernel/config/gpio-sim/weedspray-count
+[ -d "$sim_dir" ] && [ -d "$count_dir" ] || setup_failed "guest-test.sh made no gpio-sim chips"
+chip_dir="/sys/devices/platform/$(cat "$sim_dir/dev_name")/$(cat "$sim_dir/bank0/chip_name")"
+flow_chip_dir="/sys/devices/platform/$(cat "$count_dir/dev_name")/$(cat "$count_dir/bank0/chip_name")"
+# Offsets as guest-test.sh names them: valve0..3 pump buzzer lamp key flow wheel heartbeat.
+valve_lines=(0 1 2 3)
+pump_line=4
+counter_dir=""
+for dir in /sys/bus/counter/devices/counter*; do
+  [ "$(cat "$dir/name" 2>/dev/null)" = interrupt-cnt ] && counter_dir="$dir" && break
+done
+[ -n "$counter_dir" ] || setup_failed "no interrupt-cnt counter"
+gpio_base=""
+for dir in /sys/class/gpio/gpiochip*; do
+  [ "$(cat "$dir/label" 2>/dev/null)" = weedspray ] && gpio_base="$(cat "$dir/base")" && break
+done
+[ -n "$gpio_base" ] || setup_failed "no /sys/class/gpio entry labelled weedspray (GPIO base)"
+watched="$(for l in "${valve_lines[@]}" "$pump_line"; do printf '%d ' $((gpio_base + l)); done)"
+video_node="$(ls /dev/video* | head -n1)"
+# Every zone green (vivid's "100% Green" pattern): the daemon sees weeds everywhere and sprays.
+# Without the on-screen text (osd_text_mode 2), which made the zones' densities differ and move.
+v4l2-ctl -d "$video_node" -c test_pattern=8 -c osd_text_mode=2 || setup_failed "cannot set vivid's test pattern"
+
+tracing=/sys/kernel/tracing
+mountpoint -q "$tracing" || mount -t tracefs tracefs "$tracing" || setup_failed "no tracefs"
+[ -d "$tracing/events/gpio/gpio_value" ] || setup_failed "no gpio_value trace event"
+echo mono >"$tracing/trace_clock"
+echo 4096 >"$tracing/buffer_size_kb"
+echo 'get == 0' >"$tracing/events/gpio/gpio_value/filter" # writes only
+for event in gpio/gpio_value signal/signal_generate sched/sched_process_exit; do
+  echo 1 >"$tracing/events/$event/enable" || setup_failed "cannot enable trace event $event"
+done
+
+# --- the simulated machine -----------------------------------------------------------------------
+run_dir=/run/weedspray-hil
+hil_log=/run/weedspray-hil.log
+weedspray-hil --chip-dir "$chip_dir" --valve-lines "${valve_lines[@]}" --pump-line "$pump_line" \
+  --buzzer-line 5 --lamp-line 6 --heartbeat-line 10 --wheel-line 9 \
+  --flow-chip-dir "$flow_chip_dir" --flow-line 0 --run-dir "$run_dir" --rate-hz 2000 \
+  --tank-capacity-l 200 --tank-level-l 150 --wheel-pulses-per-m 20 --flow-pulses-per-l 2000 \
+  --seed 11 >"$hil_log" 2>&1 &
+hil_pid=$!
+for _ in $(seq 50); do [ -p "$run_dir/control" ] && [ -f "$run_dir/status" ] && break; sleep 0.1; done
+[ -f "$run_dir/status" ] || { cat "$hil_log"; setup_failed "weedspray-hil did not start"; }
+hil() { sed -n "s/^$1=//p" "$run_dir/status"; } # KEY: the plant's latest status value
+hil_command() { echo "$*" >"$run_dir/control"; }
+counter_count() { cat "$counter_dir/count0/count"; }
+flow_count_before="$(counter_count)"
+
+# --- the daemon, wired to it by a conf.d drop-in -------------------------------------------------
+systemctl stop weedsprayd 2>/dev/null
+rm -f /etc/weedspray/conf.d/50-vm-test.toml
+cat >/etc/weedspray/conf.d/50-hil.toml <<EOF
+# Written by tests/vm-systemd/hil-scenario.sh: the machine is weedspray-hil.
+[gpio]
+chip = "weedspray"
+valve_names = ["valve0", "valve1", "valve2", "valve3"]
+pump_name = "pump"
+buzzer_name = "buzzer"
+led_name = "lamp"
+key_name = "key"
+key_active_low = false
+wheel_name = "wheel"
+heartbeat_name = "heartbeat"
+
+[flow]
+counter = "interrupt-cnt"
+# A coarser meter than the LWGY's 8500/L: weedspray-hil makes one edge per sample, and the
+# emulated CPU samples at well under 2 kHz when busy.
+pulses_per_litre = 2000
+
+# The emulated CPU answers a Modbus transaction in 10-50 ms: a 20 Hz loop keeps the pressure
+# samples inside their freshness limit (3 periods; at 50 Hz they went stale and raised
+# pressure_sensor_fault). The valve thread's cross-watch waits 3 periods too (daemon/sprayer.cpp;
+# a fixed 50 ms took the 20 Hz loop for stalled and stopped the pump every few hundred ms).
+[pressure]
+loop_hz = 20
+
+# The plant's wheel: 20 magnets a metre, so the wheel's edges are 40 ms apart at 0.6 m/s (the
+# kernel's threaded edge handler merges edges closer than it gets the emulated CPU).
+[wheel]
+pulses_per_metre = 20
+
+# A fixed threshold: no histogram fitting on the emulated CPU (the frames are one colour).
+[vision]
+threshold = "fixed"
+
+[adc]
+source = "modbus"
+
+[dac]
+source = "modbus"
+
+[analog_modbus]
+device = "$run_dir/analog"
+timeout_s = 0.1
+
+[modbus]
+enabled = true
+device = "$run_dir/tank"
+poll_period_s = 0.2
+EOF
+# 2 frames a second leave the emulated CPUs time for the loops (camera_stall_s is 1 s).
+sed -i -e '/^\[\[camera\]\]/,$ s/^fps = .*/fps = 2.0/' /etc/weedspray/weedspray.toml
+# Test-only: the ptys (char-pts) behind the Modbus ports, and the crash hook's variable.
+mkdir -p /etc/systemd/system/weedsprayd.service.d
+cat >/etc/systemd/system/weedsprayd.service.d/50-hil.conf <<EOF
+[Service]
+DeviceAllow=char-pts rw
+Environment=WEEDSPRAY_TEST_CRASH_HOOK=1
+EOF
+if grep -q 'weedspray.hil_selftest=1' /proc/cmdline; then
+  # Harness self-test: the package was built with WEEDSPRAY_SELFTEST_NO_FAILSAFE; take the
+  # unit's ExecStopPost away as well. Every safety step below must now fail.
+  printf '[Service]\nExecStopPost=\n' >/etc/systemd/system/weedsprayd.service.d/60-no-failsafe.conf
+  info "self-test: ExecStopPost removed, package built without fail-safe paths"
+fi
+systemctl daemon-reload
+
+bus_get() { busctl get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 org.weedspray.Sprayer1 "$1" 2>/dev/null; }
+bus_value() { bus_get "$1" | cut -d' ' -f2-; } # without the type letter
+bus_state() { bus_get State | sed 's/^s "\(.*\)"$/\1/'; }
+main_pid() { systemctl show -p MainPID --value weedsprayd; }
+wait_for() { # SECONDS COMMAND...: until COMMAND succeeds
+  local deadline=$(($(date +%s) + $1))
+  shift
+  until "$@"; do
+    [ "$(date +%s)" -lt "$deadline" ] || return 1
+    sleep 0.2
+  done
+}
+state_is() { [ "$(bus_state)" = "$1" ]; }
+active_with_new_pid() { [ "$(systemctl is-active weedsprayd)" = active ] && [ "$(main_pid)" != "$1" ] && [ "$(main_pid)" != 0 ]; }
+start_spraying() { # -> 0 when Spraying with the pump on
+  sprayctl start >/dev/null 2>&1
+  wait_for 30 state_is Spraying && sleep 2 && wait_for 10 sh -c "grep -qx pump=1 $run_dir/status"
+}
+
+out="$(weedsprayd --check-config 2>&1)"
+step config_valid "$?" "$(echo "$out" | tail -n1)"
+started="$(now)"
+timeout 90 systemctl start weedsprayd
+step unit_start "$?" "systemctl start weedsprayd in $(elapsed "$started") s ($(systemctl is-active weedsprayd))"
+
+# --- Idle with live readings --------------------------------------------------------------------
+wait_for 10 state_is Idle
+state="$(bus_state)"
+pressure="$(bus_value Pressure)"
+tank="$(bus_value TankLevel)"
+true_tank="$(hil tank_pct)"
+ok="$(awk -v s="$state" -v p="$pressure" -v t="$tank" -v tt="$true_tank" \
+  'BEGIN { print (s == "Idle" && p != "" && t != "" && (t - tt) ^ 2 < 1) ? 0 : 1 }')"
+step idle_live_readings "$ok" "State=$state Pressure=$pressure MPa TankLevel=$tank % (plant $true_tank %), DAC $(hil dac_volts) V after $(hil dac_writes) writes, Modbus requests analog $(hil analog_requests) tank $(hil tank_requests)"
+
+# --- spraying: pressure and duty -----------------------------------------------------------------
+hil_command speed 0.6
+sleep 1
+start_spraying
+step start_spraying "$?" "sprayctl start: State=$(bus_state), pump line $(hil pump), Alarms $(bus_value Alarms)"
+setpoint="$(bus_value PressureSetpoint)"
+sleep 10 # the pressure loop settles (about 2 s on the plant; the emulated CPU is slower)
+samples=()
+daemon_samples=()
+for _ in $(seq 10); do
+  samples+=("$(hil pressure_mpa)")
+  daemon_samples+=("$(bus_value Pressure)")
+  sleep 0.2
+done
+daemon_mean="$(printf '%s\n' "${daemon_samples[@]}" | awk '{ s += $1 } END { printf "%.4f", s / NR }')"
+pressure="$(printf '%s\n' "${samples[@]}" | awk '{ s += $1 } END { printf "%.4f", s / NR }')"
+spread="$(printf '%s\n' "${samples[@]}" | awk -v sp="$setpoint" '{ d = $1 - sp; if (d < 0) d = -d; if (d > m) m = d } END { printf "%.4f", m }')"
+figure pressure_mpa "$pressure"
+figure setpoint_mpa "$setpoint"
+ok="$(awk -v p="$pressure" -v s="$setpoint" 'BEGIN { d = p - s; if (d < 0) d = -d; print (s > 0 && d <= 0.02) ? 0 : 1 }')"
+step pressure_at_setpoint "$ok" "plant's line pressure mean of 10 reads over 2 s $pressure MPa, set-point $setpoint, worst read off by $spread; the daemon's Pressure, same reads: mean $daemon_mean"
+
+# Measured duty per line over a window vs the daemon's NozzleDuty (read at both ends: it must
+# not change in between, or the window is not one duty).
+# The same window from the kernel's record: each valve line's share of time written 1 (exact edge
+# times, no sampling), as a cross-check of the sampler.
+trace_duty() { # -> "d0 d1 d2 d3" in percent over the traced span
+  echo 0 >"$tracing/tracing_on"
+  awk -v base="$gpio_base" -v init="$(hil valve_mask)" '
+    BEGIN { for (i = 0; i < 4; i++) state[i] = int(init / 2 ^ i) % 2; first = -1 }
+    / gpio_value: / {
+      for (i = 1; i <= NF; i++) if ($i ~ /^[0-9]+\.[0-9]+:$/) ts = substr($i, 1, length($i) - 1) + 0
+      for (i = 1; i <= NF; i++) if ($i == "gpio_value:") { l = $(i + 1) - base; v = $(i + 3) }
+      if (l < 0 || l > 3) next
+      if (first < 0) { first = ts; for (k = 0; k < 4; k++) since[k] = ts }
+      if (state[l] == 1) open[l] += ts - since[l]
+      state[l] = v; since[l] = ts; last = ts
+    }
+    END {
+      for (k = 0; k < 4; k++) { if (state[k] == 1) open[k] += last - since[k]; printf "%.2f ", (last > first) ? open[k] / (last - first) * 100 : -1 }
+    }' "$tracing/trace"
+  echo 1 >"$tracing/tracing_on"
+}
+echo 0 >"$tracing/tracing_on"; echo >"$tracing/trace"; echo 1 >"$tracing/tracing_on"
+duty_before="$(bus_value NozzleDuty)"
+t1="$(hil sampled_s)"; open1=(); for i in 0 1 2 3; do open1+=("$(hil "valve${i}_open_s")"); done
+sleep 6
+t2="$(hil sampled_s)"; open2=(); for i in 0 1 2 3; do open2+=("$(hil "valve${i}_open_s")"); done
+duty_after="$(bus_value NozzleDuty)"
+traced="$(trace_duty)"
+measured="$(for i in 0 1 2 3; do awk -v a="${open1[$i]}" -v b="${open2[$i]}" -v t1="$t1" -v t2="$t2" 'BEGIN { printf "%.2f ", (b - a) / (t2 - t1) * 100 }'; done)"
+# NozzleDuty prints as: 4 d1 d2 d3 d4
+duty_error="$(awk -v m="$measured" -v d="$duty_after" 'BEGIN { split(m, mm, " "); n = split(d, dd, " "); e = 0;
+  for (i = 2; i <= n; i++) { x = mm[i - 1] - dd[i]; if (x < 0) x = -x; if (x > e) e = x }; printf "%.2f", e }')"
+figure duty_error_pct_max "$duty_error"
+figure sample_hz "$(hil sample_hz)"
+ok="$(awk -v e="$duty_error" -v b="$duty_before" -v a="$duty_after" -v hz="$(hil sample_hz)" \
+  'BEGIN { split(a, d, " "); print (a == b && d[2] > 0 && e <= 2 && hz >= 2000) ? 0 : 1 }')"
+info "spraying: Speed $(bus_value Speed) m/s, ZoneDensity $(bus_value ZoneDensity), FrameRate $(bus_value FrameRate), Flow $(bus_value Flow) L/min (plant $(hil nozzle_flow_l_per_min)), Alarms $(bus_value Alarms)"
+traced_error="$(awk -v m="$traced" -v d="$duty_after" 'BEGIN { split(m, mm, " "); n = split(d, dd, " "); e = 0;
+  for (i = 2; i <= n; i++) { x = mm[i - 1] - dd[i]; if (x < 0) x = -x; if (x > e) e = x }; printf "%.2f", e }')"
+figure duty_error_traced_pct_max "$traced_error"
+step duty_matches "$ok" "traced edges: ${traced}% (max error $traced_error); sampled on the lines (${measured}%) vs NozzleDuty ($duty_before at the start, $duty_after at the end) over $(awk -v a="$t1" -v b="$t2" 'BEGIN { printf "%.1f", b - a }') s: max error $duty_error points; sampled at $(hil sample_hz) Hz, longest gap $(hil max_gap_ms) ms"
+
+# --- pulses: sent by the plant vs counted ---------------------------------------------------------
+# The wheel stops (so do the valves and the flow): then both counts are final.
+hil_command speed 0
+sleep 2
+flow_sent="$(hil flow_sent)"
+flow_counted=$(($(counter_count) - flow_count_before))
+wheel_sent="$(hil wheel_sent)"
+distance="$(bus_value Distance)"
+wheel_counted="$(awk -v d="$distance" 'BEGIN { printf "%.0f", d * 20 }')"
+figure flow_pulses_sent "$flow_sent"
+figure flow_pulses_counted "$flow_counted"
+figure wheel_pulses_sent "$wheel_sent"
+figure wheel_pulses_counted "$wheel_counted"
+within() { awk -v s="$1" -v c="$2" 'BEGIN { d = s - c; if (d < 0) d = -d; print (s > 0 && d <= 0.005 * s) ? 0 : 1 }'; }
+step flow_pulses_counted "$(within "$flow_sent" "$flow_counted")" "flow meter: plant sent $flow_sent, interrupt-cnt (the daemon's counter) counted $flow_counted"
+step wheel_pulses_counted "$(within "$wheel_sent" "$wheel_counted")" "wheel: plant sent $wheel_sent, the daemon's Distance $distance m x 20 pulses/m = $wheel_counted"
+hil_command speed 0.6
+
+# --- tank low -------------------------------------------------------------------------------------
+hil_command tank_l 20 # 10 %, below alarms.tank_low_pct = 15
+wait_for 10 sh -c 'busctl get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 org.weedspray.Sprayer1 Alarms | grep -q tank_low'
+step tank_low_raised "$?" "plant tank at $(hil tank_pct) %: TankLevel $(bus_value TankLevel), Alarms $(bus_value Alarms)"
+hil_command tank_l 150
+
+# --- a user outside group weedspray ----------------------------------------------------------------
+useradd --system --no-create-home --user-group stranger 2>/dev/null || true
+sprayctl stop >/dev/null 2>&1
+wait_for 10 state_is Idle
+state_before="$(bus_state)"
+out="$(setpriv --reuid=stranger --regid=stranger --clear-groups sprayctl start 2>&1)"
+status=$?
+sleep 1
+state="$(bus_state)"
+step non_member_refused "$([ "$status" -ne 0 ] && [ "$state" = "$state_before" ] && [ "$state" != Spraying ]; echo $?)" \
+  "sprayctl start as stranger: status $status ($(echo "$out" | tail -n1 | cut -c1-100)); State $state_before -> $state"
+
+# --- a broken configuration on reload --------------------------------------------------------------
+pid_before="$(main_pid)"
+echo 'pressure = "not a table"' >/etc/weedspray/conf.d/90-broken.toml
+systemctl reload weedsprayd
+sleep 3
+active="$(systemctl is-active weedsprayd)"
+step broken_reload_keeps_old "$([ "$active" = active ] && [ "$(main_pid)" = "$pid_before" ] && [ "$(bus_value PressureSetpoint)" = "$setpoint" ]; echo $?)" \
+  "after systemctl reload with a broken conf.d file: $active, MainPID $pid_before -> $(main_pid), set-point $(bus_value PressureSetpoint); journal: $(journalctl -u weedsprayd -b -q -o cat | grep -i reload | tail -n1)"
+rm -f /etc/weedspray/conf.d/90-broken.toml
+
+# --- faults while spraying: the kernel's record ----------------------------------------------------
+# trace_window_begin; fault; trace_analyse SIGNAL PID -> "unsafe_ms exit_ms rewritten_open"
+#   unsafe_ms: fatal signal -> every watched line last written 0 (-1: never within the window)
+#   exit_ms:   fatal signal -> the main thread's exit (-1: not seen)
+#   reopened:  writes of 1 to a watched line after it was safe (until the trace was read)
+trace_window_begin() {
+  echo 0 >"$tracing/tracing_on"
+  echo >"$tracing/trace"
+  # What the lines hold when the window opens (the plant's last sample).
+  initial_mask="$(hil valve_mask) $(hil pump)"
+  echo 1 >"$tracing/tracing_on"
+}
+trace_analyse() { # SIGNAL PID
+  echo 0 >"$tracing/tracing_on"
+  awk -v sig="$1" -v pid="$2" -v watched="$watched" -v base="$gpio_base" -v init="$initial_mask" '
+    BEGIN {
+      n = split(watched, w, " "); for (i = 1; i <= n; i++) watch[w[i]] = 1
+      split(init, m, " ")
+      for (i = 0; i < 4; i++) latch[base + i] = int(m[1] / 2 ^ i) % 2
+      latch[base + 4] = m[2]
+      t0 = -1; safe = -1; gone = -1; reopened = 0
+    }
+    function open_lines(   g, c) { c = 0; for (g in watch) if (latch[g] == 1) c++; return c }
+    {
+      ts = ""; for (i = 1; i <= NF; i++) if ($i ~ /^[0-9]+\.[0-9]+:$/) { ts = substr($i, 1, length($i) - 1) + 0; break }
+      if (ts == "") next
+    }
+    / gpio_value: / {
+      for (i = 1; i <= NF; i++) if ($i == "gpio_value:") { g = $(i + 1); v = $(i + 3) }
+      if (!(g in watch)) next
+      latch[g] = v
+      if (t0 >= 0 && safe < 0 && open_lines() == 0) safe = ts
+      else if (safe >= 0 && v == 1) reopened++
+      next
+    }
+    / signal_generate: / && t0 < 0 {
+      if ($0 ~ ("sig=" sig " ") && $0 ~ (" pid=" pid " ")) { t0 = ts; if (open_lines() == 0) { safe = ts; wasclosed = 1 } }
+      next
+    }
+    / sched_process_exit: / && t0 >= 0 && gone < 0 { if ($0 ~ (" pid=" pid " ")) gone = ts }
+    END {
+      printf "%s %s %d %d\n", (t0 >= 0 && safe >= 0) ? sprintf("%.3f", (safe - t0) * 1000) : -1,
+        (t0 >= 0 && gone >= 0) ? sprintf("%.3f", (gone - t0) * 1000) : -1, reopened, wasclosed
+    }' "$tracing/trace"
+  echo 1 >"$tracing/tracing_on"
+}
+# How the lines look from user space too: all of the valves and the pump written 0 (latched).
+judge_fault() { # NAME SIGNAL PID LIMIT_MS FIGURE_KEY [exit]: prints the figure and the step
+  local result unsafe gone reopened wasclosed ok
+  result="$(trace_analyse "$2" "$3")"
+  read -r unsafe gone reopened wasclosed <<<"$result"
+  figure "$5" "$unsafe"
+  ok="$(awk -v u="$unsafe" -v g="$gone" -v r="$reopened" -v c="$wasclosed" -v lim="$4" -v needexit="${6:-}" \
+    'BEGIN { bad = (u < 0 || u > lim || r > 0 || c == 1); if (needexit != "" && (g < 0 || u > g)) bad = 1; print bad }')"
+  step "$1" "$ok" "signal $2 to PID $3: every valve and the pump written 0 after $unsafe ms (limit $4), main thread gone after $gone ms, lines written open afterwards $reopened, all closed already at the signal: ${wasclosed:-0}"
+}
+
+# kill -9: nothing runs in the daemon; ExecStopPost must write the lines safe.
+# (Each fault costs a restart, the slowest part on an emulated CPU: the orderly stop comes last.)
+start_spraying || info "kill -9: not spraying before the fault (State=$(bus_state))"
+pid="$(main_pid)"
+trace_window_begin
+started="$(now)"
+kill -9 "$pid"
+wait_for 120 active_with_new_pid "$pid"
+restart_s="$(elapsed "$started")"
+wait_for 15 state_is Idle
+sleep 1 # after the restart too: nothing written open while Idle
+judge_fault kill9_safe 9 "$pid" 100 kill9_unsafe_ms
+figure restart_s "$restart_s"
+step restart "$([ "$(systemctl is-active weedsprayd)" = active ]; echo $?)" "kill -9 -> active again (new MainPID $(main_pid)) in $restart_s s (RestartSec=2s + start-up), State=$(bus_state)"
+
+# Crashes inside the daemon: the fatal-signal handlers write the lines safe before it is gone.
+crash() { # NAME SIGNAL_TO_SEND EXPECTED_FATAL_SIGNAL LIMIT_MS FIGURE_KEY
+  start_spraying || info "$1: not spraying before the fault (State=$(bus_state))"
+  local pid
+  pid="$(main_pid)"
+  trace_window_begin
+  kill -s "$2" "$pid"
+  wait_for 120 active_with_new_pid "$pid"
+  wait_for 15 state_is Idle
+  sleep 1
+  judge_fault "$1" "$3" "$pid" "$4" "$5" exit
+}
+crash abort_safe RTMIN+1 6 10 abort_unsafe_ms
+crash segv_safe RTMIN+2 11 10 segv_unsafe_ms
+# A hung main loop: no WATCHDOG=1 for WatchdogSec (2 s), systemd sends SIGABRT.
+crash watchdog_safe RTMIN+3 6 100 watchdog_unsafe_ms
+info "journal of the faults: $(journalctl -u weedsprayd -b -q -o cat | grep -E 'watchdog|dumped core|Main process exited|outputs written safe|test crash hook' | sort | uniq -c | tr '\n' '|')"
+
+# systemctl stop while spraying.
+start_spraying || info "stop: not spraying before it (State=$(bus_state))"
+trace_window_begin
+pid="$(main_pid)"
+timeout 30 systemctl stop weedsprayd
+result="$(systemctl show -p Result --value weedsprayd)"
+read -r unsafe _ reopened wasclosed <<<"$(trace_analyse 15 "$pid")" # SIGTERM
+sleep 0.5
+dac="$(hil dac_volts)"
+step stop_safe "$(awk -v u="$unsafe" -v r="$result" -v d="$dac" -v o="$reopened" -v c="$wasclosed" 'BEGIN { print (r == "success" && u >= 0 && u <= 1000 && o == 0 && c == 0 && d >= 3.29) ? 0 : 1 }')" \
+  "systemctl stop while spraying (all closed already: $wasclosed): Result=$result, valves and pump written 0 $unsafe ms after SIGTERM, return-valve DAC $dac V (3.3 = fully open), pressure $(hil pressure_mpa) MPa"
+
+
+# --- the plant's own ground truth ---------------------------------------------------------------
+echo quit >"$run_dir/control"
+wait "$hil_pid"
+hil_pid=""
+grep -a '^WEEDSPRAY-HIL-TRUTH' "$hil_log"
+echo "    ---- journalctl -u weedsprayd (HIL part, last 80 lines) ----"
+journalctl -u weedsprayd -b --no-pager -o short-monotonic | tail -n 80 | sed 's/^/    /'
+finish

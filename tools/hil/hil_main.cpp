@@ -1,0 +1,332 @@
+// weedspray-hil: the sprayer on the far side of the wires, for the hardware-in-the-loop scenario
+// of the systemd guest (tests/vm-systemd/hil-scenario.sh). It runs the hydraulic plant model
+// (control/plant) in real time against the installed daemon, through kernel interfaces only:
+//   - samples the valve, pump, buzzer, lamp and heartbeat lines in gpio-sim sysfs at --rate-hz
+//     and drives the plant's solenoids and pump relay with what it reads; integrates each
+//     valve's measured open time (its duty);
+//   - makes the flow meter's and the wheel sensor's pulses with gpio-sim pulls, as many as the
+//     plant's meter and wheel produce;
+//   - serves the pressure transmitter (ADC), the return valve's DAC and the tank level as Modbus
+//     RTU slaves on pty pairs (modbus_slaves.hpp).
+// Interface for the scenario script, in --run-dir:
+//   status   rewritten every 50 ms: key=value lines (cumulative counters and the plant's state)
+//   control  a FIFO taking one command a line: "speed M_PER_S", "tank_l LITRES", "quit"
+// On quit (or SIGTERM) it prints its ground truth as "WEEDSPRAY-HIL-TRUTH key=value" lines.
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <ctime>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "control/plant/hydraulic_plant.hpp"
+#include "io/signal_conversion.hpp"
+#include "tools/hil/modbus_slaves.hpp"
+#include "tools/hil/sim_gpio_lines.hpp"
+
+namespace weedspray::hil {
+namespace {
+
+std::atomic<bool> g_quit{false};
+
+struct Options {
+  std::string chip_dir;  // the gpio-sim chip with the daemon's lines
+  std::vector<int> valve_lines;
+  int pump_line = -1;
+  int buzzer_line = -1;
+  int lamp_line = -1;
+  int heartbeat_line = -1;
+  int wheel_line = -1;
+  std::string flow_chip_dir;  // the flow meter's chip (interrupt-cnt), may be chip_dir
+  int flow_line = -1;
+  std::string run_dir = "/run/weedspray-hil";
+  double rate_hz = 2000;
+  double speed_m_per_s = 0;
+  double tank_capacity_l = 200;
+  double tank_level_l = 150;
+  double wheel_pulses_per_m = 100;
+  double flow_pulses_per_l = 8500;
+  double adc_volts_per_count = 0.001;
+  double dac_volts_per_count = 0.001;
+  double tank_pct_per_count = 0.1;
+  std::uint64_t seed = 1;
+};
+
+double now_s() {
+  struct timespec ts {};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+}
+
+std::uint16_t counts(double value, double per_count) {
+  return static_cast<std::uint16_t>(std::clamp(std::lround(value / per_count), 0L, 65535L));
+}
+
+struct Lines {
+  std::vector<std::unique_ptr<SimOutputLine>> valves;
+  std::unique_ptr<SimOutputLine> pump, buzzer, lamp, heartbeat;
+  std::unique_ptr<SimInputLine> flow, wheel;
+};
+
+std::unique_ptr<SimOutputLine> output_line(const std::string& dir, int offset) {
+  return offset < 0 ? nullptr : std::make_unique<SimOutputLine>(dir, offset);
+}
+
+// What the sampler measured, cumulative since start.
+struct Measured {
+  std::uint64_t samples = 0;
+  double sampled_s = 0;  // time covered by samples
+  double max_gap_s = 0;  // longest interval between two samples
+  std::vector<double> valve_open_s;
+  std::uint64_t heartbeat_edges = 0;
+  std::uint64_t flow_sent = 0;
+  std::uint64_t wheel_sent = 0;
+  bool pump = false, buzzer = false, lamp = false, heartbeat = false;
+  std::uint32_t valve_mask = 0;
+};
+
+void write_status(const Options& o, const control::plant::HydraulicPlant& plant, const Measured& m,
+                  ModbusBoard& board, double elapsed_s) {
+  std::ostringstream s;
+  s << "elapsed_s=" << elapsed_s << "\nsamples=" << m.samples << "\nsampled_s=" << m.sampled_s
+    << "\nsample_hz=" << (m.sampled_s > 0 ? static_cast<double>(m.samples) / m.sampled_s : 0)
+    << "\nmax_gap_ms=" << m.max_gap_s * 1e3 << "\npressure_mpa=" << plant.line_pressure_mpa()
+    << "\npump=" << m.pump << "\nbuzzer=" << m.buzzer << "\nlamp=" << m.lamp
+    << "\nvalve_mask=" << m.valve_mask << "\nheartbeat_edges=" << m.heartbeat_edges
+    << "\nreturn_opening=" << plant.return_valve_opening()
+    << "\nnozzle_flow_l_per_min=" << plant.total_nozzle_flow_l_per_min()
+    << "\ntank_pct=" << plant.tank_level_l() / o.tank_capacity_l * 100
+    << "\ndistance_m=" << plant.distance_m() << "\nflow_sent=" << m.flow_sent
+    << "\nwheel_sent=" << m.wheel_sent
+    << "\nflow_backlog=" << plant.flow_meter_pulses() - m.flow_sent
+    << "\nwheel_backlog=" << plant.wheel_pulses() - m.wheel_sent;
+  for (std::size_t i = 0; i < m.valve_open_s.size(); ++i)
+    s << "\nvalve" << i << "_open_s=" << m.valve_open_s[i];
+  {
+    std::lock_guard lock(board.mutex);
+    s << "\ndac_volts=" << board.dac_counts * o.dac_volts_per_count
+      << "\ndac_writes=" << board.dac_writes << "\nanalog_requests=" << board.analog_requests
+      << "\ntank_requests=" << board.tank_requests << "\nbad_frames=" << board.bad_frames;
+  }
+  s << "\n";
+  const std::string tmp = o.run_dir + "/status.tmp";
+  if (FILE* f = std::fopen(tmp.c_str(), "w")) {
+    std::fputs(s.str().c_str(), f);
+    std::fclose(f);
+    std::rename(tmp.c_str(), (o.run_dir + "/status").c_str());
+  }
+}
+
+void print_truth(const control::plant::HydraulicPlant& plant, const Measured& m) {
+  std::printf("WEEDSPRAY-HIL-TRUTH pressure_mpa=%.4f\n", plant.line_pressure_mpa());
+  std::printf("WEEDSPRAY-HIL-TRUTH delivered_l=%.4f\n", plant.total_delivered_l());
+  for (int i = 0; i < plant.nozzle_count(); ++i)
+    std::printf("WEEDSPRAY-HIL-TRUTH nozzle%d_delivered_l=%.4f open_s=%.3f\n", i,
+                plant.nozzle_delivered_l(i), m.valve_open_s[static_cast<std::size_t>(i)]);
+  std::printf("WEEDSPRAY-HIL-TRUTH distance_m=%.3f\n", plant.distance_m());
+  std::printf("WEEDSPRAY-HIL-TRUTH tank_l=%.3f\n", plant.tank_level_l());
+  std::printf("WEEDSPRAY-HIL-TRUTH flow_pulses=%llu of %llu wheel_pulses=%llu of %llu\n",
+              static_cast<unsigned long long>(m.flow_sent),
+              static_cast<unsigned long long>(plant.flow_meter_pulses()),
+              static_cast<unsigned long long>(m.wheel_sent),
+              static_cast<unsigned long long>(plant.wheel_pulses()));
+  std::printf("WEEDSPRAY-HIL-TRUTH samples=%llu sample_hz=%.0f max_gap_ms=%.2f\n",
+              static_cast<unsigned long long>(m.samples),
+              m.sampled_s > 0 ? static_cast<double>(m.samples) / m.sampled_s : 0.0,
+              m.max_gap_s * 1e3);
+  std::fflush(stdout);
+}
+
+void handle_command(const std::string& line, control::plant::HydraulicPlant& plant) {
+  std::istringstream in(line);
+  std::string verb;
+  double value = 0;
+  in >> verb >> value;
+  if (verb == "speed") plant.set_ground_speed(value);
+  if (verb == "tank_l") plant.set_tank_level_l(value);
+  if (verb == "quit") g_quit = true;
+}
+
+void poll_commands(int fifo, std::string& pending, control::plant::HydraulicPlant& plant) {
+  char buffer[256];
+  ssize_t n = 0;
+  while ((n = ::read(fifo, buffer, sizeof buffer)) > 0) pending.append(buffer, n);
+  std::size_t end = 0;
+  while ((end = pending.find('\n')) != std::string::npos) {
+    handle_command(pending.substr(0, end), plant);
+    pending.erase(0, end + 1);
+  }
+}
+
+int run(const Options& o) {
+  ::mkdir(o.run_dir.c_str(), 0755);
+  ModbusBoard board;
+  control::plant::PlantParams params;
+  params.nozzle_count = static_cast<int>(o.valve_lines.size());
+  params.wheel.nominal_pulses_per_m = o.wheel_pulses_per_m;
+  params.flow_meter.nominal_pulses_per_l = o.flow_pulses_per_l;
+  params.tank.capacity_l = o.tank_capacity_l;
+  params.tank.initial_level_l = o.tank_level_l;
+  control::plant::HydraulicPlant plant(params, o.seed);
+  plant.set_ground_speed(o.speed_m_per_s);
+
+  Lines lines;
+  for (int offset : o.valve_lines)
+    lines.valves.push_back(std::make_unique<SimOutputLine>(o.chip_dir, offset));
+  lines.pump = output_line(o.chip_dir, o.pump_line);
+  lines.buzzer = output_line(o.chip_dir, o.buzzer_line);
+  lines.lamp = output_line(o.chip_dir, o.lamp_line);
+  lines.heartbeat = output_line(o.chip_dir, o.heartbeat_line);
+  if (o.flow_line >= 0)
+    lines.flow = std::make_unique<SimInputLine>(
+        o.flow_chip_dir.empty() ? o.chip_dir : o.flow_chip_dir, o.flow_line);
+  if (o.wheel_line >= 0) lines.wheel = std::make_unique<SimInputLine>(o.chip_dir, o.wheel_line);
+
+  {
+    std::lock_guard lock(board.mutex);
+    board.adc_counts = counts(plant.pressure_sensor_volts(), o.adc_volts_per_count);
+    board.tank_counts =
+        counts(plant.tank_level_l() / o.tank_capacity_l * 100, o.tank_pct_per_count);
+  }
+  start_analog_bus({.link = o.run_dir + "/analog"}, board);
+  start_tank_bus({.link = o.run_dir + "/tank"}, board);
+  const std::string fifo_path = o.run_dir + "/control";
+  ::unlink(fifo_path.c_str());
+  ::mkfifo(fifo_path.c_str(), 0600);
+  const int fifo = ::open(fifo_path.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+
+  // The sampler stays at normal priority: on the emulated CPUs it is busy all the time, and as a
+  // SCHED_FIFO thread it would starve the daemon's own threads and the kernel's IRQ threads
+  // (priority 50, the wheel's edge events) - a machine must not slow down its controller. Its
+  // achieved rate is reported (sample_hz). The Modbus threads answer at SCHED_FIFO 60.
+
+  Measured m;
+  m.valve_open_s.assign(lines.valves.size(), 0.0);
+  const io::ValveDriveConfig drive;
+  const double period_s = 1.0 / o.rate_hz;
+  const double start = now_s();
+  double last = start;
+  double next_status = start;
+  std::string pending;
+  struct timespec next {};
+  clock_gettime(CLOCK_MONOTONIC, &next);
+  std::printf("weedspray-hil: running (%zu valves, %.0f Hz sampling, status in %s)\n",
+              lines.valves.size(), o.rate_hz, o.run_dir.c_str());
+  std::fflush(stdout);
+  while (!g_quit) {
+    next.tv_nsec += static_cast<long>(period_s * 1e9);
+    while (next.tv_nsec >= 1000000000L) {
+      next.tv_nsec -= 1000000000L;
+      ++next.tv_sec;
+    }
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &next, nullptr);
+    const double t = now_s();
+    const double dt = t - last;
+    last = t;
+    if (t - (static_cast<double>(next.tv_sec) + static_cast<double>(next.tv_nsec) * 1e-9) > 0.05)
+      clock_gettime(CLOCK_MONOTONIC, &next);  // far behind (a stalled emulated CPU): no burst
+
+    // Sample: each line's level held since the previous sample.
+    std::uint32_t mask = 0;
+    for (std::size_t i = 0; i < lines.valves.size(); ++i) {
+      if (lines.valves[i]->high()) {
+        mask |= 1U << i;
+        m.valve_open_s[i] += dt;
+      }
+    }
+    m.valve_mask = mask;
+    m.pump = lines.pump && lines.pump->high();
+    // The signalling lines change slowly (the heartbeat at up to 250 Hz): every 4th sample, so
+    // the emulated CPU's time goes to the valves.
+    if (m.samples % 4 == 0) {
+      m.buzzer = lines.buzzer && lines.buzzer->high();
+      m.lamp = lines.lamp && lines.lamp->high();
+      const bool heartbeat = lines.heartbeat && lines.heartbeat->high();
+      if (heartbeat != m.heartbeat) ++m.heartbeat_edges;
+      m.heartbeat = heartbeat;
+    }
+    ++m.samples;
+    m.sampled_s += dt;
+    m.max_gap_s = std::max(m.max_gap_s, dt);
+
+    // The machine reacts.
+    plant.set_valves(mask);
+    plant.set_pump(m.pump);
+    double dac_volts = 0;
+    {
+      std::lock_guard lock(board.mutex);
+      dac_volts = board.dac_counts * o.dac_volts_per_count;
+    }
+    plant.set_return_valve_volts(io::valve_volts_from_dac_volts(dac_volts, drive));
+    plant.step(std::min(dt, 0.05));
+    {
+      std::lock_guard lock(board.mutex);
+      board.adc_counts = counts(plant.pressure_sensor_volts(), o.adc_volts_per_count);
+      board.tank_counts =
+          counts(plant.tank_level_l() / o.tank_capacity_l * 100, o.tank_pct_per_count);
+    }
+    // Its sensors pulse (at most one edge each per sample: half the sampling rate in pulses).
+    if (lines.flow) {
+      lines.flow->step(plant.flow_meter_pulses());
+      m.flow_sent = lines.flow->sent();
+    }
+    if (lines.wheel) {
+      lines.wheel->step(plant.wheel_pulses());
+      m.wheel_sent = lines.wheel->sent();
+    }
+
+    if (t >= next_status) {
+      next_status = t + 0.05;
+      if (fifo >= 0) poll_commands(fifo, pending, plant);
+      write_status(o, plant, m, board, t - start);
+    }
+  }
+  write_status(o, plant, m, board, now_s() - start);
+  print_truth(plant, m);
+  return 0;
+}
+
+}  // namespace
+}  // namespace weedspray::hil
+
+int main(int argc, char** argv) {
+  using weedspray::hil::Options;
+  Options o;
+  CLI::App app{"weedspray-hil: the simulated sprayer behind gpio-sim and Modbus ptys"};
+  app.add_option("--chip-dir", o.chip_dir, "gpio-sim chip's sysfs dir (.../gpio-sim.N/gpiochipM)")
+      ->required();
+  app.add_option("--valve-lines", o.valve_lines, "offsets of the valve lines")->required();
+  app.add_option("--pump-line", o.pump_line);
+  app.add_option("--buzzer-line", o.buzzer_line);
+  app.add_option("--lamp-line", o.lamp_line);
+  app.add_option("--heartbeat-line", o.heartbeat_line);
+  app.add_option("--wheel-line", o.wheel_line);
+  app.add_option("--flow-chip-dir", o.flow_chip_dir, "the flow meter's chip (default: chip-dir)");
+  app.add_option("--flow-line", o.flow_line);
+  app.add_option("--run-dir", o.run_dir);
+  app.add_option("--rate-hz", o.rate_hz, "line sampling and plant step rate");
+  app.add_option("--speed", o.speed_m_per_s, "initial ground speed [m/s]");
+  app.add_option("--tank-capacity-l", o.tank_capacity_l);
+  app.add_option("--tank-level-l", o.tank_level_l);
+  app.add_option("--wheel-pulses-per-m", o.wheel_pulses_per_m);
+  app.add_option("--flow-pulses-per-l", o.flow_pulses_per_l, "the flow meter's label value");
+  app.add_option("--seed", o.seed);
+  CLI11_PARSE(app, argc, argv);
+  std::signal(SIGTERM, [](int) { weedspray::hil::g_quit = true; });
+  std::signal(SIGINT, [](int) { weedspray::hil::g_quit = true; });
+  try {
+    return weedspray::hil::run(o);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "weedspray-hil: %s\n", error.what());
+    return 1;
+  }
+}

@@ -1,0 +1,167 @@
+#include "tools/hil/modbus_slaves.hpp"
+
+#include <fcntl.h>
+#include <grp.h>
+#include <modbus/modbus.h>
+#include <poll.h>
+#include <pthread.h>
+#include <pty.h>
+#include <sched.h>
+#include <sys/stat.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <array>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+#include <thread>
+
+namespace weedspray::hil {
+namespace {
+
+constexpr int kRegisters = 16;
+
+struct Pty {
+  int master = -1;
+  int slave = -1;  // kept open: the master reads EIO while no one holds the slave side
+};
+
+// A raw pty pair, its slave side reachable as `link`, readable and writable by group dialout
+// (the unit's serial-port group).
+Pty open_pty(const std::string& link) {
+  Pty pty;
+  struct termios raw {};
+  cfmakeraw(&raw);
+  if (openpty(&pty.master, &pty.slave, nullptr, &raw, nullptr) != 0)
+    throw std::runtime_error(std::string("openpty: ") + std::strerror(errno));
+  const char* name = ttyname(pty.slave);
+  if (name == nullptr) throw std::runtime_error("ttyname of the pty failed");
+  if (const struct group* dialout = getgrnam("dialout"))
+    if (fchown(pty.slave, static_cast<uid_t>(-1), dialout->gr_gid) != 0)
+      throw std::runtime_error(std::string("fchown pty: ") + std::strerror(errno));
+  if (fchmod(pty.slave, 0660) != 0)
+    throw std::runtime_error(std::string("fchmod pty: ") + std::strerror(errno));
+  ::unlink(link.c_str());
+  if (::symlink(name, link.c_str()) != 0)
+    throw std::runtime_error("symlink " + link + ": " + std::strerror(errno));
+  return pty;
+}
+
+modbus_t* slave_context(const Pty& pty, int slave_id) {
+  // The device name is never opened: the context talks on the pty master (modbus_set_socket).
+  modbus_t* ctx = modbus_new_rtu("/dev/null", 115200, 'N', 8, 1);
+  if (ctx == nullptr) throw std::runtime_error("modbus_new_rtu failed");
+  modbus_set_slave(ctx, slave_id);
+  modbus_set_socket(ctx, pty.master);
+  return ctx;
+}
+
+void raise_priority() {
+  // Answers inside the daemon's response timeout (20 ms on the analog bus) while the emulated
+  // CPUs are busy; ignored where not permitted.
+  struct sched_param param {};
+  param.sched_priority = 60;
+  pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);
+}
+
+std::uint16_t crc16(const std::uint8_t* data, std::size_t length) {
+  std::uint16_t crc = 0xFFFF;
+  for (std::size_t i = 0; i < length; ++i) {
+    crc ^= data[i];
+    for (int bit = 0; bit < 8; ++bit) crc = (crc & 1) ? (crc >> 1) ^ 0xA001 : crc >> 1;
+  }
+  return crc;
+}
+
+// One 8-byte request (functions 03, 04, 06: slave, function, two words, CRC). libmodbus's own
+// receive filters on one slave id; the analog bus carries two, so the frame is read here and
+// answered with modbus_reply for whichever module it addresses. A gap of 20 ms inside a frame
+// restarts it (the RTU rule, with slack for the emulated CPU).
+bool read_request(int fd, std::array<std::uint8_t, 8>& frame) {
+  std::size_t have = 0;
+  while (have < frame.size()) {
+    struct pollfd p {
+      fd, POLLIN, 0
+    };
+    const int ready = ::poll(&p, 1, have == 0 ? -1 : 20);
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready <= 0) return false;
+    const ssize_t n = ::read(fd, frame.data() + have, frame.size() - have);
+    if (n <= 0) {
+      if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
+      ::usleep(1000);  // EIO while the daemon has the port closed: wait for it
+      return false;
+    }
+    have += static_cast<std::size_t>(n);
+  }
+  const std::uint16_t crc = crc16(frame.data(), 6);
+  return frame[6] == (crc & 0xFF) && frame[7] == (crc >> 8);
+}
+
+void serve_analog(Pty pty, ModbusBusConfig config, ModbusBoard& board) {
+  raise_priority();
+  modbus_t* ctx = slave_context(pty, config.adc_id);
+  modbus_mapping_t* adc = modbus_mapping_new(0, 0, 0, kRegisters);
+  modbus_mapping_t* dac = modbus_mapping_new(0, 0, kRegisters, 0);
+  std::array<std::uint8_t, 8> frame{};
+  for (;;) {
+    if (!read_request(pty.master, frame)) {
+      std::lock_guard lock(board.mutex);
+      ++board.bad_frames;
+      continue;
+    }
+    const int slave = frame[0];
+    const int function = frame[1];
+    const int address = (frame[2] << 8) | frame[3];
+    modbus_mapping_t* mapping = slave == config.adc_id   ? adc
+                                : slave == config.dac_id ? dac
+                                                         : nullptr;
+    if (mapping == nullptr) continue;  // another module's address: not ours to answer
+    {
+      std::lock_guard lock(board.mutex);
+      ++board.analog_requests;
+      if (address == config.register_address) adc->tab_input_registers[address] = board.adc_counts;
+    }
+    modbus_set_slave(ctx, slave);
+    modbus_reply(ctx, frame.data(), static_cast<int>(frame.size()), mapping);
+    if (slave == config.dac_id && function == 0x06 && address == config.register_address) {
+      std::lock_guard lock(board.mutex);
+      board.dac_counts = dac->tab_registers[address];
+      ++board.dac_writes;
+    }
+  }
+}
+
+void serve_tank(Pty pty, ModbusBusConfig config, ModbusBoard& board) {
+  raise_priority();
+  modbus_t* ctx = slave_context(pty, config.tank_id);
+  modbus_mapping_t* mapping = modbus_mapping_new(0, 0, kRegisters, 0);
+  std::array<std::uint8_t, MODBUS_RTU_MAX_ADU_LENGTH> query{};
+  for (;;) {
+    const int length = modbus_receive(ctx, query.data());
+    if (length <= 0) {
+      if (length < 0) ::usleep(1000);  // the daemon has the port closed
+      continue;
+    }
+    {
+      std::lock_guard lock(board.mutex);
+      ++board.tank_requests;
+      mapping->tab_registers[config.register_address] = board.tank_counts;
+    }
+    modbus_reply(ctx, query.data(), length, mapping);
+  }
+}
+
+}  // namespace
+
+void start_analog_bus(const ModbusBusConfig& config, ModbusBoard& board) {
+  std::thread(serve_analog, open_pty(config.link), config, std::ref(board)).detach();
+}
+
+void start_tank_bus(const ModbusBusConfig& config, ModbusBoard& board) {
+  std::thread(serve_tank, open_pty(config.link), config, std::ref(board)).detach();
+}
+
+}  // namespace weedspray::hil
