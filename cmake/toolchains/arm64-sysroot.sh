@@ -16,6 +16,10 @@ packages=(
   libopencv-dev libgpiod-dev libmodbus-dev libv4l-dev libspdlog-dev libsystemd-dev
   libtomlplusplus-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
 )
+case "$root" in
+  /*/*) ;;
+  *) echo "arm64-sysroot: refusing '$root': give an absolute directory below / (it is replaced whole)" >&2; exit 2 ;;
+esac
 stamp="$root/.weedspray-packages"
 want="bookworm ${packages[*]}"
 if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want" ]; then
