@@ -16,6 +16,14 @@ set(CPACK_DEBIAN_PACKAGE_DEPENDS "dbus, systemd")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
     "${CMAKE_CURRENT_BINARY_DIR}/conffiles;${PROJECT_SOURCE_DIR}/systemd/debian/postinst")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
+# The arm64 cross build (the arm64 preset): CPack would take the host's architecture from
+# dpkg, and dpkg-shlibdeps must look up the aarch64 binaries' libraries in the sysroot, whose
+# DEBIAN/shlibs and DEBIAN/symbols (cmake/toolchains/arm64-sysroot.sh) name their packages.
+if(CMAKE_CROSSCOMPILING AND CMAKE_SYSTEM_PROCESSOR STREQUAL "aarch64")
+  set(CPACK_DEBIAN_PACKAGE_ARCHITECTURE arm64)
+  set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS_PRIVATE_DIRS
+      "${CMAKE_SYSROOT}/usr/lib/aarch64-linux-gnu" "${CMAKE_SYSROOT}/lib/aarch64-linux-gnu")
+endif()
 file(WRITE "${CMAKE_CURRENT_BINARY_DIR}/conffiles"
      "${CMAKE_INSTALL_FULL_SYSCONFDIR}/weedspray/weedspray.toml\n")
 include(CPack)
