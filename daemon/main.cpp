@@ -2,11 +2,11 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
-#include "daemon/config.hpp"
-#include "daemon/config_schema.hpp"
-#include "daemon/options.hpp"
+#include "daemon/backends/sim_faults.hpp"
+#include "daemon/config/config.hpp"
+#include "daemon/config/config_schema.hpp"
+#include "daemon/config/options.hpp"
 #include "daemon/run.hpp"
-#include "daemon/sim_faults.hpp"
 
 int main(int argc, char** argv) {
   using namespace weedspray::daemon;

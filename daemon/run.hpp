@@ -1,7 +1,7 @@
 // The daemon proper: backends, threads, D-Bus, until a signal. Returns the exit status.
 #pragma once
 
-#include "daemon/options.hpp"
+#include "daemon/config/options.hpp"
 
 namespace weedspray::daemon {
 

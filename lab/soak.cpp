@@ -20,8 +20,8 @@
 #include <stdexcept>
 #include <thread>
 
-#include "daemon/as_applied_reader.hpp"
-#include "daemon/totals.hpp"
+#include "daemon/records/as_applied_reader.hpp"
+#include "daemon/records/totals.hpp"
 
 namespace weedspray::lab {
 namespace {

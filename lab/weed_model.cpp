@@ -8,9 +8,9 @@
 
 #include <opencv2/core.hpp>
 
-#include "daemon/config.hpp"
-#include "daemon/config_schema.hpp"
-#include "daemon/vision_config.hpp"
+#include "daemon/config/config.hpp"
+#include "daemon/config/config_schema.hpp"
+#include "daemon/config/vision_config.hpp"
 
 namespace weedspray::lab {
 namespace {

@@ -7,8 +7,8 @@
 #include <cstring>
 #include <string>
 
-#include "daemon/dbus_service.hpp"
-#include "daemon/sim_faults.hpp"
+#include "daemon/backends/sim_faults.hpp"
+#include "daemon/bus/dbus_service.hpp"
 #include "tests/fuzz/offline_bus.hpp"
 
 namespace {

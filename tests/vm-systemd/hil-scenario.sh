@@ -130,7 +130,7 @@ pulses_per_litre = 2000
 
 # The emulated CPU answers a Modbus transaction in 10-50 ms: a 20 Hz loop keeps the pressure
 # samples inside their freshness limit (3 periods; at 50 Hz they went stale and raised
-# pressure_sensor_fault). The valve thread's cross-watch waits 3 periods too (daemon/sprayer.cpp;
+# pressure_sensor_fault). The valve thread's cross-watch waits 3 periods too (daemon/sprayer/sprayer.cpp;
 # a fixed 50 ms took the 20 Hz loop for stalled and stopped the pump every few hundred ms).
 [pressure]
 loop_hz = 20

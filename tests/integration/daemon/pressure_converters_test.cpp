@@ -9,7 +9,7 @@
 #include <string>
 #include <thread>
 
-#include "daemon/backends.hpp"
+#include "daemon/backends/backends.hpp"
 #include "io/analog_io_worker.hpp"
 #include "io/linux/modbus_analog.hpp"
 #include "io/linux/monotonic_clock.hpp"

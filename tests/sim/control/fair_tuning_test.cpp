@@ -8,7 +8,7 @@
 #include <string>
 #include <variant>
 
-#include "daemon/config_schema.hpp"
+#include "daemon/config/config_schema.hpp"
 
 namespace weedspray::control::experiments {
 namespace {

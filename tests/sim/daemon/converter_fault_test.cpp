@@ -7,8 +7,8 @@
 #include <string>
 #include <thread>
 
-#include "daemon/backends.hpp"
-#include "daemon/sprayer.hpp"
+#include "daemon/backends/backends.hpp"
+#include "daemon/sprayer/sprayer.hpp"
 #include "tests/sim/daemon/run_until.hpp"
 
 namespace weedspray::daemon {

@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <thread>
 
-#include "daemon/backends.hpp"
-#include "daemon/sprayer.hpp"
+#include "daemon/backends/backends.hpp"
+#include "daemon/sprayer/sprayer.hpp"
 
 namespace weedspray::daemon {
 namespace {

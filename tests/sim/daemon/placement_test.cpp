@@ -11,9 +11,9 @@
 #include <thread>
 
 #include "control/plant/hydraulic_plant.hpp"
-#include "daemon/backends.hpp"
-#include "daemon/geometry.hpp"
-#include "daemon/sprayer.hpp"
+#include "daemon/backends/backends.hpp"
+#include "daemon/sprayer/geometry.hpp"
+#include "daemon/sprayer/sprayer.hpp"
 #include "vision/pipeline.hpp"
 #include "vision/threshold.hpp"
 #include "vision/vegetation_index.hpp"

@@ -5,7 +5,7 @@
 #include <chrono>
 #include <thread>
 
-#include "daemon/backends.hpp"
+#include "daemon/backends/backends.hpp"
 
 namespace weedspray::daemon {
 

@@ -15,8 +15,8 @@
 #include <thread>
 #include <vector>
 
-#include "daemon/backends.hpp"
-#include "daemon/sprayer.hpp"
+#include "daemon/backends/backends.hpp"
+#include "daemon/sprayer/sprayer.hpp"
 
 namespace weedspray::daemon {
 namespace {

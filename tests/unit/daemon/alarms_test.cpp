@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "daemon/alarms.hpp"
+#include "daemon/supervision/alarms.hpp"
 
 namespace weedspray::daemon {
 namespace {

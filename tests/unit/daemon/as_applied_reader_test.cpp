@@ -1,11 +1,11 @@
-#include "daemon/as_applied_reader.hpp"
+#include "daemon/records/as_applied_reader.hpp"
 
 #include <gtest/gtest.h>
 
 #include <chrono>
 #include <fstream>
 
-#include "daemon/as_applied_log.hpp"
+#include "daemon/records/as_applied_log.hpp"
 
 namespace weedspray::daemon {
 namespace {

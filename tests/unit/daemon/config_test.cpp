@@ -6,8 +6,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "daemon/config.hpp"
-#include "daemon/config_schema.hpp"
+#include "daemon/config/config.hpp"
+#include "daemon/config/config_schema.hpp"
 #include "vision/threshold.hpp"
 #include "vision/vegetation_index.hpp"
 

@@ -3,7 +3,7 @@
 #include <cstdarg>
 #include <stdexcept>
 
-#include "daemon/dbus_service.hpp"
+#include "daemon/bus/dbus_service.hpp"
 #include "tests/fuzz/offline_bus.hpp"
 
 namespace weedspray::daemon {

@@ -7,7 +7,7 @@
 #include <thread>
 #include <vector>
 
-#include "daemon/inference_gate.hpp"
+#include "daemon/sprayer/inference_gate.hpp"
 
 namespace weedspray::daemon {
 namespace {

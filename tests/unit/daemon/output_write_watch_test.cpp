@@ -1,10 +1,10 @@
-#include "daemon/output_write_watch.hpp"
+#include "daemon/supervision/output_write_watch.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cerrno>
 
-#include "daemon/alarms.hpp"
+#include "daemon/supervision/alarms.hpp"
 
 namespace weedspray::daemon {
 namespace {

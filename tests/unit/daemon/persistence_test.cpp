@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "daemon/as_applied_log.hpp"
-#include "daemon/totals.hpp"
+#include "daemon/records/as_applied_log.hpp"
+#include "daemon/records/totals.hpp"
 
 namespace weedspray::daemon {
 namespace {

@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "daemon/state_machine.hpp"
+#include "daemon/supervision/state_machine.hpp"
 
 namespace weedspray::daemon {
 namespace {

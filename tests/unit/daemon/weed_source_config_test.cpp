@@ -5,9 +5,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include "daemon/config.hpp"
-#include "daemon/config_schema.hpp"
-#include "daemon/vision_config.hpp"
+#include "daemon/config/config.hpp"
+#include "daemon/config/config_schema.hpp"
+#include "daemon/config/vision_config.hpp"
 #include "vision/weed_source.hpp"
 
 namespace weedspray::daemon {

@@ -1,0 +1,87 @@
+#include "daemon/backends/backends.hpp"
+
+namespace weedspray::daemon {
+
+namespace {
+
+io::DigitalOutputBank* bank(const Backends& b, OutputRole role) noexcept {
+  switch (role) {
+    case OutputRole::kValves:
+      return b.valves;
+    case OutputRole::kPump:
+      return b.pump;
+    case OutputRole::kHeartbeat:
+      return b.heartbeat;
+    case OutputRole::kBuzzer:
+      return b.buzzer;
+    case OutputRole::kLed:
+      return b.led;
+    case OutputRole::kReturnValve:
+      return nullptr;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+int Backends::force_safe(OutputRole role) noexcept {
+  if (role == OutputRole::kReturnValve)
+    return return_valve != nullptr ? return_valve->force_safe() : 0;
+  io::DigitalOutputBank* output = bank(*this, role);
+  return output != nullptr ? output->force_safe() : 0;
+}
+
+SafeWriteErrors Backends::force_safe() noexcept {
+  SafeWriteErrors errors{};
+  // Valves and pump first: they move liquid.
+  for (OutputRole role : {OutputRole::kValves, OutputRole::kPump, OutputRole::kReturnValve,
+                          OutputRole::kBuzzer, OutputRole::kLed, OutputRole::kHeartbeat})
+    errors[static_cast<std::size_t>(role)] = force_safe(role);
+  return errors;
+}
+
+std::array<std::string, kOutputRoleCount> Backends::output_devices() const {
+  std::array<std::string, kOutputRoleCount> devices;
+  for (std::size_t i = 0; i < kOutputRoleCount; ++i) {
+    const auto role = static_cast<OutputRole>(i);
+    if (role == OutputRole::kReturnValve) {
+      if (return_valve != nullptr) devices[i] = return_valve->describe();
+    } else if (const io::DigitalOutputBank* output = bank(*this, role)) {
+      devices[i] = output->describe();
+    }
+  }
+  return devices;
+}
+
+std::size_t Backends::register_emergency_writes() const noexcept {
+  io::EmergencyOutputs::clear();
+  std::size_t registered = 0;
+  io::EmergencyWrite write;
+  for (const io::DigitalOutputBank* bank : {valves, pump, buzzer, led, heartbeat}) {
+    if (bank != nullptr && bank->emergency_write(write) && io::EmergencyOutputs::add(write))
+      ++registered;
+  }
+  if (return_valve != nullptr && return_valve->emergency_write(write) &&
+      io::EmergencyOutputs::add(write))
+    ++registered;
+  return registered;
+}
+
+io::CurrentLoopSensorConfig pressure_sensor_config(const Config& config) {
+  io::CurrentLoopSensorConfig sensor;
+  sensor.shunt_ohms = config.adc.shunt_ohms;
+  sensor.pressure_at_min_mpa = config.pressure.sensor_min_mpa;
+  sensor.pressure_at_max_mpa = config.pressure.sensor_max_mpa;
+  sensor.fault_below_ma = config.alarms.sensor_fault_low_ma;
+  sensor.fault_above_ma = config.alarms.sensor_fault_high_ma;
+  return sensor;
+}
+
+io::ValveDriveConfig valve_drive_config(const Config& config) {
+  io::ValveDriveConfig drive;
+  drive.dac_full_scale_volts = config.dac.full_scale_v;
+  drive.amplifier_gain = drive.valve_full_scale_volts / config.dac.full_scale_v;
+  return drive;
+}
+
+}  // namespace weedspray::daemon

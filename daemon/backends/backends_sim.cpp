@@ -1,0 +1,178 @@
+// The simulated machine for `weedsprayd --sim`: the hydraulic plant behind the io adapters,
+// recorded field images as the cameras, simulated time paced to real time.
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include "control/nozzle_scheduler.hpp"
+#include "control/plant/hydraulic_plant.hpp"
+#include "daemon/backends/backends.hpp"
+#include "daemon/sprayer/geometry.hpp"
+#include "io/sim/hydraulic_rig.hpp"
+#include "io/sim/memory_output_bank.hpp"
+#include "io/sim/paced_clock.hpp"
+#include "io/sim/replay_camera.hpp"
+
+#ifndef WEEDSPRAY_DEFAULT_SIM_IMAGES
+#define WEEDSPRAY_DEFAULT_SIM_IMAGES "/usr/share/weedspray/images"
+#endif
+
+namespace weedspray::daemon {
+
+double sim_speed_m_per_s(const SimSection& sim, double t_s) {
+  const double span = sim.speed_max_m_per_s - sim.speed_min_m_per_s;
+  const double phase = std::fmod(t_s / sim.speed_period_s, 1.0);
+  if (sim.speed_profile == "constant") return sim.speed_max_m_per_s;
+  if (sim.speed_profile == "ramp") {  // triangle: min -> max -> min
+    return sim.speed_min_m_per_s + span * (phase < 0.5 ? 2 * phase : 2 - 2 * phase);
+  }
+  return sim.speed_min_m_per_s + span * (0.5 - 0.5 * std::cos(2 * std::numbers::pi * phase));
+}
+
+Backends make_sim_backends(const Config& config, const Options& options) {
+  if (config.boom.nozzles > control::plant::kMaxNozzles) {
+    throw std::runtime_error(
+        "--sim: the plant model has at most " + std::to_string(control::plant::kMaxNozzles) +
+        " nozzles (boom.nozzles = " + std::to_string(config.boom.nozzles) + ")");
+  }
+  Backends b;
+  b.mode = "sim";
+  auto clock = std::make_shared<io::sim::PacedClock>(1.0);
+  b.clock = clock.get();
+  b.owned.push_back(clock);
+
+  io::sim::RigConfig rig_config;
+  auto& plant = rig_config.plant;
+  plant.nozzle_count = config.boom.nozzles;
+  plant.wheel.nominal_pulses_per_m = config.wheel.pulses_per_metre;
+  plant.flow_meter.nominal_pulses_per_l = config.flow.pulses_per_litre;
+  plant.pressure_sensor.full_scale_mpa = config.pressure.sensor_max_mpa;
+  plant.pressure_sensor.shunt_ohms = config.adc.shunt_ohms;
+  plant.tank.capacity_l = 200.0;  // a field-sized tank so a long simulation does not run dry
+  plant.tank.initial_level_l = 200.0;
+  rig_config.seed = static_cast<std::uint64_t>(config.sim.seed);
+  auto rig = std::make_shared<io::sim::HydraulicRig>(rig_config, *clock);
+  b.owned.push_back(rig);
+
+  auto valves = std::make_shared<io::sim::RigValveBank>(*rig);
+  auto pump = std::make_shared<io::sim::RigPumpRelay>(*rig);
+  auto adc = std::make_shared<io::sim::RigPressureAdc>(*rig, *clock);
+  b.drive = valve_drive_config(config);
+  auto dac = std::make_shared<io::sim::RigReturnValveDac>(*rig, b.drive);
+  auto flow = std::make_shared<io::sim::RigPulseInput>(*rig, io::sim::RigPulseSource::kFlowMeter);
+  auto wheel = std::make_shared<io::sim::RigPulseInput>(*rig, io::sim::RigPulseSource::kWheel);
+  auto tank = std::make_shared<io::sim::RigTankLevel>(*rig, *clock);
+  auto buzzer = std::make_shared<io::sim::MemoryOutputBank>(1, 0, *clock);
+  auto led = std::make_shared<io::sim::MemoryOutputBank>(1, 0, *clock);
+  // Keeps its last 4096 edges so tests can see the wave.
+  auto heartbeat = std::make_shared<io::sim::MemoryOutputBank>(1, 0, *clock, 4096);
+  b.valves = valves.get();
+  b.pump = pump.get();
+  b.pressure_adc = adc.get();
+  b.return_valve = dac.get();
+  b.flow = flow.get();
+  b.wheel = config.wheel.source == "fixed" ? nullptr : wheel.get();
+  b.tank = tank.get();
+  b.buzzer = buzzer.get();
+  b.led = led.get();
+  b.heartbeat = heartbeat.get();
+  for (std::shared_ptr<void> p :
+       {std::shared_ptr<void>(valves), std::shared_ptr<void>(pump), std::shared_ptr<void>(adc),
+        std::shared_ptr<void>(dac), std::shared_ptr<void>(flow), std::shared_ptr<void>(wheel),
+        std::shared_ptr<void>(tank), std::shared_ptr<void>(buzzer), std::shared_ptr<void>(led),
+        std::shared_ptr<void>(heartbeat)}) {
+    b.owned.push_back(p);
+  }
+  b.sensor = pressure_sensor_config(config);
+
+  // The vehicle: its speed follows the [sim] profile; cameras pace their frames by it.
+  auto speed = std::make_shared<std::atomic<double>>(sim_speed_m_per_s(config.sim, 0.0));
+  b.owned.push_back(speed);
+  const SimSection sim = config.sim;
+  b.drive_world = [rig, speed, sim](double t_s) {
+    const double v = sim_speed_m_per_s(sim, t_s);
+    speed->store(v);
+    rig->with_plant([v](control::plant::HydraulicPlant& p) { p.set_ground_speed(v); });
+  };
+  b.with_plant = [rig](const std::function<void(control::plant::HydraulicPlant&)>& fn) {
+    rig->with_plant(fn);
+  };
+  b.fail_output_writes = [rig, buzzer, led, heartbeat](OutputRole role, int error) {
+    switch (role) {
+      case OutputRole::kValves:
+        rig->fail_writes(io::sim::HydraulicRig::Output::kValves, error);
+        break;
+      case OutputRole::kPump:
+        rig->fail_writes(io::sim::HydraulicRig::Output::kPump, error);
+        break;
+      case OutputRole::kBuzzer:
+        buzzer->fail_writes(error);
+        break;
+      case OutputRole::kLed:
+        led->fail_writes(error);
+        break;
+      case OutputRole::kHeartbeat:
+        heartbeat->fail_writes(error);
+        break;
+      case OutputRole::kReturnValve:
+        break;  // the DAC's failures: see analog I/O tests
+    }
+  };
+  const double nominal_ppl = config.flow.pulses_per_litre;
+  b.plant_truth = [rig, nominal_ppl]() {
+    double delivered = 0;
+    double metered = 0;
+    double meter_gain = 1;
+    rig->with_plant([&](control::plant::HydraulicPlant& p) {
+      delivered = p.total_delivered_l();
+      metered = static_cast<double>(p.flow_meter_pulses()) / nominal_ppl;
+      meter_gain = p.true_meter_pulses_per_l() / nominal_ppl;
+    });
+    // The true volume, what the meter's pulses say at the configured pulses/L, and the meter's
+    // real pulses/L over the configured one (its calibration error).
+    char text[160];
+    std::snprintf(text, sizeof text, "sprayed_l=%.6f\nmetered_l=%.6f\nmeter_gain=%.6f\n", delivered,
+                  metered, meter_gain);
+    return std::string(text);
+  };
+  b.describe_outputs = [rig]() {
+    std::ostringstream out;
+    out << "valves=0x" << std::hex << rig->valve_mask() << std::dec
+        << " pump=" << (rig->pump_on() ? 1 : 0) << "\n";
+    return out.str();
+  };
+
+  std::string images = options.sim_images.empty() ? config.sim.images_dir : options.sim_images;
+  if (images.empty()) images = WEEDSPRAY_DEFAULT_SIM_IMAGES;
+  std::vector<std::shared_ptr<io::sim::ReplayCamera>> replay_cameras;
+  for (const auto& camera_config : config.cameras) {
+    io::sim::ReplayCameraConfig replay;
+    replay.source = images;
+    replay.loop = true;
+    const auto footprint = control::ground_footprint(camera_geometry(camera_config));
+    // A frame every 80 % of a footprint: consecutive images overlap, as a streaming camera's
+    // do, so speed changes between two frames leave no unseen ground.
+    replay.footprint_length_m = 0.8 * (footprint.far_m - footprint.near_m);
+    replay.ground_speed_m_per_s = [speed]() { return speed->load(); };
+    auto camera = std::make_shared<io::sim::ReplayCamera>(replay, *clock);
+    b.cameras.push_back(camera.get());
+    b.owned.push_back(camera);
+    replay_cameras.push_back(camera);
+  }
+  b.device_fault = [tank, replay_cameras](const std::string& fault) {
+    if (fault == "tank_silent" || fault == "tank_ok") {
+      tank->inject_timeouts(fault == "tank_silent" ? 1 << 30 : 0);
+    } else if (fault == "camera_gone" || fault == "camera_back") {
+      for (const auto& camera : replay_cameras) camera->set_unplugged(fault == "camera_gone");
+    } else {
+      return false;
+    }
+    return true;
+  };
+  return b;
+}
+
+}  // namespace weedspray::daemon

@@ -1,0 +1,69 @@
+#include "daemon/backends/sim_faults.hpp"
+
+#include <cerrno>
+#include <cstdlib>
+#include <utility>
+
+#include "control/plant/hydraulic_plant.hpp"
+
+namespace weedspray::daemon {
+
+std::optional<SimFault> parse_sim_fault(const std::string& text) {
+  const auto at = text.find('@');
+  if (at == std::string::npos) return std::nullopt;
+  SimFault fault;
+  fault.name = text.substr(0, at);
+  const std::string time = text.substr(at + 1);
+  char* end = nullptr;
+  fault.at_s = std::strtod(time.c_str(), &end);
+  if (time.empty() || *end != '\0' || !(fault.at_s >= 0)) return std::nullopt;
+  using Plant = control::plant::HydraulicPlant;
+  if (fault.name == "camera_gone" || fault.name == "camera_back" || fault.name == "tank_silent" ||
+      fault.name == "tank_ok") {
+    fault.device = fault.name;
+  } else if (fault.name == "sensor_ok") {
+    fault.apply = [](Plant& p) {
+      p.set_sensor_wire_broken(false);
+      p.set_sensor_shorted(false);
+    };
+  } else if (fault.name == "filter_ok") {
+    fault.apply = [](Plant& p) { p.set_filter_blockage(0.0); };
+  } else if (fault.name == "tank_refill") {
+    fault.apply = [](Plant& p) { p.set_tank_level_l(p.params().tank.capacity_l); };
+  } else if (fault.name == "sensor_open") {
+    fault.apply = [](Plant& p) { p.set_sensor_wire_broken(true); };
+  } else if (fault.name == "sensor_short") {
+    fault.apply = [](Plant& p) { p.set_sensor_shorted(true); };
+  } else if (fault.name == "filter_blocked") {
+    fault.apply = [](Plant& p) { p.set_filter_blockage(1.0); };
+  } else if (fault.name == "tank_empty") {
+    fault.apply = [](Plant& p) { p.set_tank_level_l(0.0); };
+  } else if (fault.name.starts_with("nozzle") && fault.name.size() >= 9 && fault.name[6] >= '0' &&
+             fault.name[6] <= '7' &&
+             (fault.name.substr(7) == "_blocked" || fault.name.substr(7) == "_ok")) {
+    const int nozzle = fault.name[6] - '0';
+    const double blockage = fault.name.ends_with("_blocked") ? 1.0 : 0.0;
+    fault.apply = [nozzle, blockage](Plant& p) {
+      if (nozzle < p.nozzle_count()) p.set_nozzle_blockage(nozzle, blockage);
+    };
+  } else {
+    constexpr std::pair<const char*, OutputRole> kOutputs[] = {
+        {"valve", OutputRole::kValves},
+        {"pump", OutputRole::kPump},
+        {"buzzer", OutputRole::kBuzzer},
+        {"led", OutputRole::kLed},
+        {"heartbeat", OutputRole::kHeartbeat}};
+    for (const auto& [prefix, role] : kOutputs) {
+      const std::string p(prefix);
+      if (fault.name == p + "_write_fail" || fault.name == p + "_write_ok") {
+        fault.output = role;
+        fault.output_error = fault.name.ends_with("_fail") ? EIO : 0;
+        return fault;
+      }
+    }
+    return std::nullopt;
+  }
+  return fault;
+}
+
+}  // namespace weedspray::daemon

@@ -1,0 +1,38 @@
+// Faults injected into the simulated plant at a given time (weedsprayd --sim --sim-fault), so
+// alarms and the fail-safe paths can be exercised end to end.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "daemon/supervision/output_write_watch.hpp"
+
+namespace weedspray::control::plant {
+class HydraulicPlant;
+}
+
+namespace weedspray::daemon {
+
+struct SimFault {
+  std::string name;
+  double at_s = 0;
+  std::function<void(control::plant::HydraulicPlant&)> apply;  // a fault of the plant, or
+  // an output whose writes start failing with EIO ("pump_write_fail"), or work again
+  // ("<output>_write_ok"): output_error is then EIO or 0.
+  std::optional<OutputRole> output;
+  int output_error = 0;
+  // A simulated device's fault: "camera_gone", "camera_back", "tank_silent", "tank_ok".
+  std::string device;
+};
+
+// The names parse_sim_fault() knows, for help texts and the soak.
+inline constexpr const char* kSimFaultNames =
+    "sensor_open, sensor_short, sensor_ok, filter_blocked, filter_ok, tank_empty, tank_refill, "
+    "nozzleN_blocked, nozzleN_ok, camera_gone, camera_back, tank_silent, tank_ok; "
+    "OUTPUT_write_fail / OUTPUT_write_ok with OUTPUT valve, pump, buzzer, led, heartbeat";
+
+// "sensor_open@5" -> the fault; nullopt for an unknown name or a malformed time.
+std::optional<SimFault> parse_sim_fault(const std::string& text);
+
+}  // namespace weedspray::daemon

@@ -1,0 +1,226 @@
+#include "daemon/bus/dbus_service.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "daemon/bus/dbus_names.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+constexpr auto kEmits = SD_BUS_VTABLE_PROPERTY_EMITS_CHANGE;
+// The bus policy (systemd/org.weedspray.Sprayer1.conf) decides who may call methods; sd-bus's
+// own CAP_SYS_ADMIN check is switched off so members of group weedspray can.
+constexpr auto kMethodFlags = SD_BUS_VTABLE_UNPRIVILEGED;
+
+#define WS_PROPERTY(name, signature) \
+  SD_BUS_PROPERTY(name, signature, DbusService::get_property, 0, kEmits)
+
+std::runtime_error bus_error(const char* what, int r) {
+  return std::runtime_error(std::string(what) + ": " + std::strerror(-r));
+}
+
+int append_doubles(sd_bus_message* reply, const std::vector<double>& values) {
+  return sd_bus_message_append_array(reply, 'd', values.data(), values.size() * sizeof(double));
+}
+
+int append_strings(sd_bus_message* reply, const std::vector<std::string>& values) {
+  int r = sd_bus_message_open_container(reply, 'a', "s");
+  for (const auto& value : values) {
+    if (r >= 0) r = sd_bus_message_append(reply, "s", value.c_str());
+  }
+  return r < 0 ? r : sd_bus_message_close_container(reply);
+}
+
+// Names of properties whose value differs between two snapshots.
+std::vector<const char*> changed_properties(const Status& a, const Status& b) {
+  std::vector<const char*> names;
+  const auto check = [&](bool differs, const char* name) {
+    if (differs) names.push_back(name);
+  };
+  check(a.state != b.state, "State");
+  check(a.pressure_mpa != b.pressure_mpa, "Pressure");
+  check(a.pressure_setpoint_mpa != b.pressure_setpoint_mpa, "PressureSetpoint");
+  check(a.flow_l_per_min != b.flow_l_per_min, "Flow");
+  check(a.tank_level_pct != b.tank_level_pct, "TankLevel");
+  check(a.speed_m_per_s != b.speed_m_per_s, "Speed");
+  check(a.distance_m != b.distance_m, "Distance");
+  check(a.nozzle_duty_pct != b.nozzle_duty_pct, "NozzleDuty");
+  check(a.zone_density != b.zone_density, "ZoneDensity");
+  check(a.alarms != b.alarms, "Alarms");
+  check(a.volume_sprayed_l != b.volume_sprayed_l, "VolumeSprayed");
+  check(a.area_covered_m2 != b.area_covered_m2, "AreaCovered");
+  check(a.savings_pct != b.savings_pct, "SavingsPercent");
+  check(a.frame_rate_hz != b.frame_rate_hz, "FrameRate");
+  check(a.vision_latency_ms != b.vision_latency_ms, "VisionLatencyMs");
+  check(a.vision_latency_p99_ms != b.vision_latency_p99_ms, "VisionLatencyP99Ms");
+  check(a.control_overruns != b.control_overruns, "ControlOverruns");
+  check(a.mode != b.mode, "Mode");
+  return names;
+}
+
+const sd_bus_vtable kVtable[] = {
+    SD_BUS_VTABLE_START(0),
+    WS_PROPERTY("State", "s"),
+    WS_PROPERTY("Pressure", "d"),
+    WS_PROPERTY("PressureSetpoint", "d"),
+    WS_PROPERTY("Flow", "d"),
+    WS_PROPERTY("TankLevel", "d"),
+    WS_PROPERTY("Speed", "d"),
+    WS_PROPERTY("Distance", "d"),
+    WS_PROPERTY("NozzleDuty", "ad"),
+    WS_PROPERTY("ZoneDensity", "ad"),
+    WS_PROPERTY("Alarms", "as"),
+    WS_PROPERTY("VolumeSprayed", "d"),
+    WS_PROPERTY("AreaCovered", "d"),
+    WS_PROPERTY("SavingsPercent", "d"),
+    WS_PROPERTY("FrameRate", "d"),
+    WS_PROPERTY("VisionLatencyMs", "d"),
+    WS_PROPERTY("VisionLatencyP99Ms", "d"),
+    WS_PROPERTY("ControlOverruns", "t"),
+    WS_PROPERTY("Mode", "s"),
+    SD_BUS_METHOD("Start", "", "", DbusService::method, kMethodFlags),
+    SD_BUS_METHOD("Stop", "", "", DbusService::method, kMethodFlags),
+    SD_BUS_METHOD("SetPressureSetpoint", "d", "", DbusService::method, kMethodFlags),
+    SD_BUS_METHOD("ReloadConfig", "", "", DbusService::method, kMethodFlags),
+    SD_BUS_METHOD("ClearAlarms", "", "", DbusService::method, kMethodFlags),
+    SD_BUS_METHOD("InjectSimFault", "s", "", DbusService::method, kMethodFlags),
+    SD_BUS_SIGNAL("AlarmRaised", "s", 0),
+    SD_BUS_SIGNAL("AlarmCleared", "s", 0),
+    SD_BUS_VTABLE_END,
+};
+
+}  // namespace
+
+DbusService::DbusService(sd_event* event, bool user_bus, CommandHandler& handler)
+    : handler_(handler) {
+  int r = user_bus ? sd_bus_open_user(&bus_) : sd_bus_open_system(&bus_);
+  if (r < 0)
+    throw bus_error(
+        user_bus ? "cannot connect to the session bus" : "cannot connect to the system bus", r);
+  r = sd_bus_add_object_vtable(bus_, &slot_, kObjectPath, kInterface, kVtable, this);
+  if (r < 0) throw bus_error("cannot register the D-Bus object", r);
+  r = sd_bus_request_name(bus_, kBusName, 0);
+  if (r < 0) throw bus_error("cannot own the name org.weedspray.Sprayer1", r);
+  r = sd_bus_attach_event(bus_, event, SD_EVENT_PRIORITY_NORMAL);
+  if (r < 0) throw bus_error("cannot attach the bus to the event loop", r);
+}
+
+DbusService::~DbusService() {
+  if (slot_ != nullptr) sd_bus_slot_unref(slot_);
+  if (bus_ != nullptr) {
+    sd_bus_flush(bus_);
+    sd_bus_detach_event(bus_);
+    sd_bus_flush_close_unref(bus_);
+  }
+}
+
+void DbusService::update(const Status& status) {
+  status_ = status;
+  std::vector<const char*> names;
+  if (!emitted_once_) {
+    emitted_once_ = true;
+    emitted_ = status_;
+    return;  // nobody has seen a previous value to change from
+  }
+  names = changed_properties(emitted_, status_);
+  if (names.empty()) return;
+  names.push_back(nullptr);
+  sd_bus_emit_properties_changed_strv(bus_, kObjectPath, kInterface,
+                                      const_cast<char**>(names.data()));
+  emitted_ = status_;
+}
+
+void DbusService::alarm_raised(const char* name) {
+  sd_bus_emit_signal(bus_, kObjectPath, kInterface, "AlarmRaised", "s", name);
+}
+
+void DbusService::alarm_cleared(const char* name) {
+  sd_bus_emit_signal(bus_, kObjectPath, kInterface, "AlarmCleared", "s", name);
+}
+
+int DbusService::get_property(sd_bus*, const char*, const char*, const char* property,
+                              sd_bus_message* reply, void* userdata, sd_bus_error* error) {
+  const Status& s = static_cast<DbusService*>(userdata)->status_;
+  const std::string_view p(property);
+  if (p == "State") return sd_bus_message_append(reply, "s", s.state.c_str());
+  if (p == "Pressure") return sd_bus_message_append(reply, "d", s.pressure_mpa);
+  if (p == "PressureSetpoint") return sd_bus_message_append(reply, "d", s.pressure_setpoint_mpa);
+  if (p == "Flow") return sd_bus_message_append(reply, "d", s.flow_l_per_min);
+  if (p == "TankLevel") return sd_bus_message_append(reply, "d", s.tank_level_pct);
+  if (p == "Speed") return sd_bus_message_append(reply, "d", s.speed_m_per_s);
+  if (p == "Distance") return sd_bus_message_append(reply, "d", s.distance_m);
+  if (p == "NozzleDuty") return append_doubles(reply, s.nozzle_duty_pct);
+  if (p == "ZoneDensity") return append_doubles(reply, s.zone_density);
+  if (p == "Alarms") return append_strings(reply, s.alarms);
+  if (p == "VolumeSprayed") return sd_bus_message_append(reply, "d", s.volume_sprayed_l);
+  if (p == "AreaCovered") return sd_bus_message_append(reply, "d", s.area_covered_m2);
+  if (p == "SavingsPercent") return sd_bus_message_append(reply, "d", s.savings_pct);
+  if (p == "FrameRate") return sd_bus_message_append(reply, "d", s.frame_rate_hz);
+  if (p == "VisionLatencyMs") return sd_bus_message_append(reply, "d", s.vision_latency_ms);
+  if (p == "VisionLatencyP99Ms") return sd_bus_message_append(reply, "d", s.vision_latency_p99_ms);
+  if (p == "ControlOverruns") {
+    return sd_bus_message_append(reply, "t", static_cast<std::uint64_t>(s.control_overruns));
+  }
+  if (p == "Mode") return sd_bus_message_append(reply, "s", s.mode.c_str());
+  return sd_bus_error_setf(error, SD_BUS_ERROR_UNKNOWN_PROPERTY, "no property %s", property);
+}
+
+int DbusService::method(sd_bus_message* message, void* userdata, sd_bus_error* error) {
+  return handle_method_call(message, static_cast<DbusService*>(userdata)->handler_, error);
+}
+
+namespace {
+
+int dispatch(sd_bus_message* message, CommandHandler& handler, sd_bus_error* error) {
+  const char* member_name = sd_bus_message_get_member(message);
+  const std::string_view member(member_name != nullptr ? member_name : "");
+  CommandResult result;
+  if (member == "Start") {
+    result = handler.start();
+  } else if (member == "Stop") {
+    result = handler.stop();
+  } else if (member == "SetPressureSetpoint") {
+    double mpa = 0;
+    const int r = sd_bus_message_read(message, "d", &mpa);
+    if (r < 0) return r;
+    result = handler.set_pressure_setpoint(mpa);
+  } else if (member == "ReloadConfig") {
+    result = handler.reload_config();
+  } else if (member == "ClearAlarms") {
+    result = handler.clear_alarms();
+  } else if (member == "InjectSimFault") {
+    const char* name = nullptr;
+    const int r = sd_bus_message_read(message, "s", &name);
+    if (r < 0) return r;
+    result = handler.inject_sim_fault(name);
+  } else {
+    return sd_bus_error_setf(error, SD_BUS_ERROR_UNKNOWN_METHOD, "no method %s",
+                             std::string(member).c_str());
+  }
+  if (!result.ok()) {
+    return sd_bus_error_set(error, result.error_name.c_str(), result.message.c_str());
+  }
+  return sd_bus_reply_method_return(message, "");
+}
+
+}  // namespace
+
+int handle_method_call(sd_bus_message* message, CommandHandler& handler, sd_bus_error* error) {
+  // An exception must not cross sd-bus's C frames: it becomes the caller's error reply.
+  try {
+    return dispatch(message, handler, error);
+  } catch (const std::exception& e) {
+    const char* member = sd_bus_message_get_member(message);
+    return sd_bus_error_setf(error, SD_BUS_ERROR_FAILED, "%s failed: %s",
+                             member != nullptr ? member : "call", e.what());
+  } catch (...) {
+    return sd_bus_error_set(error, SD_BUS_ERROR_FAILED, "unknown error");
+  }
+}
+
+}  // namespace weedspray::daemon

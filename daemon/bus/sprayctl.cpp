@@ -1,0 +1,350 @@
+// sprayctl: a small command-line client of weedsprayd over D-Bus (sd-bus).
+//   sprayctl [--user] [--json] status|monitor|start|stop|set-pressure
+//   MPA|alarms|clear-alarms|reload
+#include <systemd/sd-bus.h>
+#include <CLI/CLI.hpp>
+
+#include <cerrno>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "daemon/bus/dbus_names.hpp"
+
+namespace {
+
+using namespace weedspray::daemon;
+using Value = std::variant<std::string, double, std::uint64_t, bool, std::vector<double>,
+                           std::vector<std::string>>;
+using Properties = std::map<std::string, Value>;
+
+struct BusError {
+  std::string message;
+};
+
+// Minimal JSON string escaping (the output has only flat values; no JSON library in the
+// project's package list).
+std::string json_string(const std::string& s) {
+  std::ostringstream out;
+  out << '"';
+  for (const unsigned char c : s) {
+    if (c == '"' || c == '\\') {
+      out << '\\' << c;
+    } else if (c < 0x20) {
+      out << "\\u" << std::hex << std::setw(4) << std::setfill('0') << static_cast<int>(c)
+          << std::dec;
+    } else {
+      out << c;
+    }
+  }
+  out << '"';
+  return out.str();
+}
+
+std::string json_value(const Value& value) {
+  std::ostringstream out;
+  out << std::setprecision(10);
+  std::visit(
+      [&](const auto& v) {
+        using V = std::decay_t<decltype(v)>;
+        if constexpr (std::is_same_v<V, std::string>) {
+          out << json_string(v);
+        } else if constexpr (std::is_same_v<V, bool>) {
+          out << (v ? "true" : "false");
+        } else if constexpr (std::is_same_v<V, std::vector<double>>) {
+          out << '[';
+          for (std::size_t i = 0; i < v.size(); ++i) out << (i ? "," : "") << v[i];
+          out << ']';
+        } else if constexpr (std::is_same_v<V, std::vector<std::string>>) {
+          out << '[';
+          for (std::size_t i = 0; i < v.size(); ++i) out << (i ? "," : "") << json_string(v[i]);
+          out << ']';
+        } else {
+          out << v;
+        }
+      },
+      value);
+  return out.str();
+}
+
+// A reading that rounds to zero at three decimals prints as 0.000, not -0.000 (sensor noise).
+double shown(double x) {
+  return std::abs(x) < 0.0005 ? 0.0 : x;
+}
+
+std::string text_value(const Value& value) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(3);
+  std::visit(
+      [&](const auto& v) {
+        using V = std::decay_t<decltype(v)>;
+        if constexpr (std::is_same_v<V, std::vector<double>>) {
+          for (std::size_t i = 0; i < v.size(); ++i) out << (i ? " " : "") << shown(v[i]);
+        } else if constexpr (std::is_same_v<V, double>) {
+          out << shown(v);
+        } else if constexpr (std::is_same_v<V, std::vector<std::string>>) {
+          for (std::size_t i = 0; i < v.size(); ++i) out << (i ? ", " : "") << v[i];
+          if (v.empty()) out << "none";
+        } else {
+          out << v;
+        }
+      },
+      value);
+  return out.str();
+}
+
+void check(int r, const char* what) {
+  if (r < 0) throw BusError{std::string(what) + ": " + std::strerror(-r)};
+}
+
+// Reads one variant (of the types the service uses) from `m`.
+Value read_variant(sd_bus_message* m) {
+  char type = 0;
+  const char* contents = nullptr;
+  check(sd_bus_message_peek_type(m, &type, &contents), "peek");
+  check(sd_bus_message_enter_container(m, 'v', contents), "variant");
+  Value value;
+  const std::string sig(contents);
+  if (sig == "s") {
+    const char* s = nullptr;
+    check(sd_bus_message_read(m, "s", &s), "read s");
+    value = std::string(s);
+  } else if (sig == "d") {
+    double d = 0;
+    check(sd_bus_message_read(m, "d", &d), "read d");
+    value = d;
+  } else if (sig == "t") {
+    std::uint64_t t = 0;
+    check(sd_bus_message_read(m, "t", &t), "read t");
+    value = t;
+  } else if (sig == "b") {
+    int b = 0;
+    check(sd_bus_message_read(m, "b", &b), "read b");
+    value = b != 0;
+  } else if (sig == "ad") {
+    const void* data = nullptr;
+    std::size_t size = 0;
+    check(sd_bus_message_read_array(m, 'd', &data, &size), "read ad");
+    const auto* doubles = static_cast<const double*>(data);
+    value = std::vector<double>(doubles, doubles + size / sizeof(double));
+  } else if (sig == "as") {
+    char** strv = nullptr;
+    check(sd_bus_message_read_strv(m, &strv), "read as");
+    std::vector<std::string> strings;
+    for (char** s = strv; s && *s; ++s) {
+      strings.emplace_back(*s);
+      free(*s);
+    }
+    free(strv);
+    value = strings;
+  } else {
+    check(sd_bus_message_skip(m, contents), "skip");
+    value = std::string("<" + sig + ">");
+  }
+  check(sd_bus_message_exit_container(m), "exit variant");
+  return value;
+}
+
+// Reads an a{sv} dictionary.
+Properties read_properties(sd_bus_message* m) {
+  Properties properties;
+  check(sd_bus_message_enter_container(m, 'a', "{sv}"), "enter a{sv}");
+  while (true) {
+    const int r = sd_bus_message_enter_container(m, 'e', "sv");
+    check(r, "enter entry");
+    if (r == 0) break;
+    const char* name = nullptr;
+    check(sd_bus_message_read(m, "s", &name), "read name");
+    const std::string key(name);
+    properties[key] = read_variant(m);
+    check(sd_bus_message_exit_container(m), "exit entry");
+  }
+  check(sd_bus_message_exit_container(m), "exit a{sv}");
+  return properties;
+}
+
+class Client {
+ public:
+  explicit Client(bool user_bus) {
+    const int r = user_bus ? sd_bus_open_user(&bus_) : sd_bus_open_system(&bus_);
+    if (r < 0) {
+      throw BusError{std::string("cannot connect to the ") + (user_bus ? "session" : "system") +
+                     " bus: " + std::strerror(-r)};
+    }
+  }
+  ~Client() { sd_bus_flush_close_unref(bus_); }
+
+  Properties get_all() {
+    sd_bus_error error = SD_BUS_ERROR_NULL;
+    sd_bus_message* reply = nullptr;
+    const int r = sd_bus_call_method(bus_, kBusName, kObjectPath, "org.freedesktop.DBus.Properties",
+                                     "GetAll", &error, &reply, "s", kInterface);
+    if (r < 0) fail(error, r);
+    Properties properties = read_properties(reply);
+    sd_bus_message_unref(reply);
+    return properties;
+  }
+
+  void call(const char* method, const char* signature = "", double argument = 0) {
+    sd_bus_error error = SD_BUS_ERROR_NULL;
+    sd_bus_message* reply = nullptr;
+    const int r = signature[0] == '\0'
+                      ? sd_bus_call_method(bus_, kBusName, kObjectPath, kInterface, method, &error,
+                                           &reply, "")
+                      : sd_bus_call_method(bus_, kBusName, kObjectPath, kInterface, method, &error,
+                                           &reply, signature, argument);
+    if (r < 0) fail(error, r);
+    sd_bus_message_unref(reply);
+  }
+
+  int monitor(bool json) {
+    const std::string match =
+        std::string("type='signal',sender='") + kBusName + "',path='" + kObjectPath + "'";
+    json_ = json;
+    check(sd_bus_add_match(bus_, nullptr, match.c_str(), &Client::on_signal, this), "add match");
+    static volatile std::sig_atomic_t stop = 0;
+    std::signal(SIGINT, [](int) { stop = 1; });
+    std::signal(SIGTERM, [](int) { stop = 1; });
+    while (!stop) {
+      const int r = sd_bus_process(bus_, nullptr);
+      if (r < 0 && r != -EINTR) check(r, "process");
+      if (r > 0) continue;
+      const int w = sd_bus_wait(bus_, 500000);
+      if (w < 0 && w != -EINTR) check(w, "wait");
+    }
+    return 0;
+  }
+
+ private:
+  [[noreturn]] static void fail(sd_bus_error& error, int r) {
+    std::string message = error.message ? error.message : std::strerror(-r);
+    if (error.name) message = std::string(error.name) + ": " + message;
+    sd_bus_error_free(&error);
+    throw BusError{message};
+  }
+
+  static int on_signal(sd_bus_message* m, void* userdata, sd_bus_error*) {
+    auto& self = *static_cast<Client*>(userdata);
+    const std::string member = sd_bus_message_get_member(m);
+    if (member == "PropertiesChanged") {
+      const char* interface = nullptr;
+      if (sd_bus_message_read(m, "s", &interface) < 0) return 0;
+      const Properties changed = read_properties(m);
+      for (const auto& [name, value] : changed) self.print_event("property", name, value);
+    } else if (member == "AlarmRaised" || member == "AlarmCleared") {
+      const char* name = nullptr;
+      if (sd_bus_message_read(m, "s", &name) < 0) return 0;
+      self.print_event(member == "AlarmRaised" ? "alarm-raised" : "alarm-cleared", name,
+                       std::string(name));
+    }
+    std::cout.flush();
+    return 0;
+  }
+
+  void print_event(const std::string& kind, const std::string& name, const Value& value) {
+    if (json_) {
+      std::cout << "{\"event\":" << json_string(kind) << ",\"name\":" << json_string(name)
+                << ",\"value\":" << json_value(value) << "}\n";
+    } else if (kind == "property") {
+      std::cout << name << " = " << text_value(value) << "\n";
+    } else {
+      std::cout << kind << ": " << name << "\n";
+    }
+  }
+
+  sd_bus* bus_ = nullptr;
+  bool json_ = false;
+};
+
+void print_status(const Properties& p, bool json) {
+  if (json) {
+    std::cout << '{';
+    bool first = true;
+    for (const auto& [name, value] : p) {
+      std::cout << (first ? "" : ",") << json_string(name) << ':' << json_value(value);
+      first = false;
+    }
+    std::cout << "}\n";
+    return;
+  }
+  const auto get = [&](const char* name) {
+    const auto found = p.find(name);
+    return found == p.end() ? std::string("?") : text_value(found->second);
+  };
+  std::cout << "State:         " << get("State") << " (" << get("Mode") << ")\n"
+            << "Pressure:      " << get("Pressure") << " MPa (set-point " << get("PressureSetpoint")
+            << " MPa)\n"
+            << "Flow:          " << get("Flow") << " L/min\n"
+            << "Tank:          " << get("TankLevel") << " %\n"
+            << "Speed:         " << get("Speed") << " m/s, distance " << get("Distance") << " m\n"
+            << "Nozzle duty:   " << get("NozzleDuty") << " %\n"
+            << "Zone density:  " << get("ZoneDensity") << "\n"
+            << "Sprayed:       " << get("VolumeSprayed") << " L over " << get("AreaCovered")
+            << " m^2, saving " << get("SavingsPercent") << " %\n"
+            << "Vision:        " << get("FrameRate") << " fps, latency " << get("VisionLatencyMs")
+            << " ms (p99 " << get("VisionLatencyP99Ms") << " ms)\n"
+            << "Overruns:      " << get("ControlOverruns") << "\n"
+            << "Alarms:        " << get("Alarms") << "\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"sprayctl: status and control of weedsprayd over D-Bus"};
+  bool user_bus = false;
+  bool json = false;
+  double pressure_mpa = 0;
+  app.add_flag("--user", user_bus, "use the session bus (weedsprayd --user)");
+  app.add_flag("--json", json, "machine-readable output (one JSON object per line)");
+  app.require_subcommand(1);
+  auto* status = app.add_subcommand("status", "show the sprayer's state and measurements");
+  auto* monitor = app.add_subcommand("monitor", "print property changes and alarms until Ctrl-C");
+  auto* start = app.add_subcommand("start", "start spraying");
+  auto* stop = app.add_subcommand("stop", "stop spraying (valves closed, pump held)");
+  auto* set_pressure = app.add_subcommand("set-pressure", "change the pressure set-point");
+  set_pressure->add_option("MPA", pressure_mpa, "set-point in MPa")->required();
+  auto* alarms = app.add_subcommand("alarms", "list latched alarms");
+  auto* clear_alarms = app.add_subcommand("clear-alarms", "clear latched alarms (leaves Fault)");
+  auto* reload = app.add_subcommand("reload", "re-read the configuration");
+  for (auto* sub : {status, monitor, alarms}) sub->add_flag("--json", json, "JSON output");
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    Client client(user_bus);
+    if (*status) {
+      print_status(client.get_all(), json);
+    } else if (*monitor) {
+      return client.monitor(json);
+    } else if (*start) {
+      client.call("Start");
+    } else if (*stop) {
+      client.call("Stop");
+    } else if (*set_pressure) {
+      client.call("SetPressureSetpoint", "d", pressure_mpa);
+    } else if (*alarms) {
+      const Properties p = client.get_all();
+      const auto found = p.find("Alarms");
+      if (found == p.end()) throw BusError{"no Alarms property"};
+      std::cout << (json ? "{\"Alarms\":" + json_value(found->second) + "}"
+                         : text_value(found->second))
+                << "\n";
+    } else if (*clear_alarms) {
+      client.call("ClearAlarms");
+    } else if (*reload) {
+      client.call("ReloadConfig");
+    }
+  } catch (const BusError& error) {
+    std::cerr << "sprayctl: " << error.message << "\n";
+    return 1;
+  }
+  return 0;
+}

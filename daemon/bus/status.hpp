@@ -1,0 +1,58 @@
+// What the daemon shows over D-Bus: one plain snapshot, assembled by the main loop from the
+// real-time threads' published values.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace weedspray::daemon {
+
+struct Status {
+  std::string state = "Starting";
+  double pressure_mpa = 0;
+  double pressure_setpoint_mpa = 0;
+  double flow_l_per_min = 0;
+  double tank_level_pct = 0;
+  double speed_m_per_s = 0;
+  double distance_m = 0;
+  std::vector<double> nozzle_duty_pct;
+  std::vector<double> zone_density;
+  std::vector<std::string> alarms;  // latched alarm names
+  double volume_sprayed_l = 0;
+  double area_covered_m2 = 0;
+  double savings_pct = 0;  // liquid saved against uniform spraying at the nominal dose
+  double frame_rate_hz = 0;
+  double vision_latency_ms = 0;      // frame capture -> duty scheduled, latest frame
+  double vision_latency_p99_ms = 0;  // over the last 1000 frames
+  std::uint64_t control_overruns = 0;
+  std::string mode = "hw";  // hw | sim
+
+  bool operator==(const Status&) const = default;
+};
+
+// The outcome of a command: empty error_name = done.
+struct CommandResult {
+  std::string error_name;  // e.g. "org.weedspray.Sprayer1.Error.InvalidArgument"
+  std::string message;
+  bool ok() const { return error_name.empty(); }
+};
+
+inline constexpr const char* kErrorInvalidArgument = "org.weedspray.Sprayer1.Error.InvalidArgument";
+inline constexpr const char* kErrorNotPermitted = "org.weedspray.Sprayer1.Error.NotPermitted";
+inline constexpr const char* kErrorConfig = "org.weedspray.Sprayer1.Error.Config";
+
+// Implemented by the daemon; called on the main thread by the D-Bus service.
+class CommandHandler {
+ public:
+  virtual ~CommandHandler() = default;
+  virtual CommandResult start() = 0;
+  virtual CommandResult stop() = 0;
+  virtual CommandResult set_pressure_setpoint(double mpa) = 0;
+  virtual CommandResult reload_config() = 0;
+  virtual CommandResult clear_alarms() = 0;
+  // Simulation only (the soak, tests): a fault by name now (daemon/backends/sim_faults.hpp).
+  virtual CommandResult inject_sim_fault(const std::string& name) = 0;
+};
+
+}  // namespace weedspray::daemon

@@ -1,0 +1,551 @@
+// Parses TOML documents into Config against the key table of config_schema.cpp.
+#include <toml++/toml.h>
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <tuple>
+#include <type_traits>
+
+#include "daemon/config/config.hpp"
+#include "daemon/config/config_schema.hpp"
+#include "daemon/config/vision_config.hpp"
+
+namespace weedspray::daemon {
+
+ConfigError::ConfigError(std::string file, int line, std::string key, const std::string& message)
+    : std::runtime_error(file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " +
+                         (key.empty() ? std::string() : key + ": ") + message),
+      file_(std::move(file)),
+      line_(line),
+      key_(std::move(key)) {}
+
+std::filesystem::path Config::as_applied_dir() const {
+  if (!log.dir.empty()) return log.dir;
+  return std::filesystem::path(daemon.state_dir) / "as-applied";
+}
+
+namespace {
+
+std::string format_number(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+std::string_view node_type_name(const toml::node& node) {
+  switch (node.type()) {
+    case toml::node_type::table:
+      return "table";
+    case toml::node_type::array:
+      return "array";
+    case toml::node_type::string:
+      return "string";
+    case toml::node_type::integer:
+      return "integer";
+    case toml::node_type::floating_point:
+      return "floating-point number";
+    case toml::node_type::boolean:
+      return "boolean";
+    default:
+      return "date/time";
+  }
+}
+
+// An integer or floating-point node's value.
+double number_of(const toml::node& node) {
+  return node.is_integer() ? static_cast<double>(node.as_integer()->get())
+                           : node.as_floating_point()->get();
+}
+
+int line_of(const toml::node& node) {
+  return static_cast<int>(node.source().begin.line);
+}
+
+template <class Root>
+void apply_default(const KeySpec<Root>& spec, Root& root) {
+  std::visit(
+      [&](auto access) {
+        auto& member = access(root);
+        using Member = std::remove_reference_t<decltype(member)>;
+        member = std::get<Member>(spec.default_value);
+      },
+      spec.field);
+}
+
+struct Where {
+  const std::string& file;
+  const std::string& key;  // full key name as written ("camera[1].fps")
+};
+
+template <class Root>
+void set_from_node(const KeySpec<Root>& spec, Root& root, const toml::node& node,
+                   const Where& where) {
+  const auto fail = [&](const std::string& message) {
+    throw ConfigError(where.file, line_of(node), where.key, message);
+  };
+  const auto expect = [&](std::string_view wanted) {
+    fail("expected " + std::string(wanted) + ", got " + std::string(node_type_name(node)));
+  };
+  const auto check_range = [&](double value) {
+    if (!std::isfinite(value) || value < spec.min || value > spec.max) {
+      fail(format_number(value) + " is outside " + format_number(spec.min) + ".." +
+           format_number(spec.max) + (spec.unit.empty() ? "" : " " + std::string(spec.unit)));
+    }
+  };
+  // An array key: every element must pass `accepts`; `convert` reads (and range-checks) it.
+  const auto set_list = [&]<class T>(std::type_identity<T>, const std::string& wanted,
+                                     bool (toml::node::*accepts)() const noexcept, auto convert) {
+    if (!node.is_array()) expect("array of " + wanted);
+    std::vector<T> values;
+    for (const auto& element : *node.as_array()) {
+      if (!(element.*accepts)()) {
+        throw ConfigError(
+            where.file, line_of(element), where.key,
+            "expected " + wanted + " in the array, got " + std::string(node_type_name(element)));
+      }
+      values.push_back(convert(element));
+    }
+    std::get<std::vector<T>& (*)(Root&)>(spec.field)(root) = std::move(values);
+  };
+  switch (spec.type()) {
+    case KeyType::kBool:
+      if (!node.is_boolean()) expect("boolean");
+      std::get<bool& (*)(Root&)>(spec.field)(root) = node.as_boolean()->get();
+      break;
+    case KeyType::kInt: {
+      if (!node.is_integer()) expect("integer");
+      const auto value = node.as_integer()->get();
+      check_range(static_cast<double>(value));
+      std::get<int& (*)(Root&)>(spec.field)(root) = static_cast<int>(value);
+      break;
+    }
+    case KeyType::kDouble: {
+      if (!node.is_number()) expect("number");
+      const double value = number_of(node);
+      check_range(value);
+      std::get<double& (*)(Root&)>(spec.field)(root) = value;
+      break;
+    }
+    case KeyType::kString:
+    case KeyType::kEnum: {
+      if (!node.is_string()) expect("string");
+      const std::string& value = node.as_string()->get();
+      if (!spec.choices.empty() &&
+          std::find(spec.choices.begin(), spec.choices.end(), value) == spec.choices.end()) {
+        std::string allowed;
+        for (auto choice : spec.choices) {
+          allowed += (allowed.empty() ? "" : ", ") + std::string("\"") + std::string(choice) + "\"";
+        }
+        fail("\"" + value + "\" is not one of " + allowed);
+      }
+      std::get<std::string& (*)(Root&)>(spec.field)(root) = value;
+      break;
+    }
+    case KeyType::kIntList:
+      set_list(std::type_identity<int>{}, "integers", &toml::node::is_integer,
+               [&](const toml::node& element) {
+                 const auto value = element.as_integer()->get();
+                 check_range(static_cast<double>(value));
+                 return static_cast<int>(value);
+               });
+      break;
+    case KeyType::kDoubleList:
+      set_list(std::type_identity<double>{}, "numbers", &toml::node::is_number,
+               [&](const toml::node& element) {
+                 const double value = number_of(element);
+                 check_range(value);
+                 return value;
+               });
+      break;
+    case KeyType::kStringList:
+      set_list(std::type_identity<std::string>{}, "strings", &toml::node::is_string,
+               [](const toml::node& element) { return element.as_string()->get(); });
+      break;
+  }
+}
+
+template <class Root>
+std::map<std::string, const KeySpec<Root>*, std::less<>> index_by_name(
+    const std::vector<KeySpec<Root>>& specs) {
+  std::map<std::string, const KeySpec<Root>*, std::less<>> index;
+  for (const auto& spec : specs) index[spec.full_name()] = &spec;
+  return index;
+}
+
+class Loader {
+ public:
+  Loader() : config_(default_config()) {}
+
+  void apply(const std::string& file, const toml::table& document) {
+    config_.files.push_back(file);
+    for (const auto& [section_key, section_node] : document) {
+      const std::string section(section_key.str());
+      const int line = static_cast<int>(section_key.source().begin.line);
+      if (section == "camera") {
+        apply_cameras(file, section_node);
+        continue;
+      }
+      if (!sections().count(section)) {
+        throw ConfigError(file, line, section, "unknown section");
+      }
+      if (!section_node.is_table()) {
+        throw ConfigError(file, line, section, "expected a [" + section + "] table");
+      }
+      for (const auto& [name_key, value_node] : *section_node.as_table()) {
+        const std::string full = section + "." + std::string(name_key.str());
+        const auto found = keys_.find(full);
+        if (found == keys_.end()) {
+          throw ConfigError(file, static_cast<int>(name_key.source().begin.line), full,
+                            "unknown key");
+        }
+        set_from_node(*found->second, config_, value_node, Where{file, full});
+        config_.sources[full] = KeySource{file, line_of(value_node)};
+      }
+    }
+  }
+
+  Config finish() {
+    if (!cameras_given_) config_.cameras.front().nozzle_count = config_.boom.nozzles;
+    validate();
+    try {
+      config_.model = check_weed_source(config_);
+    } catch (const VisionKeyError& error) {
+      // A key left at its default is reported where the weed source was chosen.
+      fail(error.key(), error.what(), "vision.weed_source");
+    }
+    return std::move(config_);
+  }
+
+ private:
+  static const std::set<std::string>& sections() {
+    static const std::set<std::string> names = [] {
+      std::set<std::string> result;
+      for (const auto& spec : config_keys()) result.emplace(spec.section);
+      return result;
+    }();
+    return names;
+  }
+
+  void apply_cameras(const std::string& file, const toml::node& node) {
+    const auto* array = node.as_array();
+    if (array == nullptr || !array->is_array_of_tables() || array->empty()) {
+      throw ConfigError(file, line_of(node), "camera",
+                        "cameras are declared as [[camera]] tables, one per camera");
+    }
+    cameras_given_ = true;
+    config_.cameras.clear();  // a file that declares cameras declares all of them
+    std::erase_if(config_.sources,
+                  [](const auto& entry) { return entry.first.starts_with("camera["); });
+    for (std::size_t i = 0; i < array->size(); ++i) {
+      CameraSection camera{};
+      for (const auto& spec : camera_keys()) apply_default(spec, camera);
+      config_.sources["camera[" + std::to_string(i) + "]"] =
+          KeySource{file, line_of(*array->get(i))};
+      for (const auto& [name_key, value_node] : *array->get(i)->as_table()) {
+        const std::string name(name_key.str());
+        const std::string full = "camera[" + std::to_string(i) + "]." + name;
+        const auto found = camera_index_.find("camera." + name);
+        if (found == camera_index_.end()) {
+          throw ConfigError(file, static_cast<int>(name_key.source().begin.line), full,
+                            "unknown key");
+        }
+        set_from_node(*found->second, camera, value_node, Where{file, full});
+        config_.sources[full] = KeySource{file, line_of(value_node)};
+      }
+      config_.cameras.push_back(std::move(camera));
+    }
+  }
+
+  [[noreturn]] void fail(const std::string& key, const std::string& message,
+                         const std::string& located_by = "") const {
+    auto source = config_.sources.find(key);
+    if (source == config_.sources.end()) {
+      source = config_.sources.find(key.substr(0, key.find('.')));  // "camera[1]"
+    }
+    if (source == config_.sources.end() && !located_by.empty()) {
+      source = config_.sources.find(located_by);
+    }
+    if (source == config_.sources.end()) {
+      throw ConfigError(config_.files.empty() ? "<defaults>" : config_.files.back(), 0, key,
+                        message);
+    }
+    throw ConfigError(source->second.file, source->second.line, key, message);
+  }
+
+  // Every GPIO line is used once on its chip: two nozzles on one valve line, the pump on a
+  // valve's line, or an input sharing an output's line are refused, naming both keys.
+  void validate_gpio_lines_unique() const {
+    const auto& g = config_.gpio;
+    std::map<std::string, std::string> claimed;  // "offset 3" / "name 'PUMP'" -> key
+    const auto claim = [&](const std::string& line, const std::string& key,
+                           const std::string& located_by) {
+      const auto [it, inserted] = claimed.emplace(line, key);
+      if (!inserted) fail(key, line + " is already " + it->second, located_by);
+    };
+    for (std::size_t i = 0; i < g.valve_offsets.size(); ++i) {
+      claim("line " + std::to_string(g.valve_offsets[i]),
+            "gpio.valve_offsets[" + std::to_string(i) + "]", "gpio.valve_offsets");
+    }
+    for (std::size_t i = 0; i < g.valve_names.size(); ++i) {
+      claim("line '" + g.valve_names[i] + "'", "gpio.valve_names[" + std::to_string(i) + "]",
+            "gpio.valve_names");
+    }
+    const bool wheel_wired = config_.wheel.source != "fixed";
+    for (const auto& [offset, name, what, used] :
+         {std::tuple{g.pump_offset, &g.pump_name, "pump", true},
+          std::tuple{g.buzzer_offset, &g.buzzer_name, "buzzer", true},
+          std::tuple{g.led_offset, &g.led_name, "led", true},
+          std::tuple{g.heartbeat_offset, &g.heartbeat_name, "heartbeat", true},
+          std::tuple{g.key_offset, &g.key_name, "key", true},
+          std::tuple{g.flow_offset, &g.flow_name, "flow", config_.flow.counter.empty()},
+          std::tuple{g.wheel_offset, &g.wheel_name, "wheel", wheel_wired}}) {
+      if (!used) continue;
+      const std::string prefix = std::string("gpio.") + what;
+      if (offset >= 0) claim("line " + std::to_string(offset), prefix + "_offset", "");
+      if (!name->empty()) claim("line '" + *name + "'", prefix + "_name", "");
+    }
+  }
+
+  // Rules between keys; the message names the key whose value was set last in a file.
+  void validate() const {
+    const auto& c = config_;
+    std::vector<int> owner(static_cast<std::size_t>(c.boom.nozzles), -1);
+    for (std::size_t i = 0; i < c.cameras.size(); ++i) {
+      const auto& camera = c.cameras[i];
+      const std::string prefix = "camera[" + std::to_string(i) + "].";
+      const int last = camera.first_nozzle + camera.nozzle_count;
+      if (last > c.boom.nozzles) {
+        fail(prefix + "nozzle_count",
+             "nozzles " + std::to_string(camera.first_nozzle) + ".." + std::to_string(last - 1) +
+                 " do not exist (boom.nozzles = " + std::to_string(c.boom.nozzles) + ")");
+      }
+      for (int n = camera.first_nozzle; n < last; ++n) {
+        if (owner[static_cast<std::size_t>(n)] >= 0) {
+          fail(prefix + "first_nozzle",
+               "nozzle " + std::to_string(n) + " is already steered by camera[" +
+                   std::to_string(owner[static_cast<std::size_t>(n)]) + "]");
+        }
+        owner[static_cast<std::size_t>(n)] = static_cast<int>(i);
+      }
+    }
+    if (!c.gpio.valve_offsets.empty() &&
+        c.gpio.valve_offsets.size() != static_cast<std::size_t>(c.boom.nozzles)) {
+      fail("gpio.valve_offsets",
+           std::to_string(c.gpio.valve_offsets.size()) +
+               " lines listed for boom.nozzles = " + std::to_string(c.boom.nozzles));
+    }
+    if (!c.gpio.valve_names.empty() &&
+        c.gpio.valve_names.size() != static_cast<std::size_t>(c.boom.nozzles)) {
+      fail("gpio.valve_names",
+           std::to_string(c.gpio.valve_names.size()) +
+               " lines listed for boom.nozzles = " + std::to_string(c.boom.nozzles));
+    }
+    if (!c.gpio.valve_names.empty() && !c.gpio.valve_offsets.empty()) {
+      fail("gpio.valve_names", "name the valve lines by offset or by name, not both");
+    }
+    for (const auto& [name, offset, key] :
+         {std::tuple{&c.gpio.pump_name, c.gpio.pump_offset, "gpio.pump_name"},
+          std::tuple{&c.gpio.buzzer_name, c.gpio.buzzer_offset, "gpio.buzzer_name"},
+          std::tuple{&c.gpio.led_name, c.gpio.led_offset, "gpio.led_name"},
+          std::tuple{&c.gpio.heartbeat_name, c.gpio.heartbeat_offset, "gpio.heartbeat_name"},
+          std::tuple{&c.gpio.key_name, c.gpio.key_offset, "gpio.key_name"},
+          std::tuple{&c.gpio.flow_name, c.gpio.flow_offset, "gpio.flow_name"},
+          std::tuple{&c.gpio.wheel_name, c.gpio.wheel_offset, "gpio.wheel_name"}}) {
+      if (!name->empty() && offset >= 0) {
+        fail(key, "set either the line name or its offset, not both");
+      }
+    }
+    validate_gpio_lines_unique();
+    if (!c.flow.counter.empty() && (!c.gpio.flow_name.empty() || c.gpio.flow_offset >= 0)) {
+      fail("flow.counter",
+           "the flow meter is wired either to a GPIO line (gpio.flow_offset / "
+           "gpio.flow_name) or to a kernel counter, not both");
+    }
+    if (c.spray.quantiser_levels == 1) {
+      fail("spray.quantiser_levels", "must be 0 (no quantisation) or 2..14");
+    }
+    for (std::size_t i = 0; i < c.cameras.size(); ++i) {
+      const auto& camera = c.cameras[i];
+      if (camera.tilt_deg + camera.vfov_deg / 2 >= 89.0) {
+        fail("camera[" + std::to_string(i) + "].tilt_deg",
+             "tilt_deg + vfov_deg / 2 must stay below 89 (the top of the image sees the horizon)");
+      }
+    }
+    if (c.spray.duty_min_pct >= c.spray.duty_max_pct) {
+      fail("spray.duty_max_pct", "must be above spray.duty_min_pct");
+    }
+    if (c.pressure.sensor_min_mpa >= c.pressure.sensor_max_mpa) {
+      fail("pressure.sensor_max_mpa", "must be above pressure.sensor_min_mpa");
+    }
+    if (c.pressure.output_min >= c.pressure.output_max) {
+      fail("pressure.output_max", "must be above pressure.output_min");
+    }
+    if (c.pressure.setpoint_mpa >= c.alarms.over_pressure_mpa) {
+      fail("pressure.setpoint_mpa", "must be below alarms.over_pressure_mpa (" +
+                                        format_number(c.alarms.over_pressure_mpa) + " MPa)");
+    }
+    if (c.alarms.tank_empty_pct >= c.alarms.tank_low_pct) {
+      fail("alarms.tank_empty_pct", "must be below alarms.tank_low_pct");
+    }
+    validate_analog_modbus();
+    if (c.sim.speed_min_m_per_s > c.sim.speed_max_m_per_s) {
+      fail("sim.speed_min_m_per_s", "must not exceed sim.speed_max_m_per_s");
+    }
+  }
+
+  // The Modbus analog modules share one bus, served by the converters' thread alone.
+  void validate_analog_modbus() const {
+    const auto& c = config_;
+    const bool adc = c.adc.source == "modbus";
+    const bool dac = c.dac.source == "modbus";
+    if (!adc && !dac) return;
+    if (c.modbus.enabled && c.modbus.device == c.analog_modbus.device) {
+      fail("analog_modbus.device",
+           c.analog_modbus.device +
+               " is also the tank sensor's [modbus] port, which another thread polls: give the "
+               "analog modules their own port");
+    }
+    if (adc && dac && c.adc.modbus_slave_id == c.dac.modbus_slave_id &&
+        c.adc.modbus_register_type == "holding" && c.adc.modbus_register == c.dac.modbus_register) {
+      fail("dac.modbus_register", "is the register the pressure is read from");
+    }
+    // One RTU transaction: 8-byte request + 7-byte answer + two 3.5-character silences, 11 bits
+    // a character. The converters' thread reads at most half a loop period ahead.
+    const double transaction_s = 22.0 * 11.0 / c.analog_modbus.baud;
+    const double budget_s = 0.5 / c.pressure.loop_hz;
+    if (transaction_s > budget_s) {
+      fail("analog_modbus.baud",
+           std::to_string(c.analog_modbus.baud) + " baud needs about " +
+               format_number(transaction_s * 1e3) + " ms a transaction; pressure.loop_hz = " +
+               format_number(c.pressure.loop_hz) + " leaves " + format_number(budget_s * 1e3) +
+               " ms: raise the baud rate or lower pressure.loop_hz");
+    }
+  }
+
+  Config config_;
+  bool cameras_given_ = false;
+  std::map<std::string, const KeySpec<Config>*, std::less<>> keys_ = index_by_name(config_keys());
+  std::map<std::string, const KeySpec<CameraSection>*, std::less<>> camera_index_ =
+      index_by_name(camera_keys());
+};
+
+toml::table parse_document(std::string_view text, const std::string& name) {
+  try {
+    return toml::parse(text, std::string_view(name));
+  } catch (const toml::parse_error& error) {
+    throw ConfigError(name, static_cast<int>(error.source().begin.line), "",
+                      std::string(error.description()));
+  }
+}
+
+std::string read_file(const std::filesystem::path& path) {
+  std::error_code error;
+  const auto status = std::filesystem::status(path, error);
+  if (error || !std::filesystem::exists(status)) {
+    throw ConfigError(path.string(), 0, "", "cannot be read: no such file");
+  }
+  if (!std::filesystem::is_regular_file(status)) {
+    throw ConfigError(path.string(), 0, "",
+                      std::filesystem::is_directory(status)
+                          ? "is a directory, not a configuration file"
+                          : "is not a regular file");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw ConfigError(path.string(), 0, "", "cannot be read (permission?)");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace
+
+Config default_config() {
+  Config config{};
+  for (const auto& spec : config_keys()) apply_default(spec, config);
+  CameraSection camera{};
+  for (const auto& spec : camera_keys()) apply_default(spec, camera);
+  config.cameras.push_back(std::move(camera));
+  return config;
+}
+
+Config load_config_from_strings(const std::vector<std::pair<std::string, std::string>>& documents) {
+  Loader loader;
+  for (const auto& [name, text] : documents) loader.apply(name, parse_document(text, name));
+  return loader.finish();
+}
+
+Config load_config(const std::filesystem::path& main_file) {
+  std::vector<std::pair<std::string, std::string>> documents;
+  documents.emplace_back(main_file.string(), read_file(main_file));
+  const auto drop_in_dir = main_file.parent_path() / "conf.d";
+  std::error_code error;
+  if (std::filesystem::is_directory(drop_in_dir, error)) {
+    std::vector<std::filesystem::path> drop_ins;
+    // Listing errors are ConfigErrors naming the folder (directory_iterator would throw a
+    // filesystem_error out of a reload).
+    std::filesystem::directory_iterator entries(drop_in_dir, error);
+    if (error) {
+      throw ConfigError(drop_in_dir.string(), 0, "", "cannot be listed: " + error.message());
+    }
+    for (auto it = entries; it != std::filesystem::directory_iterator(); it.increment(error)) {
+      if (error) {
+        throw ConfigError(drop_in_dir.string(), 0, "", "cannot be listed: " + error.message());
+      }
+      if (it->path().extension() == ".toml") drop_ins.push_back(it->path());
+    }
+    std::sort(drop_ins.begin(), drop_ins.end());
+    for (const auto& path : drop_ins) documents.emplace_back(path.string(), read_file(path));
+  }
+  return load_config_from_strings(documents);
+}
+
+namespace {
+
+template <class Root>
+void insert_value(toml::table& table, const KeySpec<Root>& spec, Root& root) {
+  std::visit(
+      [&](auto access) {
+        const auto& value = access(root);
+        using Value = std::remove_cvref_t<decltype(value)>;
+        if constexpr (std::is_same_v<Value, std::vector<int>> ||
+                      std::is_same_v<Value, std::vector<std::string>> ||
+                      std::is_same_v<Value, std::vector<double>>) {
+          toml::array array;
+          for (const auto& element : value) array.push_back(element);
+          table.insert_or_assign(spec.name, std::move(array));
+        } else {
+          table.insert_or_assign(spec.name, value);
+        }
+      },
+      spec.field);
+}
+
+}  // namespace
+
+std::string dump_config(const Config& config) {
+  Config copy = config;  // accessors take non-const references
+  toml::table root;
+  for (const auto& spec : config_keys()) {
+    auto* section = root[spec.section].as_table();
+    if (section == nullptr) {
+      root.insert_or_assign(spec.section, toml::table{});
+      section = root[spec.section].as_table();
+    }
+    insert_value(*section, spec, copy);
+  }
+  toml::array cameras;
+  for (auto& camera : copy.cameras) {
+    toml::table table;
+    for (const auto& spec : camera_keys()) insert_value(table, spec, camera);
+    cameras.push_back(std::move(table));
+  }
+  root.insert_or_assign("camera", std::move(cameras));
+  std::ostringstream out;
+  out << root << "\n";
+  return out.str();
+}
+
+}  // namespace weedspray::daemon

@@ -1,0 +1,429 @@
+#include "daemon/config/config_schema.hpp"
+
+#include <climits>
+
+// GCC 12 reports a false -Wmaybe-uninitialized inside std::variant<..., std::string> when the
+// key table is built (GCC bug 107138 and relatives); the table is plain constant data.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
+
+namespace weedspray::daemon {
+
+// A captureless accessor for one member, converted to a plain function pointer so the table
+// is data, not code.
+#define WS_FIELD(Root, member) \
+  +[](Root & r) -> auto& {     \
+    return r.member;           \
+  }
+#define WS_KEY(section, name) #section, #name, WS_FIELD(Config, section.name)
+#define WS_CAM(name) "camera", #name, WS_FIELD(CameraSection, name)
+
+template <class Root>
+KeyType KeySpec<Root>::type() const {
+  switch (field.index()) {
+    case 0:
+      return KeyType::kBool;
+    case 1:
+      return KeyType::kInt;
+    case 2:
+      return KeyType::kDouble;
+    case 3:
+      return choices.empty() ? KeyType::kString : KeyType::kEnum;
+    case 4:
+      return KeyType::kIntList;
+    case 5:
+      return KeyType::kStringList;
+    default:
+      return KeyType::kDoubleList;
+  }
+}
+
+template <class Root>
+std::string KeySpec<Root>::full_name() const {
+  return std::string(section) + "." + std::string(name);
+}
+
+template struct KeySpec<Config>;
+template struct KeySpec<CameraSection>;
+
+std::string_view key_type_name(KeyType type) {
+  switch (type) {
+    case KeyType::kBool:
+      return "boolean";
+    case KeyType::kInt:
+      return "integer";
+    case KeyType::kDouble:
+      return "number";
+    case KeyType::kString:
+      return "string";
+    case KeyType::kEnum:
+      return "choice";
+    case KeyType::kIntList:
+      return "array of integers";
+    case KeyType::kStringList:
+      return "array of strings";
+    case KeyType::kDoubleList:
+      return "array of numbers";
+  }
+  return "?";
+}
+
+const std::vector<KeySpec<Config>>& config_keys() {
+  // clang-format off
+  static const std::vector<KeySpec<Config>> keys = {
+    // [daemon]
+    {WS_KEY(daemon, autostart), false, 0, 1, "",
+     "start spraying as soon as the daemon is set up (otherwise wait for Start or the key)"},
+    {WS_KEY(daemon, log_level), std::string("info"), 0, 0, "",
+     "minimum level logged to the journal or console",
+     {"trace", "debug", "info", "warn", "error"}},
+    {WS_KEY(daemon, state_dir), std::string("/var/lib/weedspray"), 0, 0, "path",
+     "persistent state: totals and (by default) the as-applied logs"},
+    {WS_KEY(daemon, status_max_rate_hz), 4.0, 0.5, 20, "Hz",
+     "D-Bus PropertiesChanged are emitted at most this often"},
+    {WS_KEY(daemon, input_stale_timeout_s), 0.5, 0.05, 10, "s",
+     "a live input (pressure, vision, wheel) older than this closes the valves"},
+    {WS_KEY(daemon, cpu_wakeup_latency_us), 0, -1, 100000, "us",
+     "PM QoS request held while the loops run (/dev/cpu_dma_latency): CPUs stay out of idle "
+     "states slower to wake than this, so real-time loops wake on time; -1 = no request"},
+    // [boom]
+    {WS_KEY(boom, nozzles), 4, 1, 32, "",
+     "number of nozzles (solenoid valves) along the boom"},
+    {WS_KEY(boom, nozzle_width_m), 0.5, 0.05, 3, "m",
+     "ground width sprayed by one nozzle (w in the spray-rate law)"},
+    {WS_KEY(boom, valve_open_delay_s), 0.02, 0, 0.5, "s",
+     "valve opening delay: commands are issued this much before the patch arrives"},
+    {WS_KEY(boom, valve_close_delay_s), 0.02, 0, 0.5, "s",
+     "valve closing delay"},
+    // [vision]
+    {WS_KEY(vision, index), std::string("default"), 0, 0, "",
+     "vegetation index; \"default\" = the vision library's measured best (weedspray-lab "
+     "vision-eval); mono for GREY cameras",
+     {"default", "exg_norm", "exg_raw", "exg_exr", "cive", "max_value", "weighted", "mono",
+      "exg_chroma"}},
+    {WS_KEY(vision, threshold), std::string("default"), 0, 0, "",
+     "automatic threshold method, or fixed; \"default\" = the vision library's choice",
+     {"default", "fit", "otsu", "kmeans", "hbt", "pso", "ipso", "fixed"}},
+    {WS_KEY(vision, fixed_threshold), -1, -1, 255, "level",
+     "level on the 8-bit index scale for threshold = \"fixed\", and for frames that are not "
+     "bimodal where the index keeps a fixed level (full canopy; normalised ExG, ExG-ExR); -1 = "
+     "the library's level for the index"},
+    {WS_KEY(vision, grid_rows), 1, 1, 4, "",
+     "zone rows along travel per frame (columns = the camera's nozzles)"},
+    {WS_KEY(vision, weed_source), std::string("vegetation"), 0, 0, "",
+     "what counts as weed. vegetation: every green pixel (bare soil: fallow, pre-plant); "
+     "inter_row: vegetation between the crop rows, rows found as peaks of the column histogram "
+     "and tracked from frame to frame (row crops; see row_band_cm); dnn: the weed class of the "
+     "segmentation network in model; hybrid: colour vegetation minus the network's crop class "
+     "grown by crop_margin_cm. The rate law uses each zone's weed density",
+     {"vegetation", "inter_row", "dnn", "hybrid"}},
+    {WS_KEY(vision, row_band_cm), 30.0, 1, 500, "cm",
+     "inter_row: width on the ground of the band around each crop row that counts as crop "
+     "(converted to a share of the image width, which spans the camera's nozzle_count x "
+     "boom.nozzle_width_m)"},
+    {WS_KEY(vision, crop_margin_cm), 2.0, 0, 50, "cm",
+     "hybrid: the network's crop mask is grown by this much on the ground before it is removed "
+     "from the vegetation (converted to pixels of the camera's configured width, which spans "
+     "its nozzle_count x boom.nozzle_width_m)"},
+    {WS_KEY(vision, model), std::string("weed-peanut.onnx"), 0, 0, "path",
+     "dnn, hybrid: the segmentation network, an ONNX file OpenCV DNN loads (checked with one "
+     "forward pass at load). A relative path is looked up beside the configuration file that "
+     "sets it, then among the installed models (/usr/share/weedspray/models from the package; "
+     "a build tree also looks in its checkout's models/). The default is "
+     "the shipped crop/weed/soil model trained on peanut fields; the model_* keys below are its "
+     "spec (models/weed-peanut.json); retrain for another crop with tools/train"},
+    {WS_KEY(vision, model_input_width), 320, 32, 4096, "px",
+     "dnn, hybrid: the frame is resized to this network input width (a multiple of 32)"},
+    {WS_KEY(vision, model_input_height), 256, 32, 4096, "px",
+     "dnn, hybrid: network input height (a multiple of 32)"},
+    {WS_KEY(vision, model_mean), std::vector<double>{123.675, 116.28, 103.53}, 0, 255, "",
+     "dnn, hybrid: per-channel mean subtracted from the 0..255 R, G, B values (3 numbers)"},
+    {WS_KEY(vision, model_scale), 1.0 / 58.0, 1e-6, 1000, "",
+     "dnn, hybrid: network input = (value - mean) x this"},
+    {WS_KEY(vision, model_rgb), true, 0, 1, "",
+     "dnn, hybrid: the network takes R, G, B channel order (false: B, G, R)"},
+    {WS_KEY(vision, model_classes), std::vector<std::string>{"soil", "crop", "weed"}, 0, 0, "",
+     "dnn, hybrid: the network's output classes in channel order; its output must have one "
+     "channel per class"},
+    {WS_KEY(vision, soil_class), 0, 0, 255, "",
+     "dnn, hybrid: index in model_classes of soil (classes other than crop and weed count as "
+     "soil)"},
+    {WS_KEY(vision, crop_class), 1, 0, 255, "", "dnn, hybrid: index in model_classes of the crop"},
+    {WS_KEY(vision, weed_class), 2, 0, 255, "", "dnn, hybrid: index in model_classes of weeds"},
+    // [spray]
+    {WS_KEY(spray, nominal_flow_l_per_min), 0.615, 0.01, 20, "L/min",
+     "q_nom: nozzle flow that gives the nominal dose at the nominal speed"},
+    {WS_KEY(spray, nominal_speed_m_per_s), 1.0, 0.1, 10, "m/s",
+     "v_nom: speed of the nominal dose u = q_nom / (60 w v_nom)"},
+    {WS_KEY(spray, max_density), 1.0, 0.01, 1, "",
+     "k: the largest expected weed density (normaliser)"},
+    {WS_KEY(spray, calibration_slope_l_per_min_per_pct),
+     0.00393, 0.0001, 1, "L/min per %", "A in the calibrated valve line q = A s + b"},
+    {WS_KEY(spray, calibration_offset_l_per_min), 0.217, -5, 5,
+     "L/min", "b in the calibrated valve line q = A s + b"},
+    {WS_KEY(spray, calibration_pressure_mpa), 0.4, 0.05, 1, "MPa",
+     "pressure at which the valve line was calibrated (sqrt(P_cal/P) compensation)"},
+    {WS_KEY(spray, duty_min_pct), 20.0, 0, 100, "%",
+     "below this duty the valve stays closed"},
+    {WS_KEY(spray, duty_max_pct), 80.0, 0, 100, "%",
+     "above this duty the valve is held fully open"},
+    {WS_KEY(spray, quantiser_levels), 7, 0, 14, "",
+     "duty levels from duty_min_pct to duty_max_pct (plus closed and open); 0 = off, else 2..14"},
+    {WS_KEY(spray, hysteresis_pct), 2.0, 0, 20, "%",
+     "a quantised duty changes level only past this margin"},
+    {WS_KEY(spray, decision_threshold), 0.001, 0, 1, "",
+     "zones with a weed density below this are not sprayed; 0.001 (0.1 % of the zone) sits well "
+     "below the 0.5 % that makes a zone weedy because detectors miss part of each small weed "
+     "(weedspray-lab vision-eval --classes --sweep shows the trade-off)"},
+    {WS_KEY(spray, low_duty_policy), std::string("raise_to_min"), 0, 0, "",
+     "a weedy zone whose duty falls below duty_min_pct: raise_to_min sprays it at duty_min_pct "
+     "(every weed sprayed); close leaves it dry (the wheat paper's s < 20 % -> 0 clamp)",
+     {"raise_to_min", "close"}},
+    {WS_KEY(spray, pressure_compensation), true, 0, 1, "",
+     "scale duty by sqrt(P_cal / P) when the line pressure is off its calibration point"},
+    // [pwm]
+    {WS_KEY(pwm, frequency_hz), 5.0, 1, 20, "Hz", "valve PWM frequency"},
+    {WS_KEY(pwm, staggered), true, 0, 1, "",
+     "offset the valves' periods by T/N so they do not switch together"},
+    {WS_KEY(pwm, order), std::string("outer_first"), 0, 0, "",
+     "order of the staggered phases along the boom",
+     {"outer_first", "inner_first", "left_to_right"}},
+    {WS_KEY(pwm, min_on_s), 0.01, 0, 0.5, "s", "shortest valve opening"},
+    {WS_KEY(pwm, min_off_s), 0.01, 0, 0.5, "s", "shortest valve closing"},
+    {WS_KEY(pwm, dead_man_s), 0.5, 0.05, 10, "s",
+     "valves close if no fresh duty command arrived for this long"},
+    // [pressure]
+    {WS_KEY(pressure, setpoint_mpa), 0.4, 0.05, 1.0, "MPa",
+     "line pressure set-point (changeable over D-Bus)"},
+    {WS_KEY(pressure, controller), std::string("fuzzy_pid"), 0, 0, "",
+     "pressure controller (fuzzy_pid won the fair tuning, README control figures; with pid set "
+     "kp = 39.31, ki = 392.4, kd = 0.9222)",
+     {"fuzzy_pid", "pid"}},
+    {WS_KEY(pressure, loop_hz), 100.0, 10, 1000, "Hz", "pressure loop rate"},
+    {WS_KEY(pressure, kp), 33.38, 0, 10000, "1/MPa",
+     "base proportional gain Kp' (controller output: return-valve closure 0..1)"},
+    {WS_KEY(pressure, ki), 352.3, 0, 100000, "1/(MPa s)", "base integral gain Ki'"},
+    {WS_KEY(pressure, kd), 1.009, 0, 1000, "s/MPa", "base derivative gain Kd'"},
+    {WS_KEY(pressure, cp), 0.7823, 0, 1000, "1/MPa", "fuzzy correction weight Cp (fuzzy_pid only)"},
+    {WS_KEY(pressure, ci), 45.96, 0, 10000, "1/(MPa s)",
+     "fuzzy correction weight Ci (fuzzy_pid only)"},
+    {WS_KEY(pressure, cd), 0.0, 0, 1000, "s/MPa",
+     "fuzzy correction weight Cd (fuzzy_pid only)"},
+    {WS_KEY(pressure, range_mpa), 0.2, 0.01, 10, "MPa",
+     "Vmax - Vmin used to quantise the error for the fuzzy rules"},
+    {WS_KEY(pressure, sensor_min_mpa), 0.0, 0, 10, "MPa",
+     "pressure read at 4 mA"},
+    {WS_KEY(pressure, sensor_max_mpa), 1.0, 0.1, 10, "MPa",
+     "pressure read at 20 mA"},
+    {WS_KEY(pressure, output_min), 0.0, 0, 1, "",
+     "lowest return-valve closure (0 = fully open)"},
+    {WS_KEY(pressure, output_max), 1.0, 0, 1, "",
+     "highest return-valve closure (1 = fully closed)"},
+    // [gpio]
+    {WS_KEY(gpio, chip), std::string("gpiochip0"), 0, 0, "",
+     "GPIO chip (name or /dev path) holding every line below"},
+    {WS_KEY(gpio, valve_offsets), std::vector<int>{}, 0, 1023, "line",
+     "valve line offsets, one per nozzle in boom order (empty = not wired)"},
+    {WS_KEY(gpio, valve_names), std::vector<std::string>{}, 0, 0, "",
+     "valve line names instead of offsets, one per nozzle (as in gpioinfo; empty = use offsets)"},
+    {WS_KEY(gpio, valve_active_low), false, 0, 1, "",
+     "valve lines are active-low"},
+    {WS_KEY(gpio, pump_offset), -1, -1, 1023, "line",
+     "pump relay line (-1 = not wired)"},
+    {WS_KEY(gpio, pump_name), std::string(""), 0, 0, "",
+     "pump relay line by name instead of offset (empty = use the offset)"},
+    {WS_KEY(gpio, pump_active_low), false, 0, 1, "",
+     "pump relay line is active-low"},
+    {WS_KEY(gpio, buzzer_offset), -1, -1, 1023, "line",
+     "alarm buzzer line (-1 = none)"},
+    {WS_KEY(gpio, buzzer_name), std::string(""), 0, 0, "",
+     "alarm buzzer line by name instead of offset (empty = use the offset)"},
+    {WS_KEY(gpio, led_offset), -1, -1, 1023, "line", "alarm LED line (-1 = none)"},
+    {WS_KEY(gpio, led_name), std::string(""), 0, 0, "",
+     "alarm LED line by name instead of offset (empty = use the offset)"},
+    {WS_KEY(gpio, heartbeat_offset), -1, -1, 1023, "line",
+     "heartbeat output (-1 = none): a square wave from the valve thread while the real-time "
+     "core runs, low when it stops; drives a retriggerable relay that powers the valves"},
+    {WS_KEY(gpio, heartbeat_name), std::string(""), 0, 0, "",
+     "heartbeat line by name instead of offset (empty = use the offset)"},
+    {WS_KEY(gpio, heartbeat_hz), 50.0, 1, 250, "Hz",
+     "heartbeat square-wave frequency (the relay's hold-up time must exceed a few periods)"},
+    {WS_KEY(gpio, key_offset), -1, -1, 1023, "line",
+     "start/stop key input (-1 = none); each press toggles Idle/Spraying"},
+    {WS_KEY(gpio, key_name), std::string(""), 0, 0, "",
+     "start/stop key line by name instead of offset (empty = use the offset)"},
+    {WS_KEY(gpio, key_active_low), true, 0, 1, "",
+     "start/stop key pulls the line low when pressed"},
+    {WS_KEY(gpio, flow_offset), -1, -1, 1023, "line",
+     "flow meter pulse input (-1 = none)"},
+    {WS_KEY(gpio, flow_name), std::string(""), 0, 0, "",
+     "flow meter line by name instead of offset (empty = use the offset)"},
+    {WS_KEY(gpio, wheel_offset), -1, -1, 1023, "line",
+     "Hall wheel sensor pulse input (-1 = none)"},
+    {WS_KEY(gpio, wheel_name), std::string(""), 0, 0, "",
+     "Hall wheel sensor line by name instead of offset (empty = use the offset)"},
+    // [adc]
+    {WS_KEY(adc, source), std::string("iio"), 0, 0, "",
+     "the pressure ADC: a Linux IIO device, or a Modbus RTU analog input module on the "
+     "[analog_modbus] bus", {"iio", "modbus"}},
+    {WS_KEY(adc, iio_device), std::string("iio:device0"), 0, 0, "",
+     "IIO device reading the pressure sensor: iio:deviceN, its path, or its name (ads1015)"},
+    {WS_KEY(adc, pressure_channel), 0, 0, 63, "",
+     "IIO input channel N (in_voltageN_raw) of the pressure sensor"},
+    {WS_KEY(adc, iio_scale_mv), 0.0, 0, 1e6, "mV/count",
+     "IIO millivolts per count, for a driver without in_voltageN_scale or in_voltage_scale "
+     "(0 = read the driver's scale)"},
+    {WS_KEY(adc, shunt_ohms), 165.0, 1, 10000, "ohm",
+     "I/V resistor of the 4-20 mA loop (165 ohm maps 20 mA to 3.3 V)"},
+    {WS_KEY(adc, modbus_slave_id), 2, 1, 247, "",
+     "source = \"modbus\": the input module's slave address"},
+    {WS_KEY(adc, modbus_register), 0, 0, 65535, "",
+     "source = \"modbus\": the register holding the sensor voltage"},
+    {WS_KEY(adc, modbus_register_type), std::string("input"), 0, 0, "",
+     "source = \"modbus\": read it as an input register (function 04) or a holding register "
+     "(03)", {"input", "holding"}},
+    {WS_KEY(adc, modbus_volts_per_count), 0.001, 1e-9, 1, "V/count",
+     "source = \"modbus\": volts = register value x this (the module's unit, e.g. mV)"},
+    // [dac]
+    {WS_KEY(dac, source), std::string("iio"), 0, 0, "",
+     "the return-valve DAC: a Linux IIO device, or a Modbus RTU analog output module on the "
+     "[analog_modbus] bus", {"iio", "modbus"}},
+    {WS_KEY(dac, iio_device), std::string("iio:device1"), 0, 0, "",
+     "IIO device driving the proportional return valve"},
+    {WS_KEY(dac, channel), 0, 0, 63, "", "IIO output channel N (out_voltageN_raw)"},
+    {WS_KEY(dac, iio_scale_mv), 0.0, 0, 1e6, "mV/count",
+     "IIO millivolts per count, for a driver without out_voltageN_scale or out_voltage_scale "
+     "(0 = read the driver's scale)"},
+    {WS_KEY(dac, full_scale_v), 3.3, 0.5, 12, "V",
+     "DAC voltage for a 100 % valve command"},
+    {WS_KEY(dac, modbus_slave_id), 3, 1, 247, "",
+     "source = \"modbus\": the output module's slave address"},
+    {WS_KEY(dac, modbus_register), 0, 0, 65535, "",
+     "source = \"modbus\": the holding register written with the valve voltage (function 06)"},
+    {WS_KEY(dac, modbus_volts_per_count), 0.001, 1e-9, 1, "V/count",
+     "source = \"modbus\": register value = volts / this"},
+    // [analog_modbus]
+    {WS_KEY(analog_modbus, device), std::string("/dev/ttyUSB1"), 0, 0, "path",
+     "RS-485 serial device of the Modbus analog modules; not the tank sensor's [modbus] port, "
+     "which another thread polls"},
+    {WS_KEY(analog_modbus, baud), 115200, 1200, 921600, "baud",
+     "serial speed: a one-register transaction is about 22 character times, 2.1 ms at 115200 "
+     "and 25 ms at 9600; it must fit in half a pressure-loop period"},
+    {WS_KEY(analog_modbus, parity), std::string("N"), 0, 0, "", "serial parity",
+     {"N", "E", "O"}},
+    {WS_KEY(analog_modbus, timeout_s), 0.02, 0.005, 1, "s",
+     "response timeout; a module silent for 3 pressure-loop periods makes the sensor stale "
+     "(pump off, valves closed)"},
+    // [flow]
+    {WS_KEY(flow, pulses_per_litre), 8500.0, 1, 1e6, "pulses/L",
+     "flow meter constant"},
+    {WS_KEY(flow, counter), std::string(""), 0, 0, "",
+     "count the flow meter in the kernel (Linux Counter subsystem, e.g. interrupt-cnt bound to "
+     "the meter's GPIO in the device tree) instead of GPIO edge events: counterN, its path, or "
+     "its name. For meters pulsing faster than ~10 kHz, where edge events can be lost. Empty = "
+     "gpio.flow_offset / gpio.flow_name"},
+    // [wheel]
+    {WS_KEY(wheel, source), std::string("pulses"), 0, 0, "",
+     "speed from the Hall wheel sensor, or a fixed speed", {"pulses", "fixed"}},
+    {WS_KEY(wheel, pulses_per_metre), 100.0, 0.1, 1e5, "pulses/m",
+     "wheel sensor constant"},
+    {WS_KEY(wheel, fixed_speed_m_per_s), 1.0, 0, 10, "m/s",
+     "speed assumed when source = \"fixed\""},
+    // [modbus]
+    {WS_KEY(modbus, enabled), false, 0, 1, "",
+     "read the tank level from a Modbus RTU sensor"},
+    {WS_KEY(modbus, device), std::string("/dev/ttyUSB0"), 0, 0, "path",
+     "RS-485 serial device"},
+    {WS_KEY(modbus, baud), 9600, 1200, 921600, "baud", "serial speed"},
+    {WS_KEY(modbus, parity), std::string("N"), 0, 0, "", "serial parity",
+     {"N", "E", "O"}},
+    {WS_KEY(modbus, slave_id), 1, 1, 247, "", "Modbus slave address"},
+    {WS_KEY(modbus, tank_register), 0, 0, 65535, "",
+     "holding register with the tank level"},
+    {WS_KEY(modbus, tank_scale_pct_per_count), 0.1, 1e-6, 100,
+     "% per count", "tank level = register value x this"},
+    {WS_KEY(modbus, poll_period_s), 1.0, 0.05, 60, "s", "polling period"},
+    {WS_KEY(modbus, timeout_s), 0.5, 0.01, 10, "s", "response timeout"},
+    // [alarms]
+    {WS_KEY(alarms, over_pressure_mpa), 0.9, 0.1, 10, "MPa",
+     "over-pressure: pump off and Fault"},
+    {WS_KEY(alarms, sensor_fault_low_ma), 3.6, 0, 4, "mA",
+     "a loop current below this is a broken sensor wire"},
+    {WS_KEY(alarms, sensor_fault_high_ma), 21.0, 20, 30, "mA",
+     "a loop current above this is a shorted sensor"},
+    {WS_KEY(alarms, blocked_pressure_mpa), 0.7, 0.05, 10, "MPa",
+     "line blocked: pressure above this while spraying ..."},
+    {WS_KEY(alarms, blocked_flow_l_per_min), 0.05, 0, 100, "L/min",
+     "... and flow below this"},
+    {WS_KEY(alarms, no_flow_l_per_min), 0.02, 0, 100, "L/min",
+     "no flow: valves open but flow below this"},
+    {WS_KEY(alarms, tank_low_pct), 15.0, 0, 100, "%", "tank low warning"},
+    {WS_KEY(alarms, tank_empty_pct), 3.0, 0, 100, "%",
+     "tank empty: spraying stops"},
+    {WS_KEY(alarms, modbus_silent_s), 5.0, 0.1, 600, "s",
+     "no Modbus answer for this long raises modbus_silent"},
+    {WS_KEY(alarms, camera_stall_s), 1.0, 0.05, 60, "s",
+     "no frame for this long raises camera_lost"},
+    {WS_KEY(alarms, debounce_s), 1.0, 0, 60, "s",
+     "a flow/pressure condition must hold this long before it raises an alarm"},
+    {WS_KEY(alarms, sensor_fault_hold_s), 0.15, 0, 5, "s",
+     "a pressure-sensor fault must last this long before it latches Fault (the pump is off "
+     "from the first bad reading)"},
+    {WS_KEY(alarms, timing_tolerance_ms), 5.0, 0.5, 100, "ms",
+     "while spraying, a valve edge or control-loop cycle later than this, or a missed "
+     "pressure-loop period, is a deadline miss that affects spraying"},
+    {WS_KEY(alarms, control_overrun_limit), 3, 1, 1000000, "",
+     "deadline misses that affect spraying (see timing_tolerance_ms) within one second that "
+     "raise control_overruns"},
+    // [log]
+    {WS_KEY(log, dir), std::string(""), 0, 0, "path",
+     "as-applied CSV folder (empty = <daemon.state_dir>/as-applied)"},
+    {WS_KEY(log, rotate_bytes), 10 * 1024 * 1024, 4096, INT_MAX, "bytes",
+     "start a new as-applied file past this size"},
+    {WS_KEY(log, keep_files), 20, 1, 10000, "",
+     "rotated as-applied files kept (oldest deleted)"},
+    // [sim]
+    {WS_KEY(sim, speed_profile), std::string("sine"), 0, 0, "",
+     "simulated travel speed over time", {"constant", "sine", "ramp"}},
+    {WS_KEY(sim, speed_min_m_per_s), 0.5, 0, 10, "m/s",
+     "lowest simulated speed (constant uses the maximum)"},
+    {WS_KEY(sim, speed_max_m_per_s), 2.5, 0.01, 10, "m/s",
+     "highest simulated speed"},
+    {WS_KEY(sim, speed_period_s), 20.0, 0.1, 3600, "s",
+     "period of the sine/ramp speed profile"},
+    {WS_KEY(sim, images_dir), std::string(""), 0, 0, "path",
+     "field images used as the simulated camera (empty = the bundled ones)"},
+    {WS_KEY(sim, seed), 1, 0, INT_MAX, "", "random seed of the simulation"},
+  };
+  // clang-format on
+  return keys;
+}
+
+const std::vector<KeySpec<CameraSection>>& camera_keys() {
+  // clang-format off
+  static const std::vector<KeySpec<CameraSection>> keys = {
+    {WS_CAM(device), std::string("/dev/video0"), 0, 0, "path", "V4L2 device"},
+    {WS_CAM(width), 1280, 16, 8192, "px", "frame width"},
+    {WS_CAM(height), 800, 16, 8192, "px", "frame height"},
+    {WS_CAM(fps), 30.0, 0.1, 240, "Hz", "frame rate requested"},
+    {WS_CAM(format), std::string("YUYV"), 0, 0, "", "pixel format",
+     {"YUYV", "MJPG", "RGB3", "GREY"}},
+    {WS_CAM(exposure_us), 0, 0, 1000000, "us", "fixed exposure (0 = automatic)"},
+    {WS_CAM(white_balance_k), 0, 0, 15000, "K",
+     "fixed white balance colour temperature, automatic white balance off: vegetation indices "
+     "compare colours, so a fixed balance keeps thresholds steady (0 = leave the camera's own "
+     "setting)"},
+    {WS_CAM(mount_height_m), 1.0, 0.1, 10, "m", "lens height above ground"},
+    {WS_CAM(tilt_deg), 30.0, 0, 80, "deg", "optical axis from vertical, looking forward"},
+    {WS_CAM(vfov_deg), 40.0, 1, 170, "deg", "vertical (along travel) field of view"},
+    {WS_CAM(distance_to_nozzles_m), 1.2, 0, 50, "m",
+     "nozzle line behind the camera's nadir (ground point under the lens), along travel"},
+    {WS_CAM(first_nozzle), 0, 0, 31, "", "first nozzle (0-based) this camera steers"},
+    {WS_CAM(nozzle_count), 4, 1, 32, "", "number of consecutive nozzles this camera steers"},
+  };
+  // clang-format on
+  return keys;
+}
+
+}  // namespace weedspray::daemon

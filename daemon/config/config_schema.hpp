@@ -1,0 +1,70 @@
+// The one table of configuration keys: name, type, default, range, unit and documentation.
+// The parser, --check-config, --dump-config and the tests (round trip, etc/weedspray.toml
+// documents every key) all read this table; nothing else declares a key.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "daemon/config/config.hpp"
+
+namespace weedspray::daemon {
+
+enum class KeyType { kBool, kInt, kDouble, kString, kEnum, kIntList, kStringList, kDoubleList };
+
+template <class Root>
+using FieldAccess =
+    std::variant<bool& (*)(Root&), int& (*)(Root&), double& (*)(Root&), std::string& (*)(Root&),
+                 std::vector<int>& (*)(Root&), std::vector<std::string>& (*)(Root&),
+                 std::vector<double>& (*)(Root&)>;
+
+using DefaultValue = std::variant<bool, int, double, std::string, std::vector<int>,
+                                  std::vector<std::string>, std::vector<double>>;
+
+template <class Root>
+struct KeySpec {
+  KeySpec(std::string_view section, std::string_view name, FieldAccess<Root> field,
+          DefaultValue default_value, double min, double max, std::string_view unit,
+          std::string_view doc, std::vector<std::string_view> choices = {})
+      : section(section),
+        name(name),
+        field(field),
+        default_value(std::move(default_value)),
+        min(min),
+        max(max),
+        unit(unit),
+        doc(doc),
+        choices(std::move(choices)) {}
+
+  std::string_view section;  // "pressure"; "camera" for keys of each [[camera]]
+  std::string_view name;     // "setpoint_mpa"
+  FieldAccess<Root> field;
+  DefaultValue default_value;
+  double min;  // numeric range (ints, doubles, every element of number lists)
+  double max;
+  std::string_view unit;
+  std::string_view doc;
+  std::vector<std::string_view> choices;  // allowed values of an enum key (empty otherwise)
+
+  [[nodiscard]] KeyType type() const;
+  [[nodiscard]] std::string full_name() const;  // "pressure.setpoint_mpa"
+};
+
+// Keys of the plain sections ([daemon], [boom], [pressure] ...).
+const std::vector<KeySpec<Config>>& config_keys();
+// Keys of each [[camera]] entry.
+const std::vector<KeySpec<CameraSection>>& camera_keys();
+
+[[nodiscard]] std::string_view key_type_name(KeyType type);
+
+}  // namespace weedspray::daemon
+
+namespace weedspray::daemon {
+
+// The whole key table as a commented TOML file at its defaults (etc/weedspray.toml is made
+// from it): each key preceded by its documentation, type, unit, range and choices.
+[[nodiscard]] std::string documented_config();
+
+}  // namespace weedspray::daemon

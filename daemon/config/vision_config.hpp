@@ -1,0 +1,47 @@
+// Configuration -> the vision library's pipeline for each camera, and the weed model those
+// pipelines are built from (found, read and checked once, when the configuration is loaded).
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "daemon/config/config.hpp"
+#include "vision/pipeline.hpp"
+
+namespace weedspray::daemon {
+
+// Ground width of one pixel of a camera's configured frame: the frame's width spans the
+// nozzles it steers (one zone column per nozzle), nozzle_count x boom.nozzle_width_m.
+[[nodiscard]] double ground_m_per_px(const Config& config, const CameraSection& camera);
+
+// The vision pipeline of `camera`: index, threshold, zone grid and weed source, with the
+// ground distances of [vision] (row_band_cm, crop_margin_cm) converted for this camera.
+[[nodiscard]] vision::PipelineConfig pipeline_config(const Config& config,
+                                                     const CameraSection& camera);
+
+// Folders a relative vision.model is looked up in, in order: the folder of the file that set
+// it (when it was set in a file), the installed models, and a build tree's models/.
+[[nodiscard]] std::vector<std::filesystem::path> model_search_dirs(const std::string& set_in_file);
+
+// A problem with one [vision] key ("vision.model", ...), raised while checking the weed
+// source; the loader turns it into a ConfigError naming where the key was set.
+class VisionKeyError : public std::runtime_error {
+ public:
+  VisionKeyError(std::string key, const std::string& message)
+      : std::runtime_error(message), key_(std::move(key)) {}
+  const std::string& key() const { return key_; }
+
+ private:
+  std::string key_;
+};
+
+// Checks the weed source keys of a loaded configuration and, when the source needs a model,
+// reads it and builds every camera's pipeline once (one forward pass): null for sources
+// without a model. Throws VisionKeyError.
+[[nodiscard]] std::shared_ptr<const LoadedModel> check_weed_source(const Config& config);
+
+}  // namespace weedspray::daemon

@@ -1,0 +1,59 @@
+#include "daemon/records/totals.hpp"
+
+#include <toml++/toml.h>
+#include <unistd.h>
+#include <cstdio>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+
+namespace weedspray::daemon {
+
+double Totals::savings_pct() const noexcept {
+  if (uniform_volume_l <= 0) return 0;
+  return 100.0 * (1.0 - volume_l / uniform_volume_l);
+}
+
+Totals load_totals(const std::filesystem::path& file, std::string* error) {
+  Totals totals;
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) return totals;
+  try {
+    const toml::table table = toml::parse_file(file.string());
+    totals.area_m2 = table["area_m2"].value_or(0.0);
+    totals.volume_l = table["volume_l"].value_or(0.0);
+    totals.uniform_volume_l = table["uniform_volume_l"].value_or(0.0);
+  } catch (const toml::parse_error& e) {
+    if (error != nullptr) {
+      *error = file.string() + ":" + std::to_string(e.source().begin.line) + ": " +
+               std::string(e.description());
+    }
+    return Totals{};
+  }
+  return totals;
+}
+
+void save_totals(const std::filesystem::path& file, const Totals& totals) {
+  const auto temp = std::filesystem::path(file.string() + ".tmp");
+  {
+    std::ofstream out(temp, std::ios::trunc);
+    if (!out) throw std::runtime_error(temp.string() + ": cannot be written");
+    toml::table table{{"area_m2", totals.area_m2},
+                      {"volume_l", totals.volume_l},
+                      {"uniform_volume_l", totals.uniform_volume_l}};
+    out << table << "\n";
+    out.flush();
+    if (!out) throw std::runtime_error(temp.string() + ": write failed");
+  }
+  // fsync the data before the rename so a power cut leaves either the old or the new file.
+  if (FILE* f = std::fopen(temp.c_str(), "r")) {
+    ::fsync(fileno(f));
+    std::fclose(f);
+  }
+  std::error_code ec;
+  std::filesystem::rename(temp, file, ec);
+  if (ec) throw std::runtime_error(file.string() + ": " + ec.message());
+}
+
+}  // namespace weedspray::daemon

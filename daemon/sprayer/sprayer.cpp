@@ -1,0 +1,635 @@
+#include "daemon/sprayer/sprayer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <cstring>
+#include <mutex>
+#include <opencv2/core.hpp>
+
+#include "daemon/config/vision_config.hpp"
+#include "daemon/sprayer/geometry.hpp"
+#include "io/signal_conversion.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+using std::chrono::duration;
+using namespace std::chrono_literals;
+
+double seconds(Nanos t) {
+  return duration<double>(t).count();
+}
+Nanos from_seconds(double s) {
+  return Nanos(static_cast<std::int64_t>(s * 1e9));
+}
+
+control::PwmConfig pwm_config(const Config& config) {
+  control::PwmConfig pwm;
+  const auto n = static_cast<std::size_t>(config.boom.nozzles);
+  pwm.valve_count = n;
+  pwm.frequency_hz = config.pwm.frequency_hz;
+  pwm.phase_mode = config.pwm.staggered ? control::PwmPhaseMode::kStaggered
+                                        : control::PwmPhaseMode::kSynchronous;
+  if (config.pwm.order == "outer_first") {
+    pwm.order = control::outer_first_order(n);
+  } else if (config.pwm.order == "inner_first") {
+    pwm.order = control::outer_first_order(n);
+    std::reverse(pwm.order.begin(), pwm.order.end());
+  } else {
+    for (std::size_t i = 0; i < n; ++i) pwm.order.push_back(i);
+  }
+  pwm.min_on_time = from_seconds(config.pwm.min_on_s);
+  pwm.min_off_time = from_seconds(config.pwm.min_off_s);
+  // A spray start/stop happens when the ground under the nozzle starts/stops needing it, not at
+  // the valve's next period start (up to 50 cm later at 2.5 m/s and 5 Hz).
+  pwm.immediate_start_stop = true;
+  return pwm;
+}
+
+control::FuzzyPidConfig controller_config(const Config& config) {
+  const auto& p = config.pressure;
+  control::FuzzyPidConfig c;
+  c.base.gains = {p.kp, p.ki, p.kd};
+  c.base.output_min = p.output_min;
+  c.base.output_max = p.output_max;
+  c.base.anti_windup = control::AntiWindup::kBackCalculation;
+  c.base.derivative_filter_s = 0.01;
+  c.correction_weights = {p.cp, p.ci, p.cd};
+  c.error_range = p.range_mpa;
+  return c;
+}
+
+}  // namespace
+
+LiveParams live_params_from(const Config& config) {
+  LiveParams p;
+  p.setpoint_mpa = config.pressure.setpoint_mpa;
+  p.law.nominal_flow_l_per_min = config.spray.nominal_flow_l_per_min;
+  p.law.nozzle_width_m = config.boom.nozzle_width_m;
+  p.law.nominal_speed_m_per_s = config.spray.nominal_speed_m_per_s;
+  p.law.max_density = config.spray.max_density;
+  p.law.decision_threshold = config.spray.decision_threshold;
+  p.law.min_duty_pct = config.spray.duty_min_pct;
+  p.law.max_duty_pct = config.spray.duty_max_pct;
+  p.law.low_duty_policy = config.spray.low_duty_policy == "close"
+                              ? control::LowDutyPolicy::kClose
+                              : control::LowDutyPolicy::kRaiseToMin;
+  p.line.slope_l_per_min_per_pct = config.spray.calibration_slope_l_per_min_per_pct;
+  p.line.intercept_l_per_min = config.spray.calibration_offset_l_per_min;
+  p.line.calibration_pressure_mpa = config.spray.calibration_pressure_mpa;
+  p.pressure_compensation = config.spray.pressure_compensation;
+  p.over_pressure_mpa = config.alarms.over_pressure_mpa;
+  p.stale_timeout_s = config.daemon.input_stale_timeout_s;
+  control::validate(p.law);
+  control::validate(p.line);
+  return p;
+}
+
+Sprayer::Sprayer(const Config& config, Backends& backends)
+    : config_(config),
+      io_(backends),
+      controller_(std::make_unique<control::PressureController>(
+          config.pressure.controller == "pid" ? control::PressureControlMode::kPid
+                                              : control::PressureControlMode::kFuzzyPid,
+          controller_config(config))),
+      schedule_(std::make_unique<control::PwmSchedule>(pwm_config(config))),
+      flow_trim_(control::FlowTrimConfig{}) {
+  // pressure.loop_hz goes down to 10 Hz: the watch waits three of the loop's periods, never less
+  // than 50 ms (at 20 Hz a fixed 50 ms took the running loop for stalled and stopped the pump).
+  pressure_watch_ = io::LoopWatch(std::max(kCrossWatchTimeout, 3 * pressure_period()));
+  io::ValvePwmDriverConfig driver;
+  driver.command_expiry = from_seconds(config.pwm.dead_man_s);
+  // The driver notices a new command only when it wakes: at most 2 ms late (5 mm at 2.5 m/s).
+  driver.max_sleep = std::chrono::milliseconds(2);
+  driver.miss_tolerance = from_seconds(config.alarms.timing_tolerance_ms / 1e3);
+  driver.lateness = &timing_.valve_edges;
+  driver.on_wake = [](void* self, Nanos now) noexcept {
+    static_cast<Sprayer*>(self)->watch_pressure_loop(now);
+  };
+  driver.on_wake_context = this;
+  driver.heartbeat = io_.heartbeat;
+  driver.heartbeat_half_period = from_seconds(0.5 / config.gpio.heartbeat_hz);
+  pwm_driver_ = std::make_unique<io::ValvePwmDriver<control::PwmSchedule>>(*io_.clock, *io_.valves,
+                                                                           *schedule_, driver);
+  io::AnalogIoTiming analog_timing;
+  analog_timing.period = pressure_period();
+  analog_io_ = std::make_unique<io::AnalogIoWorker>(*io_.pressure_adc, *io_.return_valve,
+                                                    *io_.clock, analog_timing);
+  if (io_.wheel != nullptr) {
+    control::OdometryConfig odometry;
+    odometry.pulses_per_metre = config.wheel.pulses_per_metre;
+    odometry_.emplace(odometry);
+  }
+  const auto nozzles = static_cast<std::size_t>(config.boom.nozzles);
+  if (config.spray.quantiser_levels >= 2) {
+    std::vector<double> levels{0.0};
+    const int n = config.spray.quantiser_levels;
+    for (int i = 0; i < n; ++i) {
+      levels.push_back(config.spray.duty_min_pct +
+                       (config.spray.duty_max_pct - config.spray.duty_min_pct) * i / (n - 1));
+    }
+    levels.push_back(100.0);
+    for (std::size_t i = 0; i < nozzles; ++i) {
+      quantisers_.emplace_back(levels, config.spray.hysteresis_pct);
+    }
+  }
+  if (config.cameras.size() > kMaxCameras || config.cameras.size() != io_.cameras.size()) {
+    throw std::invalid_argument("camera count: at most 8, one backend per [[camera]]");
+  }
+  nozzle_owner_.assign(nozzles, -1);
+  camera_count_ = config.cameras.size();
+  // A configuration built in code (tests) has not been through the loader's model check.
+  const std::shared_ptr<const LoadedModel> model =
+      config.model ? config.model : check_weed_source(config);
+  // The camera workers' OpenCV calls (the weed model above all) run on their own thread only:
+  // OpenCV's worker pool would take the cores the real-time loops need.
+  static std::once_flag single_threaded_opencv;
+  std::call_once(single_threaded_opencv, [] { cv::setNumThreads(1); });
+  for (std::size_t i = 0; i < camera_count_; ++i) {
+    const auto& c = config.cameras[i];
+    auto& worker = cameras_[i];
+    worker.camera = io_.cameras[i];
+    worker.first_nozzle = c.first_nozzle;
+    worker.nozzle_count = c.nozzle_count;
+    const vision::PipelineConfig vision = pipeline_config(config, c);
+    worker.uses_model = vision::needs_model(vision.weed_source);
+    worker.pipeline = std::make_unique<vision::Pipeline>(
+        vision,
+        model ? std::span<const std::uint8_t>(model->onnx) : std::span<const std::uint8_t>{});
+    control::NozzleSchedulerConfig scheduler;
+    scheduler.geometry = camera_geometry(c);
+    scheduler.nozzles = static_cast<std::size_t>(c.nozzle_count);
+    scheduler.rows = static_cast<std::size_t>(config.vision.grid_rows);
+    scheduler.opening_delay_s = config.boom.valve_open_delay_s;
+    scheduler.closing_delay_s = config.boom.valve_close_delay_s;
+    scheduler.gap_policy = control::GapPolicy::kClose;
+    worker.scheduler = std::make_unique<control::NozzleScheduler>(scheduler);
+    worker.crop_scheduler = std::make_unique<control::NozzleScheduler>(scheduler);
+    const auto footprint = control::ground_footprint(scheduler.geometry);
+    worker.footprint_length_m = footprint.far_m - footprint.near_m;
+    for (int n = c.first_nozzle; n < c.first_nozzle + c.nozzle_count; ++n) {
+      nozzle_owner_[static_cast<std::size_t>(n)] = static_cast<int>(i);
+    }
+  }
+  params_.publish(live_params_from(config));
+}
+
+Sprayer::~Sprayer() {
+  stop();
+}
+
+control::GroundInterval Sprayer::footprint(std::size_t i) const noexcept {
+  return control::ground_footprint(cameras_[i].scheduler->config().geometry);
+}
+
+std::string Sprayer::vision_failures() const {
+  std::string failures;
+  for (std::size_t i = 0; i < camera_count_; ++i) {
+    const CameraStatus status = cameras_[i].status.read();
+    if (!status.vision_failed) continue;
+    failures += (failures.empty() ? "camera " : "; camera ") + std::to_string(i) + ": " +
+                std::string(status.vision_error.data());
+  }
+  return failures;
+}
+
+void Sprayer::start() {
+  stopped_ = false;
+  safe_write_errors_ = io_.force_safe();  // outputs start safe, explicitly
+  const auto add = [this](io::ThreadRole role, std::string name, auto body) {
+    threads_.emplace_back(role, std::move(body));
+    thread_names_.push_back(std::move(name));
+  };
+  add(io::ThreadRole::kValvePwm, "valve PWM", [this](std::stop_token st) { pwm_driver_->run(st); });
+  // The converters' worker reads ahead of the pressure loop's deadlines: both start one
+  // period from now so the first sample can be waiting.
+  const Nanos first_pressure_deadline = io_.clock->now() + pressure_period();
+  add(io::ThreadRole::kAnalogIo, "analog I/O", [this, first_pressure_deadline](std::stop_token st) {
+    analog_io_->run(st, first_pressure_deadline);
+  });
+  add(io::ThreadRole::kPressureLoop, "pressure loop",
+      [this, first_pressure_deadline](std::stop_token st) {
+        pressure_loop(st, first_pressure_deadline);
+      });
+  add(io::ThreadRole::kControl, "control loop", [this](std::stop_token st) { control_loop(st); });
+  for (std::size_t i = 0; i < camera_count_; ++i) {
+    add(io::ThreadRole::kCamera, "camera " + std::to_string(i),
+        [this, i](std::stop_token st) { camera_loop(st, cameras_[i]); });
+  }
+  if (io_.tank != nullptr) {
+    add(io::ThreadRole::kModbus, "tank level", [this](std::stop_token st) { tank_loop(st); });
+  }
+}
+
+std::vector<std::string> Sprayer::realtime_warnings() const {
+  std::vector<std::string> warnings;
+  for (std::size_t i = 0; i < threads_.size(); ++i) {
+    const auto status = threads_[i].status();
+    if (status == io::RtStatus::kNoPermission || status == io::RtStatus::kFailed) {
+      warnings.push_back(thread_names_[i] + ": " + std::string(io::to_string(status)));
+    }
+  }
+  return warnings;
+}
+
+void Sprayer::stop() noexcept {
+  if (stopped_.exchange(true)) return;
+  for (auto& thread : threads_) thread.request_stop();
+  for (auto& thread : threads_) thread.stop_and_join();
+  threads_.clear();
+  for (std::size_t i = 0; i < camera_count_; ++i) cameras_[i].camera->stop();
+  safe_write_errors_ = io_.force_safe();
+}
+
+OutputWriteCounters Sprayer::output_write_counters() const noexcept {
+  OutputWriteCounters counters;
+  const io::ValvePwmStats valves = pwm_driver_->stats();
+  const auto at = [](OutputRole role) { return static_cast<std::size_t>(role); };
+  counters.failed_writes[at(OutputRole::kValves)] = valves.write_errors;
+  counters.failed_writes[at(OutputRole::kHeartbeat)] = valves.heartbeat_write_errors;
+  counters.failed_writes[at(OutputRole::kPump)] = pressure_.read().pump_write_errors;
+  counters.failed_writes[at(OutputRole::kReturnValve)] = analog_io_->stats().dac_errors;
+  return counters;
+}
+
+void Sprayer::watch_pressure_loop(Nanos now) noexcept {
+  PressureStatus pressure;
+  if (!pressure_.try_read(pressure)) return;
+  const bool stalled = pressure_watch_.stale(pressure.cycles, now);
+  if (stalled && pressure.pump_on && !pump_forced_off_.load()) {
+    // The pressure loop owns the pump, but it is not running: switch the pump off from here
+    // (force_safe is a single ioctl, safe beside a writer stuck in the kernel).
+    if (io_.pump != nullptr) io_.pump->force_safe();
+    pump_forced_off_.store(true);
+    pressure_loop_stalls_.fetch_add(1, std::memory_order_relaxed);
+  }
+}
+
+Nanos Sprayer::pressure_period() const noexcept {
+  return from_seconds(1.0 / config_.pressure.loop_hz);
+}
+
+void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept {
+  const Nanos period = pressure_period();
+  // Two missed converter reads are tolerated; a third (a hung I2C read, a silent Modbus
+  // module) makes the sample stale: sensor fault, pump off, return valve open.
+  const Nanos max_sample_age = 3 * period;
+  // A miss here is a whole period lost: the controller skipped a sample.
+  io::PeriodicLoop loop(*io_.clock, period, first_deadline, &timing_.pressure_loop, period);
+  io::AnalogSample sample;  // the newest copy obtained; kept when the slot is busy
+  LiveParams params = params_.read();
+  std::uint64_t params_version = params_.version();
+  std::uint64_t trip_reset_seen = params.trip_reset;
+  PressureStatus status;
+  bool outputs_safe = false;
+  const double dt = seconds(period);
+  io::LoopWatch valve_thread(kCrossWatchTimeout);
+  bool valves_stalled = false;
+  while (!stop.stop_requested()) {
+    loop.wait_next();
+    // The valve thread switched the pump off while this loop was stalled: the pump state this
+    // loop believes in is gone, so decide it afresh.
+    if (pump_forced_off_.exchange(false)) {
+      status.pump_on = false;
+      outputs_safe = false;
+    }
+    io::ValvePwmStats valves;
+    if (pwm_driver_->try_stats(valves)) {
+      const bool stalled = valve_thread.stale(valves.wakes, io_.clock->now());
+      if (stalled && !valves_stalled) ++status.valve_thread_stalls;
+      valves_stalled = stalled;
+    }
+    if (params_.version() != params_version) {
+      params_version = params_.version();
+      params_.try_read(params);
+    }
+    analog_io_->try_latest_sample(sample);
+    const bool fresh =
+        io::AnalogIoWorker::sample_is_fresh(sample, io_.clock->now(), max_sample_age);
+    if (sample.ok && !fresh) ++status.stale_samples;
+    const io::PressureReading reading = io::pressure_from_sensor_volts(sample.volts, io_.sensor);
+    status.time = sample.time;
+    status.current_ma = reading.current_ma;
+    status.sensor_ok = fresh && reading.ok();
+    status.pressure_mpa = status.sensor_ok ? reading.pressure_mpa : 0.0;
+    status.adc_errors = sample.error_count;
+    if (params.trip_reset != trip_reset_seen) {
+      trip_reset_seen = params.trip_reset;
+      status.tripped = false;
+    }
+    // Over-pressure: pump off in this very cycle; the main loop raises the alarm.
+    if (status.sensor_ok && status.pressure_mpa > params.over_pressure_mpa) status.tripped = true;
+
+    // A stalled valve thread may hold valves open or shut: no pump, return valve open.
+    if (params.pump_enabled && status.sensor_ok && !status.tripped && !valves_stalled) {
+      // A refused write leaves the pump as it was: counted (output_write_failed), and tried
+      // again next cycle.
+      if (io_.pump != nullptr && !status.pump_on && io_.pump->write(1) != 0) {
+        ++status.pump_write_errors;
+      } else {
+        status.pump_on = true;
+      }
+      outputs_safe = false;
+      if (!controller_->enabled()) {
+        controller_->enable(0.0, params.setpoint_mpa, status.pressure_mpa);
+      }
+      status.closure = controller_->update(params.setpoint_mpa, status.pressure_mpa, dt);
+      analog_io_->command(io::dac_volts_from_valve_opening(1.0 - status.closure, io_.drive));
+    } else if (!outputs_safe) {
+      // A refused safe write is counted and tried again next cycle (outputs_safe stays false).
+      const bool pump_safe = io_.pump == nullptr || io_.pump->force_safe() == 0;
+      if (!pump_safe) ++status.pump_write_errors;
+      analog_io_->command_safe();
+      controller_->disable();
+      status.pump_on = false;
+      status.closure = 0.0;
+      outputs_safe = pump_safe;
+    }
+    status.cycles = loop.cycles();
+    status.overruns = loop.overruns();
+    status.misses = loop.misses();
+    pressure_.publish(status);
+  }
+  if (io_.pump != nullptr) io_.pump->force_safe();
+  analog_io_->command_safe();
+}
+
+void Sprayer::control_loop(std::stop_token stop) noexcept {
+  // 500 Hz: a frame waits at most 2 ms to be scheduled, and at 2.5 m/s the vehicle moves
+  // 5 mm per cycle.
+  constexpr Nanos kPeriod = 2ms;
+  constexpr Nanos kFlowWindow = 250ms;
+  io::PeriodicLoop loop(*io_.clock, kPeriod, io_.clock->now(), &timing_.control_loop,
+                        from_seconds(config_.alarms.timing_tolerance_ms / 1e3));
+  const std::size_t nozzles = nozzle_owner_.size();
+  const double boom_width_m = config_.boom.nozzle_width_m * static_cast<double>(nozzles);
+  const double flow_ppl = config_.flow.pulses_per_litre;
+  const Nanos record_period = from_seconds(1.0 / config_.pwm.frequency_hz);
+  LiveParams params = params_.read();
+  std::uint64_t params_version = params_.version();
+  ControlStatus status;
+  status.nozzles = static_cast<std::uint32_t>(nozzles);
+  Nanos last = io_.clock->now();
+  Nanos next_record = last + record_period;
+  double volume_at_last_record = 0;
+  std::uint64_t flow_count_start = io_.flow != nullptr ? io_.flow->snapshot().count : 0;
+  std::uint64_t volume_count = flow_count_start;
+  Nanos flow_window_start = last;
+  double fixed_distance = 0;
+  std::uint64_t frames_lost = 0;
+  while (!stop.stop_requested()) {
+    loop.wait_next();
+    const Nanos now = io_.clock->now();
+    const double dt = seconds(now - last);
+    last = now;
+    if (params_.version() != params_version) {
+      params_version = params_.version();
+      params_.try_read(params);
+    }
+    // Travel.
+    if (odometry_) {
+      const io::PulseSnapshot wheel = io_.wheel->snapshot();
+      odometry_->update(wheel.count, wheel.last_edge_time, now);
+      status.distance_m = odometry_->distance_m();
+      status.speed_m_per_s = odometry_->speed_m_per_s();
+    } else {
+      status.speed_m_per_s = config_.wheel.fixed_speed_m_per_s;
+      fixed_distance += status.speed_m_per_s * dt;
+      status.distance_m = fixed_distance;
+    }
+    if (io_.flow != nullptr) {
+      const io::PulseSnapshot flow = io_.flow->snapshot();
+      // The volume is the meter's pulses themselves, counted in every state: integrating the
+      // windowed flow below would lag it and lose part of each start and stop.
+      status.volume_l += static_cast<double>(flow.count - volume_count) / flow_ppl;
+      volume_count = flow.count;
+      // Measured flow over a sliding window.
+      if (now - flow_window_start >= kFlowWindow) {
+        status.flow_l_per_min = static_cast<double>(flow.count - flow_count_start) / flow_ppl /
+                                seconds(now - flow_window_start) * 60.0;
+        flow_count_start = flow.count;
+        flow_window_start = now;
+      }
+    }
+    // New frames: pin their densities to the ground they imaged. Densities (not duties) are
+    // pinned so the rate law uses the speed and pressure at the moment the patch is sprayed.
+    for (std::size_t c = 0; c < camera_count_; ++c) {
+      auto& worker = cameras_[c];
+      while (auto frame = worker.frames.try_pop()) {
+        const double frame_distance =
+            odometry_
+                ? odometry_->distance_at(frame->capture_time)
+                : status.distance_m - status.speed_m_per_s * seconds(now - frame->capture_time);
+        const auto zones = static_cast<std::size_t>(frame->rows * frame->cols);
+        // More than 5 % of a footprint of ground between two frames was never seen.
+        if (frame_distance - worker.last_frame_distance_m > 1.05 * worker.footprint_length_m &&
+            worker.last_frame_distance_m > -1e8) {
+          ++status.coverage_gaps;
+        }
+        worker.last_frame_distance_m = frame_distance;
+        worker.vision_failed = frame->vision_failed;
+        worker.scheduler->add_frame(frame_distance,
+                                    std::span<const double>(frame->density.data(), zones));
+        worker.crop_scheduler->add_frame(
+            frame_distance, std::span<const double>(frame->crop_density.data(), zones));
+        const Nanos scheduled = io_.clock->now();
+        status.last_latency_ms = seconds(scheduled - frame->capture_time) * 1e3;
+        ++status.frames_scheduled;
+        if (!latencies_.try_push(static_cast<float>(status.last_latency_ms))) ++frames_lost;
+      }
+    }
+    PressureStatus pressure;
+    const bool have_pressure = pressure_.try_read(pressure);
+    const bool pressure_stale = !have_pressure || !pressure.sensor_ok ||
+                                seconds(now - pressure.time) > params.stale_timeout_s;
+    status.inputs_stale = pressure_stale;
+    const bool spray = params.valves_enabled && !pressure_stale;
+    const double compensation_pressure = params.pressure_compensation ? pressure.pressure_mpa : 0.0;
+
+    io::ValveCommand command;
+    command.valve_count = static_cast<std::uint32_t>(nozzles);
+    double requested_l_per_min = 0;
+    double open_sum = 0;
+    for (std::size_t n = 0; n < nozzles; ++n) {
+      const int owner = nozzle_owner_[n];
+      double density = 0;
+      if (owner >= 0) {
+        const auto& worker = cameras_[static_cast<std::size_t>(owner)];
+        // The plan holds densities: the rate law says which of them open the valve, so ground
+        // that needs no spray closes the valve with the closing lead.
+        const auto sprays = [&](double planned_density) {
+          return control::spray_decision(params.law, params.line, planned_density,
+                                         status.speed_m_per_s, compensation_pressure)
+                     .duty_pct > 0.0;
+        };
+        const std::size_t local = n - static_cast<std::size_t>(worker.first_nozzle);
+        density =
+            worker.scheduler->value_at(local, status.distance_m, status.speed_m_per_s, sprays);
+        status.crop_density[n] =
+            worker.crop_scheduler->duty_at(local, status.distance_m, status.speed_m_per_s);
+      }
+      status.density[n] = density;
+      // A camera whose weed model fails closes its own nozzles until it processes frames again.
+      const bool blind = owner >= 0 && cameras_[static_cast<std::size_t>(owner)].vision_failed;
+      double duty = 0;
+      if (spray && !blind) {
+        const control::SprayDecision decision = control::spray_decision(
+            params.law, params.line, density, status.speed_m_per_s, compensation_pressure);
+        duty = decision.duty_pct;
+        if (!quantisers_.empty()) {
+          duty = control::clamp_duty_for_flow_pct(
+              params.law, quantisers_[n].quantise(std::clamp(decision.raw_duty_pct, 0.0, 100.0)),
+              decision.target_flow_l_per_min);
+        }
+        requested_l_per_min +=
+            control::flow_for_duty_l_per_min(params.line, duty, compensation_pressure);
+      } else if (!quantisers_.empty()) {
+        quantisers_[n].reset();
+      }
+      command.duty_pct[n] = duty;
+      open_sum += duty / 100.0;
+    }
+    status.open_fraction = nozzles > 0 ? open_sum / static_cast<double>(nozzles) : 0.0;
+    if (io_.flow != nullptr && spray) {
+      const double correction =
+          flow_trim_.update(requested_l_per_min, status.flow_l_per_min, status.open_fraction, dt);
+      for (std::size_t n = 0; n < nozzles; ++n) {
+        // The trim moves duties only inside the calibrated band, never into the closed one.
+        const double d = command.duty_pct[n];
+        if (d > 0 && d < 100) {
+          command.duty_pct[n] =
+              std::clamp(d * correction, params.law.min_duty_pct, params.law.max_duty_pct);
+        }
+      }
+    }
+    command.issued_at = now;
+    pwm_driver_->command(command);
+    for (std::size_t n = 0; n < nozzles; ++n) status.duty_pct[n] = command.duty_pct[n];
+
+    if (spray && status.speed_m_per_s > 0) {
+      const double area = status.speed_m_per_s * dt * boom_width_m;
+      status.area_m2 += area;
+      status.uniform_volume_l += control::nominal_dose_l_per_m2(params.law) * area;
+    }
+    if (now >= next_record) {
+      next_record += record_period;
+      if (next_record <= now) next_record = now + record_period;
+      AppliedRecord record;
+      record.time = now;
+      record.distance_m = status.distance_m;
+      record.speed_m_per_s = status.speed_m_per_s;
+      record.pressure_mpa = pressure.pressure_mpa;
+      record.flow_l_per_min = status.flow_l_per_min;
+      record.volume_l = status.volume_l - volume_at_last_record;
+      volume_at_last_record = status.volume_l;
+      record.nozzles = status.nozzles;
+      for (std::size_t n = 0; n < nozzles; ++n) {
+        record.duty_pct[n] = static_cast<float>(status.duty_pct[n]);
+        record.density[n] = static_cast<float>(status.density[n]);
+        record.crop_density[n] = static_cast<float>(status.crop_density[n]);
+      }
+      records_.try_push(record);  // a full queue drops the record (the writer is stuck)
+    }
+    status.time = now;
+    status.cycles = loop.cycles();
+    status.overruns = loop.overruns();
+    status.misses = loop.misses();
+    control_.publish(status);
+  }
+}
+
+void Sprayer::camera_loop(std::stop_token stop, CameraWorker& worker) noexcept {
+  CameraStatus status;
+  while (!stop.stop_requested() && !status.started) {
+    status.started = worker.camera->start();
+    if (!status.started) {
+      ++status.errors;
+      worker.status.publish(status);
+      io_.clock->sleep_until(io_.clock->now() + 1s);
+    }
+  }
+  Nanos previous_frame{};
+  Nanos busy_until{};  // when the previous frame's processing ended
+  io::Frame frame;
+  while (!stop.stop_requested()) {
+    const io::FrameStatus got = worker.camera->next_frame(frame, 100ms);
+    if (got == io::FrameStatus::kEnd) break;
+    if (got != io::FrameStatus::kOk) {
+      if (got == io::FrameStatus::kError) ++status.errors;
+      continue;
+    }
+    // A frame captured while the previous one went through the network is already old: skip it
+    // for the next, fresh one, so a model slower than the frame interval costs frames, not
+    // latency. Colour-only sources take ~1 ms: a frame they find waiting is one delivered late
+    // (the thread was held up), and skipping it would leave its ground unseen.
+    if (worker.uses_model && frame.timestamp < busy_until) {
+      ++status.frames_skipped;
+      worker.status.publish(status);
+      continue;
+    }
+    const Nanos asked = io_.clock->now();
+    std::optional<InferenceGate::Turn> turn;
+    if (worker.uses_model) turn.emplace(inference_gate_.acquire());
+    const Nanos t0 = io_.clock->now();
+    const vision::FrameResult& result = worker.pipeline->process(frame.view);
+    turn.reset();
+    FrameDensities densities;
+    densities.capture_time = frame.timestamp;
+    densities.ready_time = io_.clock->now();
+    busy_until = densities.ready_time;
+    densities.rows = result.rows;
+    densities.cols = result.cols;
+    std::copy(result.zone_density.begin(), result.zone_density.end(), densities.density.begin());
+    std::copy(result.crop_density.begin(), result.crop_density.end(),
+              densities.crop_density.begin());
+    // The weed model failed (an empty error is a malformed frame: zero densities, no alarm).
+    const bool injected = worker.injected_failure.load();
+    densities.vision_failed =
+        injected || (!worker.pipeline->last_frame_ok() && !worker.pipeline->last_error().empty());
+    status.vision_failed = densities.vision_failed;
+    if (densities.vision_failed) {
+      if (injected) {
+        densities.density.fill(0.0);
+        densities.crop_density.fill(0.0);
+      }
+      ++status.vision_failures;
+      static const std::string kInjected = "failure injected by a test";
+      const std::string& error = injected ? kInjected : worker.pipeline->last_error();
+      const std::size_t n = std::min(error.size(), status.vision_error.size() - 1);
+      std::memcpy(status.vision_error.data(), error.data(), n);
+      status.vision_error[n] = '\0';
+    }
+    worker.frames.try_push(densities);
+    ++status.frames;
+    status.gate_wait_ms = seconds(t0 - asked) * 1e3;
+    status.vision_ms = seconds(densities.ready_time - t0) * 1e3;
+    if (previous_frame.count() > 0) {
+      const double interval = seconds(frame.timestamp - previous_frame);
+      if (interval > 0) {
+        status.frame_rate_hz = status.frame_rate_hz == 0
+                                   ? 1.0 / interval
+                                   : 0.8 * status.frame_rate_hz + 0.2 / interval;
+      }
+    }
+    previous_frame = frame.timestamp;
+    status.last_frame_time = frame.timestamp;
+    worker.status.publish(status);
+  }
+}
+
+void Sprayer::tank_loop(std::stop_token stop) noexcept {
+  const Nanos period = from_seconds(config_.modbus.poll_period_s);
+  Nanos next = io_.clock->now();
+  while (!stop.stop_requested()) {
+    tank_.publish(io_.tank->read());
+    next += period;
+    // Sleep in short slices so a stop request is honoured promptly.
+    while (!stop.stop_requested() && io_.clock->now() < next) {
+      io_.clock->sleep_until(std::min(next, io_.clock->now() + 100ms));
+    }
+  }
+}
+
+}  // namespace weedspray::daemon

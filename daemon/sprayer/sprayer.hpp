@@ -1,0 +1,152 @@
+// The running sprayer: the real-time loops and workers, wired to the backends.
+//   ws-valve-pwm  io::ValvePwmDriver executing control::PwmSchedule edges (highest priority)
+//   ws-analog     io::AnalogIoWorker: the pressure ADC reads and return-valve DAC writes
+//   ws-pressure   ADC sample -> fuzzy PID / PID -> DAC command, pump relay, over-pressure trip
+//   ws-control    wheel odometry, flow, frames -> NozzleScheduler -> spray-rate law -> duties
+//   ws-camera     one per camera: frame -> vision::Pipeline -> zone densities (normal
+//                 priority; weed-model inferences one at a time through a ticket gate)
+//   ws-modbus     tank level
+// Threads exchange trivially copyable values through LatestValue slots and SPSC queues; the
+// loops allocate nothing, lock nothing and log nothing after start().
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "control/flow_feedback.hpp"
+#include "control/nozzle_scheduler.hpp"
+#include "control/odometry.hpp"
+#include "control/pressure_controller.hpp"
+#include "control/pwm_schedule.hpp"
+#include "control/spray_rate_law.hpp"
+#include "daemon/backends/backends.hpp"
+#include "daemon/config/config.hpp"
+#include "daemon/sprayer/inference_gate.hpp"
+#include "daemon/sprayer/runtime_types.hpp"
+#include "daemon/supervision/loop_timing.hpp"
+#include "io/analog_io_worker.hpp"
+#include "io/latest_value.hpp"
+#include "io/loop_watch.hpp"
+#include "io/realtime.hpp"
+#include "io/spsc_queue.hpp"
+#include "io/tank_level.hpp"
+#include "io/valve_pwm_driver.hpp"
+#include "vision/pipeline.hpp"
+
+namespace weedspray::daemon {
+
+// Build the parameters the loops re-read live from a configuration.
+LiveParams live_params_from(const Config& config);
+
+class Sprayer {
+ public:
+  static constexpr std::size_t kMaxCameras = 8;
+  using FrameQueue = io::SpscQueue<FrameDensities, 16>;
+  using LatencyQueue = io::SpscQueue<float, 1024>;
+  using RecordQueue = io::SpscQueue<AppliedRecord, 256>;
+
+  // Builds every algorithm object (throws std::invalid_argument naming a bad value).
+  Sprayer(const Config& config, Backends& backends);
+  ~Sprayer();
+  Sprayer(const Sprayer&) = delete;
+  Sprayer& operator=(const Sprayer&) = delete;
+
+  void start();
+  // Stops and joins every thread, then forces every output safe. Idempotent.
+  void stop() noexcept;
+
+  void set_params(const LiveParams& params) noexcept { params_.publish(params); }
+  LiveParams params() const noexcept { return params_.read(); }
+
+  PressureStatus pressure() const noexcept { return pressure_.read(); }
+  ControlStatus control() const noexcept { return control_.read(); }
+  CameraStatus camera(std::size_t i) const noexcept { return cameras_[i].status.read(); }
+  std::size_t camera_count() const noexcept { return camera_count_; }
+  io::TankLevelSample tank() const noexcept { return tank_.read(); }
+  io::ValvePwmStats pwm() const noexcept { return pwm_driver_->stats(); }
+  io::AnalogIoStats analog_io() const noexcept { return analog_io_->stats(); }
+  // Failed output writes of the real-time threads (unsafe_error left 0).
+  OutputWriteCounters output_write_counters() const noexcept;
+  // -errno per output of the safe writes of the last start()/stop() (0: written).
+  const SafeWriteErrors& safe_write_errors() const noexcept { return safe_write_errors_; }
+  // Lateness histograms of the real-time loops (readable from any thread).
+  const LoopTiming& timing() const noexcept { return timing_; }
+  // Times the valve thread found the pressure loop stalled with the pump on and switched it off.
+  std::uint64_t pressure_loop_stalls() const noexcept { return pressure_loop_stalls_.load(); }
+  // Threads that asked for SCHED_FIFO but did not get it.
+  std::vector<std::string> realtime_warnings() const;
+
+  LatencyQueue& latencies() noexcept { return latencies_; }
+  RecordQueue& records() noexcept { return records_; }
+
+  // Ground geometry of camera i (footprint relative to its nadir, for alarms and tests).
+  control::GroundInterval footprint(std::size_t i) const noexcept;
+  // Cameras whose weed model failed on their latest frame, with why ("camera 1: ..."; empty
+  // when none): the vision_model_failed alarm. Their nozzles are held closed meanwhile.
+  std::string vision_failures() const;
+  // Tests of the failure handling: while set, camera i's frames count as failed in its weed
+  // model (as a network failing at run time makes Pipeline::process() report them).
+  void inject_vision_failure(std::size_t i, bool fail) noexcept {
+    cameras_[i].injected_failure.store(fail);
+  }
+
+ private:
+  struct CameraWorker {
+    io::Camera* camera = nullptr;
+    std::unique_ptr<vision::Pipeline> pipeline;
+    std::unique_ptr<control::NozzleScheduler> scheduler;  // owned by the control loop
+    // The crop shares, pinned to the ground alike (status and the as-applied record only).
+    std::unique_ptr<control::NozzleScheduler> crop_scheduler;
+    FrameQueue frames;
+    io::LatestValue<CameraStatus> status;
+    int first_nozzle = 0;
+    int nozzle_count = 0;
+    double footprint_length_m = 0;
+    double last_frame_distance_m = -1e9;
+    bool uses_model = false;     // dnn/hybrid: inference goes through inference_gate_
+    bool vision_failed = false;  // control loop: the latest frame failed, nozzles held closed
+    std::atomic<bool> injected_failure{false};  // inject_vision_failure()
+  };
+
+  Nanos pressure_period() const noexcept;
+  // Runs on the valve thread at every wake: the pressure loop's dead-man.
+  void watch_pressure_loop(Nanos now) noexcept;
+  void pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept;
+  void control_loop(std::stop_token stop) noexcept;
+  void camera_loop(std::stop_token stop, CameraWorker& worker) noexcept;
+  void tank_loop(std::stop_token stop) noexcept;
+
+  const Config config_;
+  Backends& io_;
+  SafeWriteErrors safe_write_errors_{};
+  io::LatestValue<LiveParams> params_;
+  io::LatestValue<PressureStatus> pressure_;
+  io::LatestValue<ControlStatus> control_;
+  io::LatestValue<io::TankLevelSample> tank_;
+  std::unique_ptr<control::PressureController> controller_;
+  std::unique_ptr<io::AnalogIoWorker> analog_io_;
+  std::unique_ptr<control::PwmSchedule> schedule_;
+  std::unique_ptr<io::ValvePwmDriver<control::PwmSchedule>> pwm_driver_;
+  std::optional<control::Odometry> odometry_;
+  control::FlowTrim flow_trim_;
+  std::vector<control::DutyQuantiser> quantisers_;
+  std::array<CameraWorker, kMaxCameras> cameras_;
+  InferenceGate inference_gate_;  // one weed-model inference at a time, in arrival order
+  std::size_t camera_count_ = 0;
+  std::vector<int> nozzle_owner_;  // camera index per nozzle, -1 = none
+  LatencyQueue latencies_;
+  RecordQueue records_;
+  std::vector<io::RealtimeThread> threads_;
+  std::vector<std::string> thread_names_;
+  std::atomic<bool> stopped_{true};
+  LoopTiming timing_;
+  // Cross-watch between the valve thread and the pressure loop (io/loop_watch.hpp).
+  static constexpr Nanos kCrossWatchTimeout = std::chrono::milliseconds(50);
+  io::LoopWatch pressure_watch_{kCrossWatchTimeout};  // used by the valve thread only
+  std::atomic<bool> pump_forced_off_{false};
+  std::atomic<std::uint64_t> pressure_loop_stalls_{0};
+};
+
+}  // namespace weedspray::daemon

@@ -1,0 +1,133 @@
+#include "daemon/supervision/alarms.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+constexpr std::array<std::string_view, kAlarmCount> kNames = {
+    "over_pressure",
+    "pressure_sensor_fault",
+    "line_blocked",
+    "no_flow",
+    "tank_low",
+    "tank_empty",
+    "modbus_silent",
+    "camera_lost",
+    "vision_too_slow",
+    "control_overruns",
+    "vision_model_failed",
+    "output_write_failed",
+};
+
+double seconds(std::chrono::nanoseconds t) {
+  return std::chrono::duration<double>(t).count();
+}
+
+}  // namespace
+
+std::string_view alarm_name(AlarmId id) noexcept {
+  return kNames[static_cast<std::size_t>(id)];
+}
+
+std::optional<AlarmId> parse_alarm(std::string_view name) noexcept {
+  for (std::size_t i = 0; i < kAlarmCount; ++i) {
+    if (kNames[i] == name) return static_cast<AlarmId>(i);
+  }
+  return std::nullopt;
+}
+
+bool is_fault(AlarmId id) noexcept {
+  switch (id) {
+    case AlarmId::kOverPressure:
+    case AlarmId::kPressureSensorFault:
+    case AlarmId::kLineBlocked:
+    case AlarmId::kNoFlow:
+    case AlarmId::kTankEmpty:
+    case AlarmId::kCameraLost:
+    case AlarmId::kOutputWriteFailed:
+      return true;
+    default:
+      return false;
+  }
+}
+
+bool AlarmEvaluator::fault_latched() const noexcept {
+  for (std::size_t i = 0; i < kAlarmCount; ++i) {
+    const auto id = static_cast<AlarmId>(i);
+    if ((latched_ & alarm_bit(id)) && is_fault(id)) return true;
+  }
+  return false;
+}
+
+AlarmMask AlarmEvaluator::clear() noexcept {
+  const AlarmMask was = latched_;
+  latched_ = 0;
+  condition_since_.fill(std::nullopt);
+  return was;
+}
+
+AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
+  const auto& t = thresholds_;
+  std::array<bool, kAlarmCount> condition{};
+  std::array<double, kAlarmCount> hold_s{};  // how long a condition must last to raise
+  const auto set = [&](AlarmId id, bool present, bool needs_debounce) {
+    condition[static_cast<std::size_t>(id)] = present;
+    hold_s[static_cast<std::size_t>(id)] = needs_debounce ? t.debounce_s : 0.0;
+  };
+  const bool valves_open = in.spraying && in.open_fraction > 0.05;
+  set(AlarmId::kPressureSensorFault, !in.pressure_valid, false);
+  // One bad reading (a glitch on the loop, a lost converter sample) must not latch Fault: the
+  // pressure loop already stops the pump in every cycle whose reading is bad, so the machine
+  // is safe meanwhile; only a fault that persists is latched.
+  hold_s[static_cast<std::size_t>(AlarmId::kPressureSensorFault)] = t.sensor_fault_hold_s;
+  set(AlarmId::kOverPressure,
+      in.over_pressure_trip || (in.pressure_valid && in.pressure_mpa > t.over_pressure_mpa), false);
+  set(AlarmId::kLineBlocked,
+      valves_open && in.pressure_valid && in.pressure_mpa > t.blocked_pressure_mpa &&
+          in.flow_l_per_min < t.blocked_flow_l_per_min,
+      true);
+  set(AlarmId::kNoFlow,
+      valves_open && in.pressure_valid && in.pressure_mpa <= t.blocked_pressure_mpa &&
+          in.flow_l_per_min < t.no_flow_l_per_min,
+      true);
+  set(AlarmId::kTankLow, in.tank_enabled && in.tank_valid && in.tank_level_pct < t.tank_low_pct,
+      true);
+  set(AlarmId::kTankEmpty, in.tank_enabled && in.tank_valid && in.tank_level_pct < t.tank_empty_pct,
+      true);
+  set(AlarmId::kModbusSilent,
+      in.tank_enabled && seconds(in.now - in.tank_last_ok) > t.modbus_silent_s, false);
+  set(AlarmId::kCameraLost,
+      in.camera_expected && seconds(in.now - in.last_frame_time) >
+                                t.camera_stall_s + 2 * in.expected_frame_interval_s,
+      false);
+  const bool moving = in.spraying && in.speed_m_per_s > 0.1;
+  set(AlarmId::kVisionTooSlow,
+      moving && (in.coverage_gap || in.vision_latency_s * in.speed_m_per_s > in.lead_distance_m),
+      false);
+  // A warning, not a fault: only the failing camera's nozzles close (in the control loop).
+  set(AlarmId::kVisionModelFailed, in.vision_model_failed, false);
+  // A fault: an output that cannot be written may be stuck open; everything else is driven
+  // safe, and the failing safe write is retried while in Fault.
+  set(AlarmId::kOutputWriteFailed, in.output_write_failed, false);
+  set(AlarmId::kControlOverruns,
+      in.overruns_last_second >= static_cast<std::uint64_t>(t.control_overrun_limit), false);
+
+  AlarmMask raised = 0;
+  present_ = 0;
+  for (std::size_t i = 0; i < kAlarmCount; ++i) {
+    const auto id = static_cast<AlarmId>(i);
+    if (!condition[i]) {
+      condition_since_[i].reset();
+      continue;
+    }
+    if (!condition_since_[i]) condition_since_[i] = in.now;
+    if (seconds(in.now - *condition_since_[i]) < hold_s[i]) continue;
+    present_ |= alarm_bit(id);
+    if (!(latched_ & alarm_bit(id))) {
+      latched_ |= alarm_bit(id);
+      raised |= alarm_bit(id);
+    }
+  }
+  return raised;
+}
+
+}  // namespace weedspray::daemon

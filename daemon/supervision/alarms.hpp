@@ -1,0 +1,89 @@
+// Alarm evaluation as pure logic: inputs (the latest measurements and counters) in, latched
+// alarms out. Each alarm stays latched until ClearAlarms; a fault-class alarm puts the sprayer
+// in Fault (valves closed, pump off). The caller signals, logs and drives buzzer/LED.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <optional>
+#include <string_view>
+
+#include "daemon/config/config.hpp"
+
+namespace weedspray::daemon {
+
+enum class AlarmId : std::uint8_t {
+  kOverPressure,         // pressure above alarms.over_pressure_mpa: pump off
+  kPressureSensorFault,  // loop current < 3.6 mA or > 21 mA
+  kLineBlocked,          // pressure high and flow low while valves are open
+  kNoFlow,               // valves open, pressure normal, no flow (pump, meter or tank)
+  kTankLow,
+  kTankEmpty,
+  kModbusSilent,       // the tank sensor stopped answering
+  kCameraLost,         // no frame for alarms.camera_stall_s
+  kVisionTooSlow,      // frames do not cover the ground at this speed, or arrive too late
+  kControlOverruns,    // control loops missing their deadlines
+  kVisionModelFailed,  // a camera's weed model fails at run time: that camera's nozzles closed
+  kOutputWriteFailed,  // a valve/pump/return-valve/alarm output refused a write (line named)
+};
+inline constexpr std::size_t kAlarmCount = 12;
+
+using AlarmMask = std::uint32_t;
+constexpr AlarmMask alarm_bit(AlarmId id) noexcept {
+  return AlarmMask{1} << static_cast<int>(id);
+}
+
+std::string_view alarm_name(AlarmId id) noexcept;  // "over_pressure", ...
+std::optional<AlarmId> parse_alarm(std::string_view name) noexcept;
+// Fault-class alarms latch the Fault state; the others are warnings.
+bool is_fault(AlarmId id) noexcept;
+
+struct AlarmInputs {
+  std::chrono::nanoseconds now{};
+  bool spraying = false;
+  double open_fraction = 0;     // mean commanded valve duty, 0..1
+  bool pressure_valid = false;  // false: sensor fault (see sensor_current_ma)
+  double pressure_mpa = 0;
+  bool over_pressure_trip = false;  // the pressure loop already cut the pump
+  double sensor_current_ma = 0;
+  double flow_l_per_min = 0;
+  bool tank_enabled = false;
+  bool tank_valid = false;
+  double tank_level_pct = 0;
+  std::chrono::nanoseconds tank_last_ok{};  // last good tank read (or start time)
+  bool camera_expected = false;
+  std::chrono::nanoseconds last_frame_time{};  // newest frame of the stalest camera (or start)
+  double expected_frame_interval_s = 0;        // frames are due this often (ground pacing)
+  double speed_m_per_s = 0;
+  bool coverage_gap = false;    // consecutive frames left unseen ground since the last evaluation
+  double vision_latency_s = 0;  // frame capture to scheduled
+  double lead_distance_m = 0;   // from the near edge of the footprint to the nozzles
+  std::uint64_t overruns_last_second = 0;
+  bool vision_model_failed = false;  // some camera's latest frame failed in its weed model
+  bool output_write_failed = false;  // an output write failed since the last evaluation
+};
+
+class AlarmEvaluator {
+ public:
+  explicit AlarmEvaluator(const AlarmsSection& thresholds) : thresholds_(thresholds) {}
+  void set_thresholds(const AlarmsSection& thresholds) { thresholds_ = thresholds; }
+
+  // Returns the alarms raised by this call (not already latched).
+  AlarmMask evaluate(const AlarmInputs& in);
+  AlarmMask active() const noexcept { return latched_; }
+  bool fault_latched() const noexcept;
+  // Unlatches everything; a condition still present is raised again on the next evaluation
+  // (after its debounce). Returns the alarms that were latched.
+  AlarmMask clear() noexcept;
+  // Conditions present in the last evaluation (latched or not).
+  AlarmMask present() const noexcept { return present_; }
+
+ private:
+  AlarmsSection thresholds_;
+  AlarmMask latched_ = 0;
+  AlarmMask present_ = 0;
+  std::array<std::optional<std::chrono::nanoseconds>, kAlarmCount> condition_since_{};
+};
+
+}  // namespace weedspray::daemon
