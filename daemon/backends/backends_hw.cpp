@@ -1,5 +1,6 @@
 // The board: libgpiod lines, the pressure converters (backends_hw_converters.cpp), V4L2 cameras,
 // libmodbus tank sensor, configured from the [gpio], [modbus] and [[camera]] sections.
+#include <cstring>
 #include <stdexcept>
 
 #include "daemon/backends/backends.hpp"
@@ -59,7 +60,14 @@ int write_hw_safe_outputs(const Config& config, std::vector<std::string>& errors
     try {
       Backends b;
       make(b);  // requested with the safe values as defaults; released when b goes
-      b.force_safe();
+      // The request itself wrote the safe values; a refused explicit write is still reported
+      // (ExecStopPost's exit status and the journal name the output).
+      const SafeWriteErrors refused = b.force_safe();
+      for (std::size_t i = 0; i < kOutputRoleCount; ++i) {
+        if (refused[i] != 0)
+          errors.push_back(std::string(what) +
+                           ": safe value not written: " + std::strerror(-refused[i]));
+      }
     } catch (const std::exception& error) {
       errors.push_back(std::string(what) + ": " + error.what());
     }
