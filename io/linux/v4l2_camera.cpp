@@ -1,5 +1,7 @@
 #include "io/linux/v4l2_camera.hpp"
 
+#include "io/linux/mjpeg_decoder.hpp"
+
 #include <fcntl.h>
 #include <libv4l2.h>
 #include <linux/videodev2.h>
@@ -11,7 +13,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
-#include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <stdexcept>
 #include <vector>
 
@@ -81,7 +83,7 @@ struct V4l2Camera::Impl {
   int width = 0;
   int height = 0;
   std::size_t stride = 0;
-  cv::Mat decoded;
+  std::optional<MjpegDecoder> mjpeg;  // made once the size is negotiated
   std::string error;
   CameraCounters counters;
   bool have_sequence = false;
@@ -161,6 +163,13 @@ struct V4l2Camera::Impl {
                   " (nearest offered: " + std::to_string(width) + "x" + std::to_string(height) +
                   "; list sizes with v4l2-ctl --list-formats-ext)");
     stride = fmt.fmt.pix.bytesperline;
+    if (config.pixel_format == CameraPixelFormat::kMjpeg &&
+        (!mjpeg || mjpeg->width() != width || mjpeg->height() != height))
+      try {
+        mjpeg.emplace(width, height);
+      } catch (const std::exception& e) {
+        return fail(e.what());
+      }
     if (stride == 0) {
       const std::size_t bpp = config.pixel_format == CameraPixelFormat::kRgb24  ? 3
                               : config.pixel_format == CameraPixelFormat::kGrey ? 1
@@ -350,15 +359,21 @@ FrameStatus V4l2Camera::next_frame(Frame& frame, milliseconds timeout) {
   const auto* data = static_cast<const std::uint8_t*>(m.buffers[buf.index].start);
   switch (m.config.pixel_format) {
     case CameraPixelFormat::kMjpeg: {
-      const cv::Mat encoded(1, static_cast<int>(buf.bytesused), CV_8UC1,
-                            const_cast<std::uint8_t*>(data));
-      m.decoded = cv::imdecode(encoded, cv::IMREAD_COLOR);
-      if (m.decoded.empty()) {
+      // A damaged frame (libjpeg warned, e.g. padding before the end marker that some webcams
+      // send on every frame) is still delivered, as OpenCV's decoder did.
+      if (m.mjpeg->decode(data, buf.bytesused) == MjpegDecoder::Result::kRefused) {
         ++m.counters.errors;
-        m.error = m.where() + "MJPEG frame " + std::to_string(buf.sequence) + " did not decode";
+        m.error = m.where() + "MJPEG frame " + std::to_string(buf.sequence) +
+                  " did not decode: " + m.mjpeg->error();
+        if (m.mjpeg->claimed_width() > 0)
+          m.error.append(" (header says ")
+              .append(std::to_string(m.mjpeg->claimed_width()))
+              .append("x")
+              .append(std::to_string(m.mjpeg->claimed_height()))
+              .append(")");
         return FrameStatus::kError;
       }
-      frame.view = {m.decoded.data, m.decoded.cols, m.decoded.rows, m.decoded.step[0],
+      frame.view = {m.mjpeg->bgr(), m.mjpeg->width(), m.mjpeg->height(), m.mjpeg->stride(),
                     vision::PixelFormat::kBgr24};
       break;
     }
