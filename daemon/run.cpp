@@ -817,19 +817,7 @@ class Daemon final : public CommandHandler {
 }  // namespace
 
 int write_safe_outputs(const Options& options) {
-  Config config;
-  try {
-    config = load_with_overrides(options);
-  } catch (const ConfigError& error) {
-    std::fprintf(stderr, "weedsprayd --safe-outputs: %s\n", error.what());
-    return 1;
-  }
-  std::vector<std::string> errors;
-  write_hw_safe_outputs(config, errors);
-  for (const auto& error : errors)
-    std::fprintf(stderr, "weedsprayd --safe-outputs: %s\n", error.c_str());
-  if (errors.empty()) std::printf("weedsprayd: outputs written safe\n");
-  return errors.empty() ? 0 : 1;
+  return write_safe_outputs(options.config_path, "weedsprayd --safe-outputs");
 }
 
 int run_daemon(const Options& options) {

@@ -85,6 +85,12 @@ io::ValveDriveConfig valve_drive_config(const Config& config);
 // output is tried on its own; returns the failures, each described in `errors`.
 int write_hw_safe_outputs(const Config& config, std::vector<std::string>& errors);
 
+// Loads `config_path` (without the weed source check: no model, no vision library), then
+// write_hw_safe_outputs(); each failure on stderr prefixed by `program`. Returns the exit
+// status: 0 when every output took its safe value. weedsprayd --safe-outputs and
+// weedspray-safe-outputs.
+int write_safe_outputs(const std::filesystem::path& config_path, const char* program);
+
 Backends make_hw_backends(const Config& config);
 
 // The board's pressure converters from [adc], [dac] and [analog_modbus]: IIO devices or Modbus

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "daemon/backends/backends.hpp"
+#include "daemon/backends/hw_output_lines.hpp"
 #include "io/linux/counter_pulse_input.hpp"
 #include "io/linux/gpio_digital_input.hpp"
 #include "io/linux/gpio_output_bank.hpp"
@@ -22,26 +23,6 @@ io::hw::CameraPixelFormat pixel_format(const std::string& name) {
   return io::hw::CameraPixelFormat::kYuyv;
 }
 
-template <class T>
-T* keep(Backends& b, std::shared_ptr<T> device) {
-  b.owned.push_back(device);
-  return device.get();
-}
-
-bool wired(const std::string& name, int offset) {
-  return !name.empty() || offset >= 0;
-}
-
-io::DigitalOutputBank* single_line(Backends& b, const GpioSection& gpio, const std::string& name,
-                                   int offset, bool active_low) {
-  if (!wired(name, offset)) return nullptr;
-  io::hw::GpioOutputBankConfig config;
-  config.chip = gpio.chip;
-  config.lines.push_back(io::hw::GpioLineConfig{
-      .name = name, .offset = offset, .active_low = active_low, .safe_value = false});
-  return keep(b, std::make_shared<io::hw::GpioOutputBank>(config));
-}
-
 io::PulseInput* pulse_line(Backends& b, const GpioSection& gpio, const std::string& name,
                            int offset) {
   if (!wired(name, offset)) return nullptr;
@@ -53,57 +34,6 @@ io::PulseInput* pulse_line(Backends& b, const GpioSection& gpio, const std::stri
 }
 
 }  // namespace
-
-int write_hw_safe_outputs(const Config& config, std::vector<std::string>& errors) {
-  const auto& gpio = config.gpio;
-  const auto attempt = [&](const char* what, auto&& make) {
-    try {
-      Backends b;
-      make(b);  // requested with the safe values as defaults; released when b goes
-      // The request itself wrote the safe values; a refused explicit write is still reported
-      // (ExecStopPost's exit status and the journal name the output).
-      const SafeWriteErrors refused = b.force_safe();
-      for (std::size_t i = 0; i < kOutputRoleCount; ++i) {
-        if (refused[i] != 0)
-          errors.push_back(std::string(what) +
-                           ": safe value not written: " + std::strerror(-refused[i]));
-      }
-    } catch (const std::exception& error) {
-      errors.push_back(std::string(what) + ": " + error.what());
-    }
-  };
-  attempt("valves", [&](Backends& b) {
-    io::hw::GpioOutputBankConfig valves;
-    valves.chip = gpio.chip;
-    valves.consumer = "weedsprayd-safe";
-    for (int offset : gpio.valve_offsets)
-      valves.lines.push_back(
-          {.name = {}, .offset = offset, .active_low = gpio.valve_active_low, .safe_value = false});
-    for (const auto& name : gpio.valve_names)
-      valves.lines.push_back(
-          {.name = name, .offset = -1, .active_low = gpio.valve_active_low, .safe_value = false});
-    if (!valves.lines.empty()) b.valves = keep(b, std::make_shared<io::hw::GpioOutputBank>(valves));
-  });
-  attempt("pump", [&](Backends& b) {
-    b.pump = single_line(b, gpio, gpio.pump_name, gpio.pump_offset, gpio.pump_active_low);
-  });
-  attempt("buzzer", [&](Backends& b) {
-    b.buzzer = single_line(b, gpio, gpio.buzzer_name, gpio.buzzer_offset, false);
-  });
-  attempt("led", [&](Backends& b) {
-    b.led = single_line(b, gpio, gpio.led_name, gpio.led_offset, false);
-  });
-  attempt("heartbeat", [&](Backends& b) {
-    b.heartbeat = single_line(b, gpio, gpio.heartbeat_name, gpio.heartbeat_offset, false);
-  });
-  attempt("return valve", [&](Backends& b) {
-    b.clock = keep(b, std::make_shared<io::hw::MonotonicClock>());
-    PressureConverters converters = make_hw_pressure_converters(config, *b.clock);
-    b.return_valve = keep(b, converters.dac);  // writes the safe value when it is made
-    keep(b, converters.adc);
-  });
-  return static_cast<int>(errors.size());
-}
 
 Backends make_hw_backends(const Config& config) {
   Backends b;

@@ -285,6 +285,10 @@ class ConfigError : public std::runtime_error {
 [[nodiscard]] Config load_config_from_strings(
     const std::vector<std::pair<std::string, std::string>>& documents);
 
+// load_config() without the weed source check: no model is read and no vision pipeline built
+// (model stays null). For the fail-safe writer, which must start fast and with few libraries.
+[[nodiscard]] Config load_config_without_vision(const std::filesystem::path& main_file);
+
 // The effective configuration as TOML (every key, current values), parseable back.
 [[nodiscard]] std::string dump_config(const Config& config);
 

@@ -10,8 +10,8 @@
 #include <type_traits>
 
 #include "daemon/config/config.hpp"
+#include "daemon/config/config_loader.hpp"
 #include "daemon/config/config_schema.hpp"
-#include "daemon/config/vision_config.hpp"
 
 namespace weedspray::daemon {
 
@@ -207,14 +207,16 @@ class Loader {
     }
   }
 
-  Config finish() {
+  Config finish(WeedSourceCheck check) {
     if (!cameras_given_) config_.cameras.front().nozzle_count = config_.boom.nozzles;
     validate();
-    try {
-      config_.model = check_weed_source(config_);
-    } catch (const VisionKeyError& error) {
-      // A key left at its default is reported where the weed source was chosen.
-      fail(error.key(), error.what(), "vision.weed_source");
+    if (check != nullptr) {
+      try {
+        config_.model = check(config_);
+      } catch (const VisionKeyError& error) {
+        // A key left at its default is reported where the weed source was chosen.
+        fail(error.key(), error.what(), "vision.weed_source");
+      }
     }
     return std::move(config_);
   }
@@ -471,13 +473,18 @@ Config default_config() {
   return config;
 }
 
-Config load_config_from_strings(const std::vector<std::pair<std::string, std::string>>& documents) {
+Config load_config_documents(const std::vector<std::pair<std::string, std::string>>& documents,
+                             WeedSourceCheck check) {
   Loader loader;
   for (const auto& [name, text] : documents) loader.apply(name, parse_document(text, name));
-  return loader.finish();
+  return loader.finish(check);
 }
 
-Config load_config(const std::filesystem::path& main_file) {
+Config load_config_without_vision(const std::filesystem::path& main_file) {
+  return load_config_files(main_file, nullptr);
+}
+
+Config load_config_files(const std::filesystem::path& main_file, WeedSourceCheck check) {
   std::vector<std::pair<std::string, std::string>> documents;
   documents.emplace_back(main_file.string(), read_file(main_file));
   const auto drop_in_dir = main_file.parent_path() / "conf.d";
@@ -499,7 +506,7 @@ Config load_config(const std::filesystem::path& main_file) {
     std::sort(drop_ins.begin(), drop_ins.end());
     for (const auto& path : drop_ins) documents.emplace_back(path.string(), read_file(path));
   }
-  return load_config_from_strings(documents);
+  return load_config_documents(documents, check);
 }
 
 namespace {

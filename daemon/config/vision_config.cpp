@@ -211,3 +211,16 @@ std::shared_ptr<const LoadedModel> check_weed_source(const Config& config) {
 }
 
 }  // namespace weedspray::daemon
+
+// The full load: the files, then the weed source (config_loader.hpp says why they are apart).
+namespace weedspray::daemon {
+
+Config load_config(const std::filesystem::path& main_file) {
+  return load_config_files(main_file, &check_weed_source);
+}
+
+Config load_config_from_strings(const std::vector<std::pair<std::string, std::string>>& documents) {
+  return load_config_documents(documents, &check_weed_source);
+}
+
+}  // namespace weedspray::daemon

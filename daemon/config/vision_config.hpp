@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "daemon/config/config.hpp"
+#include "daemon/config/config_loader.hpp"
 #include "vision/pipeline.hpp"
 
 namespace weedspray::daemon {
@@ -26,18 +27,6 @@ namespace weedspray::daemon {
 // Folders a relative vision.model is looked up in, in order: the folder of the file that set
 // it (when it was set in a file), the installed models, and a build tree's models/.
 [[nodiscard]] std::vector<std::filesystem::path> model_search_dirs(const std::string& set_in_file);
-
-// A problem with one [vision] key ("vision.model", ...), raised while checking the weed
-// source; the loader turns it into a ConfigError naming where the key was set.
-class VisionKeyError : public std::runtime_error {
- public:
-  VisionKeyError(std::string key, const std::string& message)
-      : std::runtime_error(message), key_(std::move(key)) {}
-  const std::string& key() const { return key_; }
-
- private:
-  std::string key_;
-};
 
 // Checks the weed source keys of a loaded configuration and, when the source needs a model,
 // reads it and builds every camera's pipeline once (one forward pass): null for sources

@@ -1,0 +1,80 @@
+// The fail-safe writer's work (ExecStopPost after any exit, kill -9 included): every output
+// line requested at its safe value and released, and the return-valve DAC's safe value.
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+
+#include "daemon/backends/backends.hpp"
+#include "daemon/backends/hw_output_lines.hpp"
+#include "io/linux/gpio_output_bank.hpp"
+#include "io/linux/monotonic_clock.hpp"
+
+namespace weedspray::daemon {
+
+int write_hw_safe_outputs(const Config& config, std::vector<std::string>& errors) {
+  const auto& gpio = config.gpio;
+  const auto attempt = [&](const char* what, auto&& make) {
+    try {
+      Backends b;
+      make(b);  // requested with the safe values as defaults; released when b goes
+      // The request itself wrote the safe values; a refused explicit write is still reported
+      // (ExecStopPost's exit status and the journal name the output).
+      const SafeWriteErrors refused = b.force_safe();
+      for (std::size_t i = 0; i < kOutputRoleCount; ++i) {
+        if (refused[i] != 0)
+          errors.push_back(std::string(what) +
+                           ": safe value not written: " + std::strerror(-refused[i]));
+      }
+    } catch (const std::exception& error) {
+      errors.push_back(std::string(what) + ": " + error.what());
+    }
+  };
+  attempt("valves", [&](Backends& b) {
+    io::hw::GpioOutputBankConfig valves;
+    valves.chip = gpio.chip;
+    valves.consumer = "weedsprayd-safe";
+    for (int offset : gpio.valve_offsets)
+      valves.lines.push_back(
+          {.name = {}, .offset = offset, .active_low = gpio.valve_active_low, .safe_value = false});
+    for (const auto& name : gpio.valve_names)
+      valves.lines.push_back(
+          {.name = name, .offset = -1, .active_low = gpio.valve_active_low, .safe_value = false});
+    if (!valves.lines.empty()) b.valves = keep(b, std::make_shared<io::hw::GpioOutputBank>(valves));
+  });
+  attempt("pump", [&](Backends& b) {
+    b.pump = single_line(b, gpio, gpio.pump_name, gpio.pump_offset, gpio.pump_active_low);
+  });
+  attempt("buzzer", [&](Backends& b) {
+    b.buzzer = single_line(b, gpio, gpio.buzzer_name, gpio.buzzer_offset, false);
+  });
+  attempt("led", [&](Backends& b) {
+    b.led = single_line(b, gpio, gpio.led_name, gpio.led_offset, false);
+  });
+  attempt("heartbeat", [&](Backends& b) {
+    b.heartbeat = single_line(b, gpio, gpio.heartbeat_name, gpio.heartbeat_offset, false);
+  });
+  attempt("return valve", [&](Backends& b) {
+    b.clock = keep(b, std::make_shared<io::hw::MonotonicClock>());
+    PressureConverters converters = make_hw_pressure_converters(config, *b.clock);
+    b.return_valve = keep(b, converters.dac);  // writes the safe value when it is made
+    keep(b, converters.adc);
+  });
+  return static_cast<int>(errors.size());
+}
+
+int write_safe_outputs(const std::filesystem::path& config_path, const char* program) {
+  Config config;
+  try {
+    config = load_config_without_vision(config_path);
+  } catch (const ConfigError& error) {
+    std::fprintf(stderr, "%s: %s\n", program, error.what());
+    return 1;
+  }
+  std::vector<std::string> errors;
+  write_hw_safe_outputs(config, errors);
+  for (const auto& error : errors) std::fprintf(stderr, "%s: %s\n", program, error.c_str());
+  if (errors.empty()) std::printf("%s: outputs written safe\n", program);
+  return errors.empty() ? 0 : 1;
+}
+
+}  // namespace weedspray::daemon
