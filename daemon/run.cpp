@@ -28,6 +28,7 @@
 #include "daemon/records/totals.hpp"
 #include "daemon/sprayer/sprayer.hpp"
 #include "daemon/supervision/alarms.hpp"
+#include "daemon/supervision/exit_watcher.hpp"
 #include "daemon/supervision/loop_timing.hpp"
 #include "daemon/supervision/state_machine.hpp"
 #include "daemon/test_crash_hook.hpp"
@@ -848,6 +849,22 @@ int run_daemon(const Options& options) {
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   if (io::lock_memory() != 0) spdlog::info("memory not locked (mlockall not permitted)");
 
+#ifndef WEEDSPRAY_SELFTEST_NO_FAILSAFE
+  // Hardware mode: before any line is requested, a watcher process that writes the outputs
+  // safe when this one ends in any way (kill -9 included); ExecStopPost is the second layer.
+  if (!options.sim) {
+    std::string error;
+    const ExitWatcher watcher =
+        start_exit_watcher(options.config_path, default_exit_watcher_program(), error);
+    if (watcher.pid < 0)
+      spdlog::warn(
+          "exit watcher not started ({}): after a kill -9 only ExecStopPost closes the "
+          "valves",
+          error);
+    else
+      spdlog::info("exit watcher started (pid {})", watcher.pid);
+  }
+#endif
   Daemon daemon(options, std::move(config));
   try {
     return daemon.run();

@@ -1,18 +1,28 @@
 // weedspray-safe-outputs: writes every configured output's safe value and exits; the unit's
 // ExecStopPost after every exit of weedsprayd, kill -9 included (daemon/CMakeLists.txt says why
-// it is not weedsprayd --safe-outputs, which does the same).
+// it is not weedsprayd --safe-outputs, which does the same). With --when-closed it is the exit
+// watcher weedsprayd starts beside itself (backends/safe_outputs_watch.hpp).
 #include <CLI/CLI.hpp>
 #include <string>
 
 #include "daemon/backends/backends.hpp"
+#include "daemon/backends/safe_outputs_watch.hpp"
 #include "daemon/config/config.hpp"
 
 int main(int argc, char** argv) {
   std::string config_path = weedspray::daemon::kDefaultConfigPath;
+  int watch_fd = -1;
   CLI::App app{
       "weedspray-safe-outputs: write every output of the configuration at its safe value "
       "(valves and pump off, buzzer/LED/heartbeat low, return valve at dac.safe_value)"};
   app.add_option("--config", config_path, "main configuration file (drop-ins: conf.d/)");
+  app.add_option("--when-closed", watch_fd,
+                 "first wait until this file descriptor reads end-of-file (weedsprayd holds the "
+                 "pipe's write end: its process has ended)")
+      ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
+  if (watch_fd >= 0)
+    return weedspray::daemon::watch_and_write_safe_outputs(watch_fd, config_path,
+                                                           "weedspray-safe-outputs");
   return weedspray::daemon::write_safe_outputs(config_path, "weedspray-safe-outputs");
 }

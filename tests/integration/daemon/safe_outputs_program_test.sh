@@ -45,4 +45,24 @@ if "$BUILD/daemon/weedsprayd" --safe-outputs --config "$T/weedspray.toml" >"$T/d
   fail "weedsprayd --safe-outputs reported safe"
 fi
 grep -q "^weedsprayd --safe-outputs: valves: " "$T/daemon.log" || fail "weedsprayd --safe-outputs"
+# --when-closed (the exit watcher weedsprayd starts): it waits while the pipe's write end lives,
+# outlives SIGTERM (a stop signals the whole service), and writes as soon as that end closes,
+# here when its holder is killed with SIGKILL. A missing chip is not retried.
+mkfifo "$T/pipe"
+sleep 600 >"$T/pipe" &
+holder=$!
+"$BIN" --config "$T/weedspray.toml" --when-closed 3 3<"$T/pipe" >"$T/watch.log" 2>&1 &
+watcher=$!
+sleep 0.5
+kill -TERM "$watcher"
+sleep 0.3
+kill -0 "$watcher" 2>/dev/null || fail "the watcher did not outlive SIGTERM"
+[ -s "$T/watch.log" ] && fail "the watcher wrote before its holder ended"
+start=$(date +%s%N)
+kill -KILL "$holder"
+wait "$watcher" && fail "no chip, yet the watcher reported safe"
+elapsed_ms=$((($(date +%s%N) - start) / 1000000))
+grep -q "^weedspray-safe-outputs: valves: .*no-such-gpiochip" "$T/watch.log" ||
+  fail "the watcher did not try the valves after its holder ended"
+[ "$elapsed_ms" -lt 1000 ] || fail "the watcher took $elapsed_ms ms (a missing chip is not retried)"
 echo "PASS"

@@ -1,0 +1,56 @@
+#include "daemon/supervision/exit_watcher.hpp"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <vector>
+
+extern char** environ;
+
+namespace weedspray::daemon {
+
+std::filesystem::path default_exit_watcher_program() {
+  std::error_code error;
+  const auto self = std::filesystem::read_symlink("/proc/self/exe", error);
+  return (error ? std::filesystem::path("/usr/sbin") : self.parent_path()) /
+         "weedspray-safe-outputs";
+}
+
+ExitWatcher start_exit_watcher(const std::filesystem::path& config_path,
+                               const std::filesystem::path& program, std::string& error) {
+  ExitWatcher watcher;
+  int fds[2];
+  if (pipe2(fds, O_CLOEXEC) != 0) {
+    error = std::string("pipe: ") + std::strerror(errno);
+    return watcher;
+  }
+  // The read end becomes the child's fd 3 (dup2 clears close-on-exec there); the write end,
+  // close-on-exec, stays only here.
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, fds[0], 3);
+  std::error_code absolute_error;
+  const std::string config = std::filesystem::absolute(config_path, absolute_error).string();
+  const std::string program_text = program.string();
+  std::vector<std::string> args = {program_text, "--config", config, "--when-closed", "3"};
+  std::vector<char*> argv;
+  for (auto& arg : args) argv.push_back(arg.data());
+  argv.push_back(nullptr);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, program_text.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  close(fds[0]);
+  if (rc != 0) {
+    close(fds[1]);
+    error = program_text + ": " + std::strerror(rc);
+    return watcher;
+  }
+  watcher.pid = pid;
+  watcher.pipe_write_fd = fds[1];
+  return watcher;
+}
+
+}  // namespace weedspray::daemon
