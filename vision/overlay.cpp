@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "vision/weed_source.hpp"
@@ -113,6 +114,15 @@ BgrImage draw_overlay(const ImageView& frame, const ImageView& classes, const Pi
   out.height = overlay.rows;
   out.pixels.assign(overlay.datastart, overlay.dataend);  // continuous: made by copy/cvtColor
   return out;
+}
+
+std::vector<std::uint8_t> encode_png(const BgrImage& image) {
+  std::vector<std::uint8_t> png;
+  const cv::Mat mat(image.height, image.width, CV_8UC3,
+                    const_cast<std::uint8_t*>(image.pixels.data()));  // read only
+  if (!cv::imencode(".png", mat, png, {cv::IMWRITE_PNG_COMPRESSION, 1}))
+    throw std::runtime_error("PNG encoding failed");
+  return png;
 }
 
 }  // namespace weedspray::vision

@@ -50,4 +50,8 @@ struct BgrImage {
 BgrImage draw_overlay(const ImageView& frame, const ImageView& classes, const PixelRect& region,
                       const OverlayZones& zones);
 
+// The image as PNG bytes (in memory), at zlib's fastest level: a live view is sent once, and
+// encoding is its main cost.
+std::vector<std::uint8_t> encode_png(const BgrImage& image);
+
 }  // namespace weedspray::vision

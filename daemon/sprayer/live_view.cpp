@@ -1,20 +1,20 @@
 #include "daemon/sprayer/live_view.hpp"
 
+#include <pthread.h>
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <exception>
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <utility>
 
-#include "vision/overlay.hpp"
-
 namespace weedspray::daemon {
-
 LiveView::LiveView(Sprayer& sprayer, std::vector<int> first_nozzles)
-    : sprayer_(sprayer), first_nozzles_(std::move(first_nozzles)) {}
+    : sprayer_(sprayer),
+      first_nozzles_(std::move(first_nozzles)),
+      encoder_([this](std::stop_token stop) { encoder_loop(stop); }) {}
 
 LiveView::~LiveView() {
   cancel("weedsprayd is stopping");
@@ -26,7 +26,7 @@ CommandResult LiveView::request(std::uint32_t camera, Nanos now, SnapshotReply r
                                        std::to_string(sprayer_.camera_count()) + " configured)"};
   }
   if (pending_) {
-    return {kErrorRateLimited, "Snapshot refused: the previous one still waits for its frame"};
+    return {kErrorRateLimited, "Snapshot refused: the previous one is not answered yet"};
   }
   const CameraStatus status = sprayer_.camera(camera);
   if (status.frames == 0 || status.frame_bytes == 0) {
@@ -50,12 +50,27 @@ CommandResult LiveView::request(std::uint32_t camera, Nanos now, SnapshotReply r
 
 void LiveView::poll(Nanos now) {
   if (!pending_) return;
+  if (pending_->encoding) {
+    std::optional<Encoded> encoded;
+    {
+      const std::lock_guard lock(mutex_);
+      encoded.swap(encoded_);
+    }
+    if (encoded) finish(now, encoded->result, encoded->png);
+    return;
+  }
   SnapshotHandoff& handoff = sprayer_.snapshot(pending_->camera);
   if (const SnapshotHandoff::Capture* capture = handoff.ready()) {
-    answer(*capture);
-    limit_.mark(now);  // from the answer: encoding is the cost the limit bounds
-    handoff.release();
-    pending_.reset();
+    if (capture->error != nullptr) {
+      finish(now, {kErrorUnavailable, std::string("Snapshot: ") + capture->error}, {});
+      return;
+    }
+    {
+      const std::lock_guard lock(mutex_);
+      job_ = Job{capture, current_duties(pending_->camera, capture->cols)};
+    }
+    pending_->encoding = true;
+    wake_.notify_one();
   } else if (now - pending_->asked > kFrameTimeout && handoff.release()) {
     pending_->reply({kErrorUnavailable, "Snapshot: camera " + std::to_string(pending_->camera) +
                                             " delivered no frame within 3 s"},
@@ -64,48 +79,66 @@ void LiveView::poll(Nanos now) {
   }
 }
 
+void LiveView::finish(Nanos now, const CommandResult& result, std::span<const std::uint8_t> png) {
+  sprayer_.snapshot(pending_->camera).release();
+  pending_->reply(result, png);
+  pending_.reset();
+  limit_.mark(now);  // from the answer: encoding is the cost the limit bounds
+}
+
 void LiveView::cancel(const char* why) {
   if (!pending_) return;
+  if (pending_->encoding) {
+    // The encoder reads the capture: let it finish before the handoff takes it back.
+    encoder_.request_stop();
+    wake_.notify_one();
+    if (encoder_.joinable()) encoder_.join();
+  }
   sprayer_.snapshot(pending_->camera).release();
   pending_->reply({kErrorUnavailable, std::string("Snapshot: ") + why}, {});
   pending_.reset();
 }
 
-void LiveView::answer(const SnapshotHandoff::Capture& capture) {
-  if (capture.error != nullptr) {
-    pending_->reply({kErrorUnavailable, std::string("Snapshot: ") + capture.error}, {});
-    return;
-  }
-  // The duties the nozzles under this camera run now (for ground the camera saw a moment
-  // ago: the schedule delays each zone's density until its ground reaches the nozzle).
+// The duties the nozzles under this camera run now (for ground the camera saw a moment ago:
+// the schedule delays each zone's density until its ground reaches the nozzle).
+std::vector<double> LiveView::current_duties(std::size_t camera, int cols) const {
   const ControlStatus control = sprayer_.control();
-  std::vector<double> duties(static_cast<std::size_t>(capture.cols), 0.0);
-  for (int col = 0; col < capture.cols; ++col) {
-    const int nozzle = first_nozzles_[pending_->camera] + col;
+  std::vector<double> duties(static_cast<std::size_t>(cols), 0.0);
+  for (int col = 0; col < cols; ++col) {
+    const int nozzle = first_nozzles_[camera] + col;
     if (nozzle >= 0 && static_cast<std::uint32_t>(nozzle) < control.nozzles)
       duties[static_cast<std::size_t>(col)] = control.duty_pct[static_cast<std::size_t>(nozzle)];
   }
-  try {
+  return duties;
+}
+
+void LiveView::encoder_loop(std::stop_token stop) {
+  pthread_setname_np(pthread_self(), "ws-liveview");
+  // Below the camera threads: a snapshot must not cost the vision its frames.
+  setpriority(PRIO_PROCESS, static_cast<id_t>(gettid()), 10);
+  while (true) {
+    Job job;
+    {
+      std::unique_lock lock(mutex_);
+      if (!wake_.wait(lock, stop, [this] { return job_.has_value(); })) return;
+      job = std::move(*job_);
+      job_.reset();
+    }
+    Encoded encoded;
     const auto started = std::chrono::steady_clock::now();
-    const vision::OverlayZones zones{
-        capture.rows, capture.cols,
-        std::span<const double>(capture.density.data(),
-                                static_cast<std::size_t>(capture.rows * capture.cols)),
-        duties};
-    vision::BgrImage overlay =
-        vision::draw_overlay(capture.frame, capture.classes, capture.region, zones);
-    std::vector<std::uint8_t> png;
-    // Fastest zlib level: the picture goes over the bus once, and encoding is the cost here.
-    cv::imencode(".png", cv::Mat(overlay.height, overlay.width, CV_8UC3, overlay.pixels.data()),
-                 png, {cv::IMWRITE_PNG_COMPRESSION, 1});
-    spdlog::debug(
-        "snapshot of camera {}: {}x{}, {} bytes, {:.1f} ms", pending_->camera, overlay.width,
-        overlay.height, png.size(),
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started)
-            .count());
-    pending_->reply({}, png);
-  } catch (const std::exception& error) {
-    pending_->reply({kErrorUnavailable, std::string("Snapshot: ") + error.what()}, {});
+    try {
+      encoded.png = overlay_png(*job.capture, job.duties);
+      spdlog::debug(
+          "snapshot: {}x{}, {} bytes, overlay + PNG {:.1f} ms", job.capture->frame.width,
+          job.capture->frame.height, encoded.png.size(),
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started)
+              .count());
+    } catch (const std::exception& error) {
+      encoded.result = {kErrorUnavailable, std::string("Snapshot: ") + error.what()};
+      encoded.png.clear();
+    }
+    const std::lock_guard lock(mutex_);
+    encoded_ = std::move(encoded);
   }
 }
 

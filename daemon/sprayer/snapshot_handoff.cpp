@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include "vision/overlay.hpp"
+
 namespace weedspray::daemon {
 
 std::size_t SnapshotHandoff::packed_bytes(const vision::ImageView& frame) noexcept {
@@ -58,6 +60,17 @@ void SnapshotHandoff::fill(const vision::ImageView& frame, std::chrono::nanoseco
     if (c.classes.data == nullptr) c.error = "the class map grew after the request: ask again";
   }
   state_.store(kReady, std::memory_order_release);
+}
+
+std::vector<std::uint8_t> overlay_png(const SnapshotHandoff::Capture& capture,
+                                      std::span<const double> duties) {
+  const vision::OverlayZones zones{
+      capture.rows, capture.cols,
+      std::span<const double>(capture.density.data(),
+                              static_cast<std::size_t>(capture.rows * capture.cols)),
+      duties};
+  return vision::encode_png(
+      vision::draw_overlay(capture.frame, capture.classes, capture.region, zones));
 }
 
 }  // namespace weedspray::daemon

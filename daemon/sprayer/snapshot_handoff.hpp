@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "vision/image_view.hpp"
@@ -54,5 +55,11 @@ class SnapshotHandoff {
   std::vector<std::uint8_t> frame_bytes_;
   std::vector<std::uint8_t> class_bytes_;
 };
+
+// A filled capture as the live view's PNG: the overlay (vision/overlay.hpp) with `duties`, one
+// per zone column, written in. Throws std::invalid_argument / std::runtime_error. Slow (0.1 s
+// and more for 1280x800): never on a real-time thread.
+std::vector<std::uint8_t> overlay_png(const SnapshotHandoff::Capture& capture,
+                                      std::span<const double> duties);
 
 }  // namespace weedspray::daemon
