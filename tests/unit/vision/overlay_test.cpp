@@ -156,6 +156,33 @@ TEST(Overlay, OtherPixelFormatsComeOutAsBgr) {
   EXPECT_EQ(out.at(30, 100), (OverlayColour{42, 60, 78}));
 }
 
+TEST(Overlay, YuyvAndGreyFramesComeOutAsBgr) {
+  // YUYV (V4L2 cameras): Y 100 with neutral chroma is grey 100 -> 60 dimmed, at full size.
+  std::vector<std::uint8_t> yuyv(static_cast<std::size_t>(kWidth) * kHeight * 2);
+  for (std::size_t i = 0; i < yuyv.size(); i += 2) {
+    yuyv[i] = 100;
+    yuyv[i + 1] = 128;
+  }
+  const ClassMap classes(kWidth, kHeight);
+  const ImageView yuyv_view{yuyv.data(), kWidth, kHeight, static_cast<std::size_t>(kWidth) * 2,
+                            PixelFormat::kYuyv};
+  const BgrImage out =
+      draw_overlay(yuyv_view, classes.view(), {0, 0, kWidth, kHeight}, {1, 4, kDensities, {}});
+  ASSERT_EQ(out.width, kWidth);
+  ASSERT_EQ(out.height, kHeight);
+  const OverlayColour soil = out.at(30, 100);
+  EXPECT_EQ(soil.b, soil.g);
+  EXPECT_EQ(soil.g, soil.r);
+  EXPECT_NEAR(soil.g, 0.6 * 100 * 255 / 219.0 - 0.6 * 16 * 255 / 219.0, 2) << "BT.601 Y 100";
+  // Grey (mono industrial cameras).
+  const std::vector<std::uint8_t> grey(static_cast<std::size_t>(kWidth) * kHeight, 200);
+  const ImageView grey_view{grey.data(), kWidth, kHeight, static_cast<std::size_t>(kWidth),
+                            PixelFormat::kGrey};
+  EXPECT_EQ(draw_overlay(grey_view, classes.view(), {0, 0, kWidth, kHeight}, {1, 4, kDensities, {}})
+                .at(30, 100),
+            (OverlayColour{120, 120, 120}));
+}
+
 // The pipeline's own class map, written into a caller's buffer without allocating, drawn red
 // where the frame is green.
 TEST(Overlay, ThePipelinesClassMapMarksItsPlants) {
