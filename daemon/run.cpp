@@ -26,6 +26,7 @@
 #include "daemon/logging.hpp"
 #include "daemon/records/as_applied_log.hpp"
 #include "daemon/records/totals.hpp"
+#include "daemon/sprayer/live_view.hpp"
 #include "daemon/sprayer/sprayer.hpp"
 #include "daemon/supervision/alarms.hpp"
 #include "daemon/supervision/exit_watcher.hpp"
@@ -93,6 +94,7 @@ class Daemon final : public CommandHandler {
     io::EmergencyOutputs::clear();
     if (tick_source_ != nullptr) sd_event_source_unref(tick_source_);
     for (auto* source : signal_sources_) sd_event_source_unref(source);
+    live_view_.reset();  // answers a pending Snapshot while the bus is still there
     dbus_.reset();
     if (event_ != nullptr) sd_event_unref(event_);
   }
@@ -135,6 +137,9 @@ class Daemon final : public CommandHandler {
     }
 
     sprayer_ = std::make_unique<Sprayer>(config_, backends_);
+    std::vector<int> first_nozzles;
+    for (const auto& camera : config_.cameras) first_nozzles.push_back(camera.first_nozzle);
+    live_view_ = std::make_unique<LiveView>(*sprayer_, std::move(first_nozzles));
     if (backends_.drive_world) backends_.drive_world(0.0);
     request_cpu_wakeup_latency();
     sprayer_->start();
@@ -167,6 +172,7 @@ class Daemon final : public CommandHandler {
   // Called on every exit path: threads stopped, outputs forced safe, state persisted.
   void shutdown() noexcept {
     if (sprayer_) sprayer_->stop();
+    if (live_view_) live_view_->cancel("weedsprayd is stopping");
     report_safe_writes(backends_.force_safe());
     report_timing();
     cpu_latency_ = {};
@@ -347,6 +353,7 @@ class Daemon final : public CommandHandler {
       }
     }
     drain_latencies();
+    live_view_->poll(now);
     evaluate_alarms(now, pressure, control);
     heartbeat(now, pressure, control);
 
@@ -377,6 +384,11 @@ class Daemon final : public CommandHandler {
     } else {
       backends_.with_plant(fault.apply);
     }
+  }
+
+  CommandResult snapshot(std::uint32_t camera, SnapshotReply reply) override {
+    if (!live_view_) return {kErrorUnavailable, "Snapshot: the cameras are not running yet"};
+    return live_view_->request(camera, backends_.clock->now(), std::move(reply));
   }
 
   CommandResult inject_sim_fault(const std::string& name) override {
@@ -766,6 +778,7 @@ class Daemon final : public CommandHandler {
   Config config_;
   Backends backends_;
   std::unique_ptr<Sprayer> sprayer_;
+  std::unique_ptr<LiveView> live_view_;  // main thread; before sprayer_ in destruction
   StateMachine state_;
   AlarmEvaluator alarms_;
   std::unique_ptr<DbusService> dbus_;

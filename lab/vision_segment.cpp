@@ -8,13 +8,13 @@
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "lab/vision_dataset.hpp"
 #include "lab/vision_tools.hpp"
 #include "lab/weed_eval.hpp"
 #include "lab/weed_eval_command.hpp"
 #include "lab/weed_model.hpp"
+#include "vision/overlay.hpp"
 #include "vision/pipeline.hpp"
 
 namespace weedspray::lab {
@@ -86,35 +86,13 @@ std::filesystem::path overlay_path(const std::string& out, const std::filesystem
 
 void write_overlay(const cv::Mat& bgr, vision::Pipeline& pipeline,
                    const vision::FrameResult& result, const std::filesystem::path& path) {
-  cv::Mat overlay = bgr.clone();
-  const vision::PixelRect region = pipeline.region();
-  const cv::Mat classes = class_map_at_region_size(pipeline);
-  cv::Mat roi = overlay(cv::Rect(region.x, region.y, region.width, region.height));
-  // Crop in blue, weed in red (colours never seen in a field), soil dimmed so the classes
-  // read at a glance; with the vegetation source every plant is weed.
-  roi = roi * 0.6;
-  roi.setTo(cv::Scalar(255, 0, 0), classes == vision::kClassCrop);
-  roi.setTo(cv::Scalar(0, 0, 255), classes == vision::kClassWeed);
-  const double font_scale = std::max(0.4, region.width / 900.0);
-  const int thickness = std::max(1, region.width / 500);
-  for (int row = 0; row < result.rows; ++row) {
-    for (int col = 0; col < result.cols; ++col) {
-      const cv::Point top_left(region.x + col * region.width / result.cols,
-                               region.y + row * region.height / result.rows);
-      const cv::Point bottom_right(region.x + (col + 1) * region.width / result.cols - 1,
-                                   region.y + (row + 1) * region.height / result.rows - 1);
-      cv::rectangle(overlay, top_left, bottom_right, cv::Scalar(0, 255, 255), thickness);
-      char label[32];
-      std::snprintf(label, sizeof label, "%.1f%%", 100.0 * result.density(row, col));
-      const cv::Point text_at(top_left.x + 4 * thickness,
-                              top_left.y + static_cast<int>(24 * font_scale) + 4 * thickness);
-      cv::putText(overlay, label, text_at, cv::FONT_HERSHEY_SIMPLEX, font_scale,
-                  cv::Scalar(0, 0, 0), thickness + 2, cv::LINE_AA);
-      cv::putText(overlay, label, text_at, cv::FONT_HERSHEY_SIMPLEX, font_scale,
-                  cv::Scalar(255, 255, 255), thickness, cv::LINE_AA);
-    }
-  }
-  if (!cv::imwrite(path.string(), overlay)) {
+  const vision::ImageView frame{bgr.data, bgr.cols, bgr.rows, bgr.step[0],
+                                vision::PixelFormat::kBgr24};
+  const vision::OverlayZones zones{result.rows, result.cols, result.densities(), {}};
+  vision::BgrImage overlay =
+      vision::draw_overlay(frame, pipeline.class_map(), pipeline.region(), zones);
+  if (!cv::imwrite(path.string(),
+                   cv::Mat(overlay.height, overlay.width, CV_8UC3, overlay.pixels.data()))) {
     throw std::runtime_error(path.string() + ": cannot write overlay");
   }
 }

@@ -124,16 +124,26 @@ std::span<const CropRow> Pipeline::crop_rows() const {
 }
 
 ImageView Pipeline::class_map() {
+  class_buffer_.resize(class_map_pixels());
+  return class_map_into(class_buffer_);
+}
+
+std::size_t Pipeline::class_map_pixels() const {
+  if (weeds_) return weeds_->class_map_pixels();
+  return static_cast<std::size_t>(region_.width) * region_.height;
+}
+
+ImageView Pipeline::class_map_into(std::span<std::uint8_t> out) {
+  if (out.size() < class_map_pixels()) return {};
   const auto level = static_cast<std::uint8_t>(result_.threshold);
-  if (weeds_) return weeds_->class_map(index_buffer_.data(), level);
+  if (weeds_) return weeds_->class_map(index_buffer_.data(), level, out);
   // vegetation: every vegetation pixel is weed.
-  const std::size_t pixels = static_cast<std::size_t>(region_.width) * region_.height;
-  class_buffer_.resize(pixels);
+  const std::size_t pixels = class_map_pixels();
   for (std::size_t i = 0; i < pixels; ++i) {
-    class_buffer_[i] = index_buffer_[i] > level ? kClassWeed : kClassSoil;
+    out[i] = index_buffer_[i] > level ? kClassWeed : kClassSoil;
   }
-  return {class_buffer_.data(), region_.width, region_.height,
-          static_cast<std::size_t>(region_.width), PixelFormat::kGrey};
+  return {out.data(), region_.width, region_.height, static_cast<std::size_t>(region_.width),
+          PixelFormat::kGrey};
 }
 
 ImageView Pipeline::index_image() const {

@@ -100,6 +100,10 @@ class Pipeline {
   // of interest, built on demand for overlays and evaluation: at the region's resolution,
   // except for dnn, whose map is at the network's output resolution.
   ImageView class_map();
+  // The same written into `out` without allocating (the daemon's snapshot handoff): a view of
+  // `out`, or an empty view when `out` is smaller than class_map_pixels().
+  ImageView class_map_into(std::span<std::uint8_t> out);
+  std::size_t class_map_pixels() const;
   const PipelineConfig& config() const { return config_; }
   // The last frame's index image over the region of interest and its pixel rectangle, for
   // overlays and evaluation (mask = index > threshold).

@@ -17,7 +17,6 @@ struct WeedClassifier::Masks {
   cv::Mat weed;        // hybrid: vegetation outside near_crop
   cv::Mat margin_kernel;
   cv::Mat scratch;
-  cv::Mat class_map;
 };
 
 namespace {
@@ -186,34 +185,49 @@ void WeedClassifier::classify_hybrid(const std::uint8_t* index, std::uint8_t lev
   }
 }
 
-ImageView WeedClassifier::class_map(const std::uint8_t* index, std::uint8_t level) {
+PixelRect WeedClassifier::class_map_rect() const {
+  if (config_.weed_source == WeedSource::kDnn) {
+    const cv::Mat& classes = network_->segment_result();
+    return {0, 0, classes.cols, classes.rows};
+  }
+  return {0, 0, region_.width, region_.height};
+}
+
+std::size_t WeedClassifier::class_map_pixels() const {
+  const PixelRect rect = class_map_rect();
+  return static_cast<std::size_t>(rect.width) * rect.height;
+}
+
+ImageView WeedClassifier::class_map(const std::uint8_t* index, std::uint8_t level,
+                                    std::span<std::uint8_t> out) {
   Masks& m = *masks_;
-  const cv::Size size(region_.width, region_.height);
+  const PixelRect rect = class_map_rect();
+  const cv::Size size(rect.width, rect.height);
+  // A header on the caller's bytes: the writes below fill it in place, allocating nothing.
+  cv::Mat map(size, CV_8UC1, out.data());
   switch (config_.weed_source) {
     case WeedSource::kVegetation:
       break;
     case WeedSource::kInterRow:
-      m.class_map.create(size, CV_8UC1);
       for (int y = 0; y < size.height; ++y) {
         const std::uint8_t* values = index + static_cast<std::size_t>(y) * size.width;
-        std::uint8_t* out = m.class_map.ptr<std::uint8_t>(y);
+        std::uint8_t* row = map.ptr<std::uint8_t>(y);
         for (int x = 0; x < size.width; ++x) {
-          out[x] = values[x] <= level ? kClassSoil : in_band_[x] ? kClassCrop : kClassWeed;
+          row[x] = values[x] <= level ? kClassSoil : in_band_[x] ? kClassCrop : kClassWeed;
         }
       }
       break;
     case WeedSource::kDnn:
-      network_->segment_result().copyTo(m.class_map);
+      network_->segment_result().copyTo(map);
       break;
     case WeedSource::kHybrid:
       // Vegetation kept out of the weeds by the margin is attributed to the crop.
-      m.class_map.create(size, CV_8UC1);
-      m.class_map.setTo(kClassSoil);
-      m.class_map.setTo(kClassCrop, m.crop);
-      m.class_map.setTo(kClassWeed, m.weed);
+      map.setTo(kClassSoil);
+      map.setTo(kClassCrop, m.crop);
+      map.setTo(kClassWeed, m.weed);
       break;
   }
-  return {m.class_map.data, m.class_map.cols, m.class_map.rows, m.class_map.step[0],
+  return {out.data(), size.width, size.height, static_cast<std::size_t>(size.width),
           PixelFormat::kGrey};
 }
 

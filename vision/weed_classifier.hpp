@@ -34,10 +34,13 @@ class WeedClassifier {
   void reset_tracking() { tracker_.reset(); }
   const CropRowTracker& tracker() const { return tracker_; }
 
-  // The last classified frame's class map (see Pipeline::class_map).
-  ImageView class_map(const std::uint8_t* index, std::uint8_t level);
+  // The last classified frame's class map (see Pipeline::class_map), written into `out`
+  // (at least class_map_pixels() bytes, packed rows).
+  ImageView class_map(const std::uint8_t* index, std::uint8_t level, std::span<std::uint8_t> out);
+  std::size_t class_map_pixels() const;
 
  private:
+  PixelRect class_map_rect() const;  // the class map's width and height (x = y = 0)
   void classify_inter_row(const std::uint8_t* index, std::uint8_t level, FrameResult& result);
   void classify_dnn(const ImageView& frame, FrameResult& result);
   void classify_hybrid(const std::uint8_t* index, std::uint8_t level, FrameResult& result);

@@ -2,6 +2,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -89,6 +90,7 @@ const sd_bus_vtable kVtable[] = {
     SD_BUS_METHOD("ReloadConfig", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("ClearAlarms", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("InjectSimFault", "s", "", DbusService::method, kMethodFlags),
+    SD_BUS_METHOD("Snapshot", "u", "ay", DbusService::method, kMethodFlags),
     SD_BUS_SIGNAL("AlarmRaised", "s", 0),
     SD_BUS_SIGNAL("AlarmCleared", "s", 0),
     SD_BUS_VTABLE_END,
@@ -176,6 +178,25 @@ int DbusService::method(sd_bus_message* message, void* userdata, sd_bus_error* e
 
 namespace {
 
+// The reply to a Snapshot call, sent later: the call is kept referenced until then.
+SnapshotReply deferred_snapshot_reply(sd_bus_message* call) {
+  std::shared_ptr<sd_bus_message> kept(sd_bus_message_ref(call), sd_bus_message_unref);
+  return [kept](const CommandResult& result, std::span<const std::uint8_t> png) {
+    if (!result.ok()) {
+      sd_bus_error error = SD_BUS_ERROR_NULL;
+      sd_bus_error_set(&error, result.error_name.c_str(), result.message.c_str());
+      sd_bus_reply_method_error(kept.get(), &error);
+      sd_bus_error_free(&error);
+      return;
+    }
+    sd_bus_message* reply = nullptr;
+    if (sd_bus_message_new_method_return(kept.get(), &reply) < 0) return;
+    if (sd_bus_message_append_array(reply, 'y', png.data(), png.size()) >= 0)
+      sd_bus_send(nullptr, reply, nullptr);
+    sd_bus_message_unref(reply);
+  };
+}
+
 int dispatch(sd_bus_message* message, CommandHandler& handler, sd_bus_error* error) {
   const char* member_name = sd_bus_message_get_member(message);
   const std::string_view member(member_name != nullptr ? member_name : "");
@@ -198,6 +219,12 @@ int dispatch(sd_bus_message* message, CommandHandler& handler, sd_bus_error* err
     const int r = sd_bus_message_read(message, "s", &name);
     if (r < 0) return r;
     result = handler.inject_sim_fault(name);
+  } else if (member == "Snapshot") {
+    std::uint32_t camera = 0;
+    const int r = sd_bus_message_read(message, "u", &camera);
+    if (r < 0) return r;
+    result = handler.snapshot(camera, deferred_snapshot_reply(message));
+    if (result.ok()) return 1;  // the handler replies once the frame is there
   } else {
     return sd_bus_error_setf(error, SD_BUS_ERROR_UNKNOWN_METHOD, "no method %s",
                              std::string(member).c_str());

@@ -5,7 +5,8 @@
 //     VolumeSprayed d (L), AreaCovered d (m^2), SavingsPercent d, FrameRate d (Hz),
 //     VisionLatencyMs d, VisionLatencyP99Ms d, ControlOverruns t, Mode s
 //   methods: Start(), Stop(), SetPressureSetpoint(d), ReloadConfig(), ClearAlarms(),
-//     InjectSimFault(s) (simulation only)
+//     InjectSimFault(s) (simulation only), Snapshot(u camera) -> ay PNG (live view, at most
+//     2 a second; the reply comes when the camera's next frame is processed)
 //   signals: AlarmRaised(s), AlarmCleared(s)
 #pragma once
 

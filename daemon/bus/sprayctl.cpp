@@ -1,6 +1,6 @@
 // sprayctl: a small command-line client of weedsprayd over D-Bus (sd-bus).
 //   sprayctl [--user] [--json] status|monitor|start|stop|set-pressure
-//   MPA|alarms|clear-alarms|reload
+//   MPA|alarms|clear-alarms|reload|snapshot [--camera N] OUT.png
 #include <systemd/sd-bus.h>
 #include <CLI/CLI.hpp>
 
@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -206,6 +207,25 @@ class Client {
     sd_bus_message_unref(reply);
   }
 
+  // The live view: camera `camera`'s next frame with its overlay, as PNG bytes.
+  std::vector<std::uint8_t> snapshot(std::uint32_t camera) {
+    sd_bus_error error = SD_BUS_ERROR_NULL;
+    sd_bus_message* reply = nullptr;
+    const int r = sd_bus_call_method(bus_, kBusName, kObjectPath, kInterface, "Snapshot", &error,
+                                     &reply, "u", camera);
+    if (r < 0) fail(error, r);
+    const void* data = nullptr;
+    std::size_t size = 0;
+    const int read = sd_bus_message_read_array(reply, 'y', &data, &size);
+    std::vector<std::uint8_t> png;
+    if (read >= 0)
+      png.assign(static_cast<const std::uint8_t*>(data),
+                 static_cast<const std::uint8_t*>(data) + size);
+    sd_bus_message_unref(reply);
+    check(read, "read the PNG");
+    return png;
+  }
+
   int monitor(bool json) {
     const std::string match =
         std::string("type='signal',sender='") + kBusName + "',path='" + kObjectPath + "'";
@@ -315,6 +335,14 @@ int main(int argc, char** argv) {
   auto* alarms = app.add_subcommand("alarms", "list latched alarms");
   auto* clear_alarms = app.add_subcommand("clear-alarms", "clear latched alarms (leaves Fault)");
   auto* reload = app.add_subcommand("reload", "re-read the configuration");
+  auto* snapshot = app.add_subcommand(
+      "snapshot",
+      "save a camera's latest frame with the weed/crop overlay, zone grid, densities "
+      "and duties as a PNG (at most 2 a second)");
+  std::uint32_t camera = 0;
+  std::string snapshot_path;
+  snapshot->add_option("--camera", camera, "camera index (0 = the first [[camera]])");
+  snapshot->add_option("OUT", snapshot_path, "PNG file to write")->required();
   for (auto* sub : {status, monitor, alarms}) sub->add_flag("--json", json, "JSON output");
   CLI11_PARSE(app, argc, argv);
 
@@ -341,6 +369,16 @@ int main(int argc, char** argv) {
       client.call("ClearAlarms");
     } else if (*reload) {
       client.call("ReloadConfig");
+    } else if (*snapshot) {
+      // Written here, by the operator's own process: the daemon runs as user weedspray and
+      // never writes where a caller asks.
+      const std::vector<std::uint8_t> png = client.snapshot(camera);
+      std::ofstream out(snapshot_path, std::ios::binary | std::ios::trunc);
+      out.write(reinterpret_cast<const char*>(png.data()),
+                static_cast<std::streamsize>(png.size()));
+      out.close();
+      if (!out) throw BusError{"cannot write " + snapshot_path + ": " + std::strerror(errno)};
+      std::cout << snapshot_path << ": " << png.size() << " bytes (camera " << camera << ")\n";
     }
   } catch (const BusError& error) {
     std::cerr << "sprayctl: " << error.message << "\n";

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -41,6 +43,11 @@ struct CommandResult {
 inline constexpr const char* kErrorInvalidArgument = "org.weedspray.Sprayer1.Error.InvalidArgument";
 inline constexpr const char* kErrorNotPermitted = "org.weedspray.Sprayer1.Error.NotPermitted";
 inline constexpr const char* kErrorConfig = "org.weedspray.Sprayer1.Error.Config";
+inline constexpr const char* kErrorRateLimited = "org.weedspray.Sprayer1.Error.RateLimited";
+inline constexpr const char* kErrorUnavailable = "org.weedspray.Sprayer1.Error.Unavailable";
+
+// The answer to a Snapshot call, given once: an error, or the PNG's bytes.
+using SnapshotReply = std::function<void(const CommandResult&, std::span<const std::uint8_t> png)>;
 
 // Implemented by the daemon; called on the main thread by the D-Bus service.
 class CommandHandler {
@@ -53,6 +60,10 @@ class CommandHandler {
   virtual CommandResult clear_alarms() = 0;
   // Simulation only (the soak, tests): a fault by name now (daemon/backends/sim_faults.hpp).
   virtual CommandResult inject_sim_fault(const std::string& name) = 0;
+  // The live view: camera `camera`'s next frame with its overlay as a PNG. A refusal is
+  // returned at once (and `reply` never called); once accepted, `reply` is called exactly
+  // once, later, from the main thread (the frame comes from the camera thread).
+  virtual CommandResult snapshot(std::uint32_t camera, SnapshotReply reply) = 0;
 };
 
 }  // namespace weedspray::daemon

@@ -71,6 +71,9 @@ struct CameraStatus {
   std::uint64_t vision_failures = 0;     // frames the weed model failed on
   bool vision_failed = false;            // the latest frame failed: this camera's nozzles closed
   std::array<char, 200> vision_error{};  // why it failed (NUL-terminated)
+  // The latest frame's size packed and its class map's pixels: what a snapshot needs.
+  std::size_t frame_bytes = 0;
+  std::size_t class_map_pixels = 0;
 };
 
 // Control loop -> main thread.

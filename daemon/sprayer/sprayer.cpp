@@ -602,6 +602,10 @@ void Sprayer::camera_loop(std::stop_token stop, CameraWorker& worker) noexcept {
       status.vision_error[n] = '\0';
     }
     worker.frames.try_push(densities);
+    if (worker.snapshot.wanted())
+      worker.snapshot.fill(frame.view, frame.timestamp, *worker.pipeline, result);
+    status.frame_bytes = SnapshotHandoff::packed_bytes(frame.view);
+    status.class_map_pixels = worker.pipeline->class_map_pixels();
     ++status.frames;
     status.gate_wait_ms = seconds(t0 - asked) * 1e3;
     status.vision_ms = seconds(densities.ready_time - t0) * 1e3;

@@ -25,6 +25,7 @@
 #include "daemon/config/config.hpp"
 #include "daemon/sprayer/inference_gate.hpp"
 #include "daemon/sprayer/runtime_types.hpp"
+#include "daemon/sprayer/snapshot_handoff.hpp"
 #include "daemon/supervision/loop_timing.hpp"
 #include "io/analog_io_worker.hpp"
 #include "io/latest_value.hpp"
@@ -86,6 +87,8 @@ class Sprayer {
   // Cameras whose weed model failed on their latest frame, with why ("camera 1: ..."; empty
   // when none): the vision_model_failed alarm. Their nozzles are held closed meanwhile.
   std::string vision_failures() const;
+  // Camera i's live-view handoff (the main thread asks, the camera thread fills).
+  SnapshotHandoff& snapshot(std::size_t i) noexcept { return cameras_[i].snapshot; }
   // Tests of the failure handling: while set, camera i's frames count as failed in its weed
   // model (as a network failing at run time makes Pipeline::process() report them).
   void inject_vision_failure(std::size_t i, bool fail) noexcept {
@@ -108,6 +111,7 @@ class Sprayer {
     bool uses_model = false;     // dnn/hybrid: inference goes through inference_gate_
     bool vision_failed = false;  // control loop: the latest frame failed, nozzles held closed
     std::atomic<bool> injected_failure{false};  // inject_vision_failure()
+    SnapshotHandoff snapshot;
   };
 
   Nanos pressure_period() const noexcept;

@@ -31,11 +31,18 @@ class Handler final : public weedspray::daemon::CommandHandler {
       return {weedspray::daemon::kErrorInvalidArgument, "unknown fault"};
     return {};
   }
+  // One camera; its reply at once (the daemon's comes from a later main-loop tick).
+  CommandResult snapshot(std::uint32_t camera, weedspray::daemon::SnapshotReply reply) override {
+    if (camera != 0) return {weedspray::daemon::kErrorInvalidArgument, "no such camera"};
+    static constexpr std::uint8_t kPng[] = {0x89, 'P', 'N', 'G'};
+    reply({}, kPng);
+    return {};
+  }
 };
 
 constexpr const char* kMembers[] = {"Start",        "Stop",        "SetPressureSetpoint",
                                     "ReloadConfig", "ClearAlarms", "InjectSimFault",
-                                    "Get",          "SetPressure"};
+                                    "Get",          "SetPressure", "Snapshot"};
 
 }  // namespace
 
@@ -55,7 +62,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (size >= sizeof integer) std::memcpy(&integer, data, sizeof integer);
   const std::string text(reinterpret_cast<const char*>(data), size);
   const std::string utf8_safe = text.substr(0, text.find('\0'));
-  switch (shape % 6) {
+  switch (shape % 7) {
     case 0:
       break;
     case 1:
@@ -72,6 +79,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       break;
     case 5:
       sd_bus_message_append(m, "as", 2, utf8_safe.c_str(), "x");
+      break;
+    case 6:
+      sd_bus_message_append(m, "u", static_cast<std::uint32_t>(integer));
       break;
   }
   if (weedspray::testing::OfflineBus::seal(m) >= 0) {

@@ -242,6 +242,17 @@ status=$?
 echo "$out" | sed 's/^/    sprayctl: /'
 check sprayctl_status_as_operator "$status" "sprayctl status as user operator (group weedspray)"
 
+# The live view in hardware mode, as the operator: the daemon (user weedspray) sends the PNG of
+# vivid's next frame over the system bus, sprayctl (the operator) writes it. PNG signature and
+# the IHDR's width and height (bytes 16..23, big-endian) = the camera's 320x180.
+out="$(cd /tmp && setpriv --reuid=operator --regid=weedspray --init-groups sprayctl snapshot /tmp/live-view.png 2>&1)"
+status=$?
+header="$(od -An -tx1 -N8 /tmp/live-view.png 2>/dev/null | tr -d ' \n')"
+size="$(od -An -tu1 -j16 -N8 /tmp/live-view.png 2>/dev/null | tr -s ' ' | sed 's/^ //')"
+check snapshot_as_operator "$([ "$status" = 0 ] && [ "$header" = 89504e470d0a1a0a ] &&
+  [ "$size" = "0 0 1 64 0 0 0 180" ]; echo $?)" \
+  "sprayctl snapshot: ${out:-?}; PNG header $header, IHDR width/height bytes '$size' (320x180: 0 0 1 64 0 0 0 180)"
+
 # --- stop -------------------------------------------------------------------------------------
 # Released lines read their pull again; pulled down, as a board's valve drivers are, so the
 # lines stay off once the daemon has let go of them.

@@ -12,21 +12,8 @@ if [ "$(id -u)" -ne 0 ] || ! id nobody >/dev/null 2>&1; then
   echo "SKIP: needs root and user nobody"
   exit 0
 fi
-T=$(mktemp -d /tmp/weedspray-policy-test.XXXXXX)
+. "$(dirname "$0")/private_bus_lib.sh" policy
 chmod 755 "$T"
-DAEMON_PID=
-BUS_PID=
-cleanup() {
-  [ -n "$DAEMON_PID" ] && kill -KILL "$DAEMON_PID" 2>/dev/null || true
-  [ -n "$BUS_PID" ] && kill "$BUS_PID" 2>/dev/null || true
-  rm -rf "$T"
-}
-trap cleanup EXIT
-fail() {
-  echo "FAIL: $*" >&2
-  tail -n 20 "$T/daemon.log" >&2 || true
-  exit 1
-}
 
 write_bus_config() {  # write_bus_config POLICY_FILE OUTPUT
   cat >"$2" <<XML

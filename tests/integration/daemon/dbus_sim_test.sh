@@ -9,28 +9,8 @@ SOURCE=$(realpath "$2")
 WEEDSPRAYD=$BUILD/daemon/weedsprayd
 SPRAYCTL=$BUILD/daemon/sprayctl
 PY=/usr/bin/python3
-T=$(mktemp -d /tmp/weedspray-dbus-test.XXXXXX)
-DAEMON_PID=
-BUS_PID=
-
-cleanup() {
-  [ -n "$DAEMON_PID" ] && kill -KILL "$DAEMON_PID" 2>/dev/null || true
-  [ -n "$BUS_PID" ] && kill "$BUS_PID" 2>/dev/null || true
-  rm -rf "$T"
-}
-trap cleanup EXIT
-
-fail() {
-  echo "FAIL: $*" >&2
-  echo "--- daemon log (tail) ---" >&2
-  tail -n 40 "$T/daemon.log" >&2 || true
-  exit 1
-}
-
-# A private bus: never the host's.
-dbus-daemon --session --fork --nopidfile --print-address=3 --print-pid=4 3>"$T/bus.addr" 4>"$T/bus.pid"
-export DBUS_SESSION_BUS_ADDRESS=$(cat "$T/bus.addr")
-BUS_PID=$(cat "$T/bus.pid")
+. "$(dirname "$0")/private_bus_lib.sh" dbus
+start_private_bus
 
 prop() {  # prop NAME -> value as busctl prints it, without the type letter
   busctl --user get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \

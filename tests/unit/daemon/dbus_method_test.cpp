@@ -27,6 +27,14 @@ class RecordingHandler final : public CommandHandler {
     fault = name;
     return {};
   }
+  CommandResult snapshot(std::uint32_t camera, SnapshotReply reply) override {
+    snapshot_camera = camera;
+    if (camera > 0) return {kErrorRateLimited, "at most 2 a second"};
+    snapshot_reply = std::move(reply);
+    return {};
+  }
+  std::int64_t snapshot_camera = -1;
+  SnapshotReply snapshot_reply;
   int starts = 0;
   bool throw_on_start = false;
   double setpoint = -1;
@@ -89,6 +97,25 @@ TEST_F(DbusMethodTest, AnExceptionInTheHandlerBecomesTheCallersErrorAndGoesNoFur
   handler_.throw_on_start = false;
   call("Start");
   EXPECT_EQ(handler_.starts, 2);
+}
+
+TEST_F(DbusMethodTest, AnAcceptedSnapshotIsAnsweredLaterByTheHandler) {
+  // > 0: handled, and no reply sent now (sd-bus sends none either); the handler keeps one.
+  EXPECT_GT(call("Snapshot", "u", 0u), 0);
+  EXPECT_EQ(handler_.snapshot_camera, 0);
+  ASSERT_TRUE(handler_.snapshot_reply) << "no reply function kept for later";
+  EXPECT_EQ(error_name(), "");
+  const std::uint8_t png[] = {0x89, 'P', 'N', 'G'};
+  handler_.snapshot_reply({}, png);  // the call stays referenced until now
+}
+
+TEST_F(DbusMethodTest, ARefusedSnapshotIsTheNamedErrorAtOnce) {
+  EXPECT_LT(call("Snapshot", "u", 3u), 0);
+  EXPECT_EQ(handler_.snapshot_camera, 3);
+  EXPECT_EQ(error_name(), kErrorRateLimited);
+  EXPECT_EQ(error_message(), "at most 2 a second");
+  EXPECT_LT(call("Snapshot", "s", "0"), 0);  // a camera must be a number
+  EXPECT_EQ(handler_.snapshot_camera, 3) << "the handler ran on an argument it never got";
 }
 
 TEST_F(DbusMethodTest, AnUnknownMethodIsNamed) {
