@@ -162,6 +162,8 @@ class Daemon final : public CommandHandler {
     }
     start_time_ = backends_.clock->now();
     last_tick_time_ = start_time_;
+    gnss_lost_fix_.emplace(start_time_, from_seconds(config_.gnss.lost_fix_timeout_s),
+                           from_seconds(config_.gnss.first_fix_timeout_s));
     log_thread_ = std::jthread([this](std::stop_token stop) { log_writer(stop); });
 
     uint64_t watchdog_usec = 0;
@@ -492,9 +494,7 @@ class Daemon final : public CommandHandler {
     in.vision_model_failed = !vision_failures.empty();
     const std::string output_failures = check_outputs();
     in.output_write_failed = !output_failures.empty();
-    in.gnss_fix_lost =
-        backends_.gnss != nullptr && gnss_fix_lost(sprayer_->gnss(), now, start_time_,
-                                                   from_seconds(config_.gnss.lost_fix_timeout_s));
+    in.gnss_fix_lost = backends_.gnss != nullptr && gnss_lost_fix_->lost(sprayer_->gnss(), now);
 
     const AlarmMask raised = alarms_.evaluate(in);
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
@@ -511,9 +511,13 @@ class Daemon final : public CommandHandler {
                      name, overruns_last_second_,
                      timing_report_line(timing_input(pressure, control)));
       } else if (id == AlarmId::kGnssFixLost) {
+        // What the control loop uses without a fix (it switched on its own, at the same timeout).
+        GroundSpeedInputs without_fix;
+        without_fix.source = parse_speed_source(config_.speed.source).value_or(SpeedSource::kWheel);
+        without_fix.wheel_wired = backends_.wheel != nullptr;
         spdlog::warn("alarm raised: {} (no usable fix for {} s from gpsd at {}:{}; speed from {})",
                      name, config_.gnss.lost_fix_timeout_s, config_.gnss.host, config_.gnss.port,
-                     to_string(control.speed_source));
+                     to_string(select_ground_speed(without_fix).used));
       } else if (id == AlarmId::kVisionModelFailed) {
         spdlog::error(
             "alarm raised: {} ({}; that camera's nozzles stay closed until its frames "
@@ -829,6 +833,7 @@ class Daemon final : public CommandHandler {
   std::uint64_t coverage_gaps_seen_ = 0;
   Nanos start_time_{};
   Nanos tank_last_ok_{};
+  std::optional<LostFixWatch> gnss_lost_fix_;  // from start_time_ on
   Nanos spraying_since_{};
   bool was_spraying_ = false;
   Nanos overrun_window_start_{};

@@ -192,8 +192,9 @@ struct GnssSection {
   bool enabled;
   std::string host;
   int port;
-  double lost_fix_timeout_s;  // no usable fix for this long: gnss_fix_lost, speed falls back
-  double reconnect_max_s;     // ceiling of the reconnection backoff while gpsd is away
+  double lost_fix_timeout_s;   // no usable fix for this long: gnss_fix_lost, speed falls back
+  double first_fix_timeout_s;  // after start: the receiver's time to find its first fix
+  double reconnect_max_s;      // ceiling of the reconnection backoff while gpsd is away
 };
 
 struct ModbusSection {

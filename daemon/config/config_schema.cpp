@@ -345,6 +345,9 @@ const std::vector<KeySpec<Config>>& config_keys() {
     {WS_KEY(gnss, lost_fix_timeout_s), 2.0, 0.2, 60, "s",
      "no 2D/3D fix for this long raises gnss_fix_lost (and a receiver reporting no fix makes "
      "speed.source = \"gnss\" fall back at once)"},
+    {WS_KEY(gnss, first_fix_timeout_s), 60.0, 1, 3600, "s",
+     "after start, no usable fix for this long raises gnss_fix_lost (a receiver's cold start "
+     "takes 30-60 s); afterwards lost_fix_timeout_s applies"},
     {WS_KEY(gnss, reconnect_max_s), 5.0, 0.1, 600, "s",
      "while gpsd is away, reconnection attempts back off from 0.25 s up to this"},
     // [modbus]

@@ -30,9 +30,12 @@ bool gnss_fix_usable(const GnssSample& sample, std::chrono::nanoseconds now,
          fix.speed_m_per_s >= 0 && now - sample.sample_time <= timeout;
 }
 
-bool gnss_fix_lost(const GnssSample& latest, std::chrono::nanoseconds now,
-                   std::chrono::nanoseconds since, std::chrono::nanoseconds timeout) noexcept {
-  return !gnss_fix_usable(latest, now, timeout) && now - since > timeout;
+bool LostFixWatch::lost(const GnssSample& latest, std::chrono::nanoseconds now) noexcept {
+  if (gnss_fix_usable(latest, now, timeout_)) {
+    had_fix_ = true;
+    return false;
+  }
+  return had_fix_ || now - start_ > first_fix_timeout_;
 }
 
 GroundSpeed select_ground_speed(const GroundSpeedInputs& in) noexcept {

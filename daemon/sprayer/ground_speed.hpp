@@ -28,11 +28,21 @@ using GnssSample = io::Stamped<io::GnssFix>;  // sample_time: when the fix arriv
 bool gnss_fix_usable(const GnssSample& sample, std::chrono::nanoseconds now,
                      std::chrono::nanoseconds timeout) noexcept;
 
-// The gnss_fix_lost alarm's condition: no usable fix now, and `timeout` has passed since
-// `since` (the daemon's start), so a receiver still acquiring its first fix at start-up has
-// the timeout to find one.
-bool gnss_fix_lost(const GnssSample& latest, std::chrono::nanoseconds now,
-                   std::chrono::nanoseconds since, std::chrono::nanoseconds timeout) noexcept;
+// The gnss_fix_lost alarm's condition, one update per main-loop tick: no usable fix now, after
+// one was usable (lost once it is `timeout` old, at once when the receiver reports no fix), or
+// none within `first_fix_timeout` of `start` (a receiver's cold start takes 30-60 s: no alarm
+// at every power-on).
+class LostFixWatch {
+ public:
+  LostFixWatch(std::chrono::nanoseconds start, std::chrono::nanoseconds timeout,
+               std::chrono::nanoseconds first_fix_timeout) noexcept
+      : start_(start), timeout_(timeout), first_fix_timeout_(first_fix_timeout) {}
+  bool lost(const GnssSample& latest, std::chrono::nanoseconds now) noexcept;
+
+ private:
+  std::chrono::nanoseconds start_, timeout_, first_fix_timeout_;
+  bool had_fix_ = false;
+};
 
 struct GroundSpeedInputs {
   SpeedSource source = SpeedSource::kWheel;

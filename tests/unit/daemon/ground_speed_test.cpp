@@ -86,16 +86,25 @@ TEST(GnssFix, UsableWhile2dOr3dWithASpeedAndFresh) {
   EXPECT_FALSE(gnss_fix_usable(GnssSample{}, 0s, timeout));  // nothing received yet
 }
 
-TEST(GnssFix, LostAfterTheTimeoutButNotWhileStartingUp) {
-  constexpr auto timeout = 2s;
-  const GnssSample nothing{};                                 // no fix has arrived
-  EXPECT_FALSE(gnss_fix_lost(nothing, 101s, 100s, timeout));  // start-up: time to acquire
-  EXPECT_TRUE(gnss_fix_lost(nothing, 102s + 1ms, 100s, timeout));
+TEST(GnssFix, LostOnceAUsableFixIsTimeoutOldOrTheReceiverSaysNoFix) {
+  LostFixWatch watch(100s, 2s, 60s);  // started at 100 s
   const GnssSample good = fix_at(105s, GnssFixMode::k3D, 2.0);
-  EXPECT_FALSE(gnss_fix_lost(good, 106s, 100s, timeout));
-  EXPECT_TRUE(gnss_fix_lost(good, 107s + 1ms, 100s, timeout));  // gpsd went quiet
-  const GnssSample none = fix_at(106s, GnssFixMode::kNone, 0.0);
-  EXPECT_TRUE(gnss_fix_lost(none, 106s, 100s, timeout));  // the receiver says: no fix
+  EXPECT_FALSE(watch.lost(good, 106s));
+  EXPECT_FALSE(watch.lost(good, 107s));
+  EXPECT_TRUE(watch.lost(good, 107s + 1ms));                            // gpsd went quiet (or away)
+  EXPECT_FALSE(watch.lost(fix_at(108s, GnssFixMode::k2D, 2.0), 108s));  // back
+  EXPECT_TRUE(watch.lost(fix_at(109s, GnssFixMode::kNone, 0.0), 109s));  // the receiver: no fix
+}
+
+TEST(GnssFix, AtStartUpTheFirstFixHasItsOwnTimeout) {
+  LostFixWatch watch(100s, 2s, 60s);
+  const GnssSample nothing{};               // no fix has arrived
+  EXPECT_FALSE(watch.lost(nothing, 130s));  // a cold start: still acquiring
+  EXPECT_FALSE(watch.lost(fix_at(140s, GnssFixMode::kNone, 0.0), 150s));  // "no fix" yet
+  EXPECT_TRUE(watch.lost(nothing, 160s + 1ms));
+  LostFixWatch found(100s, 2s, 60s);
+  EXPECT_FALSE(found.lost(fix_at(130s, GnssFixMode::k3D, 0.0), 130s));
+  EXPECT_TRUE(found.lost(fix_at(130s, GnssFixMode::k3D, 0.0), 132s + 1ms));  // long before 160 s
 }
 
 TEST(GnssFix, LostFixIsAWarningAlarm) {
