@@ -85,7 +85,7 @@ cat >"$T/weedspray.toml" <<TOML
 enabled = true
 host = "127.0.0.1"
 port = $PORT
-lost_fix_timeout_s = 1.0
+lost_fix_timeout_s = 2.0  # margin for a loaded machine (gpsfake paces in Python)
 first_fix_timeout_s = 10.0
 reconnect_max_s = 0.5
 [speed]
@@ -103,15 +103,16 @@ wait_for 15 'j["GnssFix"] == "3d" and j["SpeedSource"] == "gnss" and
   abs(j["GnssSpeed"] - 2.0) < 0.001 and j["Speed"] == j["GnssSpeed"]' ||
   fail "no 3d fix with Speed from gnss: $(status_json)"
 json_check 'abs(j["Position"][0] - 52.0) < 0.001 and abs(j["Position"][1] - 5.0) < 0.001 and
-  abs(j["Position"][2] - 12.5) < 1e-6 and j["GnssTime"].startswith("2026-06-24T14:30:") and
-  "gnss_fix_lost" not in j["Alarms"]' || fail "Position/GNSS fields: $(status_json)"
+  j["GnssTime"].startswith("2026-06-24T14:30:") and "gnss_fix_lost" not in j["Alarms"]' ||
+  fail "Position/GNSS fields: $(status_json)"
 echo "ok: 3d fix, Position on the track, Speed from gnss"
 # The turn: the course swings between north and east; the sky view (GSV every 4 s) arrives.
 wait_for 10 '5 < j["Course"] < 85' || fail "never saw the turn's course: $(status_json)"
-wait_for 5 'j["GnssSatellites"] == 9 and abs(j["GnssHdop"] - 0.8) < 1e-9' ||
-  fail "satellites and HDOP: $(status_json)"
+# gpsd's first reports of a stream may lack the altitude (a TPV before the epoch's GGA).
+wait_for 5 'j["GnssSatellites"] == 9 and abs(j["GnssHdop"] - 0.8) < 1e-9 and
+  abs(j["Position"][2] - 12.5) < 1e-6' || fail "satellites, HDOP and altitude: $(status_json)"
 json_check '"gnss_fix_lost" not in j["Alarms"]' || fail "gnss_fix_lost while the fix is good: $(status_json)"
-echo "ok: the turn's course, 9 satellites, HDOP 0.8, no alarm"
+echo "ok: the turn's course, 9 satellites, HDOP 0.8, altitude, no alarm"
 "$SPRAYCTL" --user status | grep -q "^GNSS: *3d fix, position 52.0" || fail "sprayctl status: $("$SPRAYCTL" --user status)"
 
 # 2. gpsd goes away: alarm, GnssFix none, speed from the wheel.
@@ -120,7 +121,7 @@ stop_gpsfake
 wait_for 5 '"gnss_fix_lost" in j["Alarms"] and j["GnssFix"] == "none" and
   j["SpeedSource"] == "wheel (gnss fix lost)" and abs(j["Speed"] - 1.0) < 0.1' ||
   fail "no fallback after gpsd stopped: $(status_json)"
-grep -q "alarm raised: gnss_fix_lost (no usable fix for 1 s from gpsd at 127.0.0.1:$PORT; speed from wheel)" \
+grep -q "alarm raised: gnss_fix_lost (no usable fix for 2 s from gpsd at 127.0.0.1:$PORT; speed from wheel)" \
   "$T/daemon.log" || fail "the alarm's log line"
 echo "ok: gnss_fix_lost, speed from the wheel"
 
