@@ -515,8 +515,10 @@ class Daemon final : public CommandHandler {
         GroundSpeedInputs without_fix;
         without_fix.source = parse_speed_source(config_.speed.source).value_or(SpeedSource::kWheel);
         without_fix.wheel_wired = backends_.wheel != nullptr;
-        spdlog::warn("alarm raised: {} (no usable fix for {} s from gpsd at {}:{}; speed from {})",
+        spdlog::warn("alarm raised: {} (no usable fix for {} s; gpsd at {}:{} {}; speed from {})",
                      name, config_.gnss.lost_fix_timeout_s, config_.gnss.host, config_.gnss.port,
+                     sprayer_->gnss_link().connected ? "connected: the receiver has no fix"
+                                                     : "not reachable",
                      to_string(select_ground_speed(without_fix).used));
       } else if (id == AlarmId::kVisionModelFailed) {
         spdlog::error(
