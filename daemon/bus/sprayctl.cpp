@@ -316,14 +316,14 @@ void print_status(const Properties& p, bool json) {
             << " MPa)\n"
             << "Flow:          " << get("Flow") << " L/min\n"
             << "Tank:          " << get("TankLevel") << " %\n"
-            << "Speed:         " << get("Speed") << " m/s, distance " << get("Distance") << " m\n"
+            << "Speed:         " << get("Speed") << " m/s (" << get("SpeedSource") << "), distance "
+            << get("Distance") << " m\n"
             << "Nozzle duty:   " << get("NozzleDuty") << " %\n"
             << "Zone density:  " << get("ZoneDensity") << "\n"
             << "Sprayed:       " << get("VolumeSprayed") << " L over " << get("AreaCovered")
             << " m^2, saving " << get("SavingsPercent") << " %\n"
             << "Vision:        " << get("FrameRate") << " fps, latency " << get("VisionLatencyMs")
             << " ms (p99 " << get("VisionLatencyP99Ms") << " ms)\n"
-            << "Speed source:  " << get("SpeedSource") << "\n"
             << "GNSS:          " << get("GnssFix") << " fix, position " << get_precise("Position")
             << ", " << get("GnssSpeed") << " m/s, course " << get("Course") << " deg, "
             << get("GnssSatellites") << " satellites, HDOP " << get("GnssHdop") << "\n"
