@@ -12,6 +12,8 @@ set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 # Library dependencies from the binaries (dpkg-shlibdeps), plus the D-Bus daemon.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "dbus, systemd")
+# [gnss] reads the receiver through gpsd (optional: off by default).
+set(CPACK_DEBIAN_PACKAGE_SUGGESTS "gpsd")
 # The configuration file is a conffile: upgrades keep the user's edits.
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
     "${CMAKE_CURRENT_BINARY_DIR}/conffiles;${PROJECT_SOURCE_DIR}/systemd/debian/postinst")

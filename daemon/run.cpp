@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -45,6 +46,23 @@ constexpr std::size_t kLatencyWindow = 1000;
 
 double seconds(Nanos t) {
   return std::chrono::duration<double>(t).count();
+}
+
+Nanos from_seconds(double s) {
+  return std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(s));
+}
+
+// "2026-06-24T14:30:05.000Z"; "" for 0 (unknown).
+std::string utc_iso8601(std::int64_t utc_ns) {
+  if (utc_ns == 0) return {};
+  const std::time_t t = static_cast<std::time_t>(utc_ns / 1'000'000'000);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char text[96];  // room for any int the format could be given (GCC checks)
+  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
+                tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec,
+                static_cast<int>(utc_ns % 1'000'000'000 / 1'000'000));
+  return text;
 }
 
 // Where a simulation keeps its totals and as-applied logs: never the sprayer's own records.
@@ -150,6 +168,8 @@ class Daemon final : public CommandHandler {
     }
     start_time_ = backends_.clock->now();
     last_tick_time_ = start_time_;
+    gnss_lost_fix_.emplace(start_time_, from_seconds(config_.gnss.lost_fix_timeout_s),
+                           from_seconds(config_.gnss.first_fix_timeout_s));
     log_thread_ = std::jthread([this](std::stop_token stop) { log_writer(stop); });
 
     uint64_t watchdog_usec = 0;
@@ -487,6 +507,7 @@ class Daemon final : public CommandHandler {
     in.vision_model_failed = !vision_failures.empty();
     const std::string output_failures = check_outputs();
     in.output_write_failed = !output_failures.empty();
+    in.gnss_fix_lost = backends_.gnss != nullptr && gnss_lost_fix_->lost(sprayer_->gnss(), now);
 
     const AlarmMask raised = alarms_.evaluate(in);
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
@@ -502,6 +523,16 @@ class Daemon final : public CommandHandler {
         spdlog::warn("alarm raised: {} ({} deadline misses while spraying in the last second; {})",
                      name, overruns_last_second_,
                      timing_report_line(timing_input(pressure, control)));
+      } else if (id == AlarmId::kGnssFixLost) {
+        // What the control loop uses without a fix (it switched on its own, at the same timeout).
+        GroundSpeedInputs without_fix;
+        without_fix.source = parse_speed_source(config_.speed.source).value_or(SpeedSource::kWheel);
+        without_fix.wheel_wired = backends_.wheel != nullptr;
+        spdlog::warn("alarm raised: {} (no usable fix for {} s; gpsd at {}:{} {}; speed from {})",
+                     name, config_.gnss.lost_fix_timeout_s, config_.gnss.host, config_.gnss.port,
+                     sprayer_->gnss_link().connected ? "connected: the receiver has no fix"
+                                                     : "not reachable",
+                     to_string(select_ground_speed(without_fix).used));
       } else if (id == AlarmId::kVisionModelFailed) {
         spdlog::error(
             "alarm raised: {} ({}; that camera's nozzles stay closed until its frames "
@@ -704,7 +735,13 @@ class Daemon final : public CommandHandler {
     s.flow_l_per_min = control.flow_l_per_min;
     s.tank_level_pct = sprayer_->tank().level_pct;
     s.speed_m_per_s = control.speed_m_per_s;
+    s.speed_source = std::string(to_string(control.speed_source));
+    if (control.speed_fell_back) s.speed_source += " (gnss fix lost)";
     s.distance_m = control.distance_m;
+    if (backends_.gnss != nullptr) {
+      add_gnss_status(s, sprayer_->gnss(), backends_.clock->now(),
+                      from_seconds(config_.gnss.lost_fix_timeout_s));
+    }
     s.nozzle_duty_pct.assign(control.duty_pct.begin(), control.duty_pct.begin() + control.nozzles);
     s.zone_density.assign(control.density.begin(), control.density.begin() + control.nozzles);
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
@@ -722,6 +759,22 @@ class Daemon final : public CommandHandler {
     s.vision_latency_p99_ms = latency_p99();
     s.control_overruns = total_overruns(pressure, control);
     return s;
+  }
+
+  // The latest fix: its mode ("none" too once older than the lost-fix timeout), and the
+  // position and motion it reported (NaN: not given).
+  static void add_gnss_status(Status& s, const GnssSample& sample, Nanos now, Nanos timeout) {
+    const io::GnssFix& fix = sample.value;
+    const bool fresh = now - sample.sample_time <= timeout;
+    s.gnss_fix = std::string(io::to_string(fresh ? fix.mode : io::GnssFixMode::kNone));
+    s.latitude_deg = fix.latitude_deg;
+    s.longitude_deg = fix.longitude_deg;
+    s.altitude_m = fix.altitude_m;
+    s.gnss_speed_m_per_s = fix.speed_m_per_s;
+    s.course_deg = fix.course_deg;
+    s.gnss_hdop = fix.hdop;
+    s.gnss_satellites = fix.satellites_used;
+    s.gnss_utc = utc_iso8601(fix.utc_ns);
   }
 
   static void print_status_line(const Status& s) {
@@ -796,6 +849,7 @@ class Daemon final : public CommandHandler {
   std::uint64_t coverage_gaps_seen_ = 0;
   Nanos start_time_{};
   Nanos tank_last_ok_{};
+  std::optional<LostFixWatch> gnss_lost_fix_;  // from start_time_ on
   Nanos spraying_since_{};
   bool was_spraying_ = false;
   Nanos overrun_window_start_{};

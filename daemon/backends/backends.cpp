@@ -1,5 +1,7 @@
 #include "daemon/backends/backends.hpp"
 
+#include "io/linux/gpsd_gnss.hpp"
+
 namespace weedspray::daemon {
 
 namespace {
@@ -82,6 +84,17 @@ io::ValveDriveConfig valve_drive_config(const Config& config) {
   drive.dac_full_scale_volts = config.dac.full_scale_v;
   drive.amplifier_gain = drive.valve_full_scale_volts / config.dac.full_scale_v;
   return drive;
+}
+
+void add_gnss(Backends& b, const Config& config) {
+  if (!config.gnss.enabled) return;
+  io::hw::GpsdGnssConfig gpsd;
+  gpsd.host = config.gnss.host;
+  gpsd.port = std::to_string(config.gnss.port);
+  gpsd.max_retry = std::chrono::milliseconds(static_cast<int>(config.gnss.reconnect_max_s * 1000));
+  auto receiver = std::make_shared<io::hw::GpsdGnss>(gpsd);
+  b.gnss = receiver.get();
+  b.owned.push_back(receiver);
 }
 
 }  // namespace weedspray::daemon

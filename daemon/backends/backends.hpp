@@ -16,6 +16,7 @@
 #include "io/clock.hpp"
 #include "io/digital_input.hpp"
 #include "io/digital_output.hpp"
+#include "io/gnss.hpp"
 #include "io/pulse_input.hpp"
 #include "io/signal_conversion.hpp"
 #include "io/tank_level.hpp"
@@ -41,6 +42,7 @@ struct Backends {
   io::PulseInput* wheel = nullptr;      // null: fixed speed
   io::DigitalInput* key = nullptr;      // null: no start/stop key
   io::TankLevelSensor* tank = nullptr;  // null: no tank sensor
+  io::GnssReceiver* gnss = nullptr;     // null: gnss.enabled = false
   std::vector<io::Camera*> cameras;     // one per [[camera]]
   io::CurrentLoopSensorConfig sensor{};
   io::ValveDriveConfig drive{};
@@ -77,6 +79,9 @@ struct Backends {
 // The 4-20 mA pressure sensor and the return-valve drive chain as configured (both backends).
 io::CurrentLoopSensorConfig pressure_sensor_config(const Config& config);
 io::ValveDriveConfig valve_drive_config(const Config& config);
+// The GNSS receiver when gnss.enabled: gpsd at gnss.host:gnss.port in both modes (a simulation
+// feeds its gpsd from gpsfake, so the whole client path runs).
+void add_gnss(Backends& b, const Config& config);
 
 // Throws std::runtime_error naming the device that could not be opened.
 // For ExecStopPost (weedsprayd --safe-outputs), after the daemon has gone however it went

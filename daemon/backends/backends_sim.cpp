@@ -172,6 +172,7 @@ Backends make_sim_backends(const Config& config, const Options& options) {
     }
     return true;
   };
+  add_gnss(b, config);
   return b;
 }
 

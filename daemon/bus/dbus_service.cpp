@@ -61,6 +61,18 @@ std::vector<const char*> changed_properties(const Status& a, const Status& b) {
   check(a.vision_latency_p99_ms != b.vision_latency_p99_ms, "VisionLatencyP99Ms");
   check(a.control_overruns != b.control_overruns, "ControlOverruns");
   check(a.mode != b.mode, "Mode");
+  check(a.speed_source != b.speed_source, "SpeedSource");
+  // NaN (not given) compares unequal to itself: only a change to or from a value counts.
+  const auto differs = [](double x, double y) { return !(x == y || (x != x && y != y)); };
+  check(a.gnss_fix != b.gnss_fix, "GnssFix");
+  check(differs(a.latitude_deg, b.latitude_deg) || differs(a.longitude_deg, b.longitude_deg) ||
+            differs(a.altitude_m, b.altitude_m),
+        "Position");
+  check(differs(a.gnss_speed_m_per_s, b.gnss_speed_m_per_s), "GnssSpeed");
+  check(differs(a.course_deg, b.course_deg), "Course");
+  check(differs(a.gnss_hdop, b.gnss_hdop), "GnssHdop");
+  check(a.gnss_satellites != b.gnss_satellites, "GnssSatellites");
+  check(a.gnss_utc != b.gnss_utc, "GnssTime");
   return names;
 }
 
@@ -84,6 +96,14 @@ const sd_bus_vtable kVtable[] = {
     WS_PROPERTY("VisionLatencyP99Ms", "d"),
     WS_PROPERTY("ControlOverruns", "t"),
     WS_PROPERTY("Mode", "s"),
+    WS_PROPERTY("SpeedSource", "s"),
+    WS_PROPERTY("GnssFix", "s"),
+    WS_PROPERTY("Position", "(ddd)"),
+    WS_PROPERTY("GnssSpeed", "d"),
+    WS_PROPERTY("Course", "d"),
+    WS_PROPERTY("GnssHdop", "d"),
+    WS_PROPERTY("GnssSatellites", "u"),
+    WS_PROPERTY("GnssTime", "s"),
     SD_BUS_METHOD("Start", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("Stop", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("SetPressureSetpoint", "d", "", DbusService::method, kMethodFlags),
@@ -169,6 +189,16 @@ int DbusService::get_property(sd_bus*, const char*, const char*, const char* pro
     return sd_bus_message_append(reply, "t", static_cast<std::uint64_t>(s.control_overruns));
   }
   if (p == "Mode") return sd_bus_message_append(reply, "s", s.mode.c_str());
+  if (p == "SpeedSource") return sd_bus_message_append(reply, "s", s.speed_source.c_str());
+  if (p == "GnssFix") return sd_bus_message_append(reply, "s", s.gnss_fix.c_str());
+  if (p == "Position") {
+    return sd_bus_message_append(reply, "(ddd)", s.latitude_deg, s.longitude_deg, s.altitude_m);
+  }
+  if (p == "GnssSpeed") return sd_bus_message_append(reply, "d", s.gnss_speed_m_per_s);
+  if (p == "Course") return sd_bus_message_append(reply, "d", s.course_deg);
+  if (p == "GnssHdop") return sd_bus_message_append(reply, "d", s.gnss_hdop);
+  if (p == "GnssSatellites") return sd_bus_message_append(reply, "u", s.gnss_satellites);
+  if (p == "GnssTime") return sd_bus_message_append(reply, "s", s.gnss_utc.c_str());
   return sd_bus_error_setf(error, SD_BUS_ERROR_UNKNOWN_PROPERTY, "no property %s", property);
 }
 

@@ -57,13 +57,26 @@ std::string json_value(const Value& value) {
   std::visit(
       [&](const auto& v) {
         using V = std::decay_t<decltype(v)>;
+        // JSON has no NaN: a value not given (a GNSS field without a fix) is null.
+        const auto number = [&](double x) {
+          if (std::isfinite(x)) {
+            out << x;
+          } else {
+            out << "null";
+          }
+        };
         if constexpr (std::is_same_v<V, std::string>) {
           out << json_string(v);
         } else if constexpr (std::is_same_v<V, bool>) {
           out << (v ? "true" : "false");
+        } else if constexpr (std::is_same_v<V, double>) {
+          number(v);
         } else if constexpr (std::is_same_v<V, std::vector<double>>) {
           out << '[';
-          for (std::size_t i = 0; i < v.size(); ++i) out << (i ? "," : "") << v[i];
+          for (std::size_t i = 0; i < v.size(); ++i) {
+            out << (i ? "," : "");
+            number(v[i]);
+          }
           out << ']';
         } else if constexpr (std::is_same_v<V, std::vector<std::string>>) {
           out << '[';
@@ -127,6 +140,14 @@ Value read_variant(sd_bus_message* m) {
     std::uint64_t t = 0;
     check(sd_bus_message_read(m, "t", &t), "read t");
     value = t;
+  } else if (sig == "u") {
+    std::uint32_t u = 0;
+    check(sd_bus_message_read(m, "u", &u), "read u");
+    value = std::uint64_t{u};
+  } else if (sig == "(ddd)") {  // Position: latitude, longitude, altitude
+    double x[3] = {0, 0, 0};
+    check(sd_bus_message_read(m, "(ddd)", &x[0], &x[1], &x[2]), "read (ddd)");
+    value = std::vector<double>(x, x + 3);
   } else if (sig == "b") {
     int b = 0;
     check(sd_bus_message_read(m, "b", &b), "read b");
@@ -300,18 +321,32 @@ void print_status(const Properties& p, bool json) {
     const auto found = p.find(name);
     return found == p.end() ? std::string("?") : text_value(found->second);
   };
+  // Degrees of latitude/longitude need 7 decimals (1 cm); altitude is the third value.
+  const auto get_precise = [&](const char* name) {
+    const auto found = p.find(name);
+    const auto* v = found == p.end() ? nullptr : std::get_if<std::vector<double>>(&found->second);
+    if (v == nullptr || v->size() != 3) return std::string("?");
+    std::ostringstream out;
+    out << std::fixed << std::setprecision(7) << (*v)[0] << ' ' << (*v)[1] << std::setprecision(1)
+        << ' ' << (*v)[2] << " m";
+    return out.str();
+  };
   std::cout << "State:         " << get("State") << " (" << get("Mode") << ")\n"
             << "Pressure:      " << get("Pressure") << " MPa (set-point " << get("PressureSetpoint")
             << " MPa)\n"
             << "Flow:          " << get("Flow") << " L/min\n"
             << "Tank:          " << get("TankLevel") << " %\n"
-            << "Speed:         " << get("Speed") << " m/s, distance " << get("Distance") << " m\n"
+            << "Speed:         " << get("Speed") << " m/s (" << get("SpeedSource") << "), distance "
+            << get("Distance") << " m\n"
             << "Nozzle duty:   " << get("NozzleDuty") << " %\n"
             << "Zone density:  " << get("ZoneDensity") << "\n"
             << "Sprayed:       " << get("VolumeSprayed") << " L over " << get("AreaCovered")
             << " m^2, saving " << get("SavingsPercent") << " %\n"
             << "Vision:        " << get("FrameRate") << " fps, latency " << get("VisionLatencyMs")
             << " ms (p99 " << get("VisionLatencyP99Ms") << " ms)\n"
+            << "GNSS:          " << get("GnssFix") << " fix, position " << get_precise("Position")
+            << ", " << get("GnssSpeed") << " m/s, course " << get("Course") << " deg, "
+            << get("GnssSatellites") << " satellites, HDOP " << get("GnssHdop") << "\n"
             << "Overruns:      " << get("ControlOverruns") << "\n"
             << "Alarms:        " << get("Alarms") << "\n";
 }

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 namespace weedspray::daemon {
 
 struct Status {
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   std::string state = "Starting";
   double pressure_mpa = 0;
   double pressure_setpoint_mpa = 0;
@@ -28,7 +30,18 @@ struct Status {
   double vision_latency_ms = 0;      // frame capture -> duty scheduled, latest frame
   double vision_latency_p99_ms = 0;  // over the last 1000 frames
   std::uint64_t control_overruns = 0;
-  std::string mode = "hw";  // hw | sim
+  std::string mode = "hw";             // hw | sim
+  std::string speed_source = "wheel";  // wheel | gnss | fixed, "... (gnss fix lost)"
+  // GNSS ([gnss] enabled): the latest fix's mode and what it reported; NaN = not given.
+  std::string gnss_fix = "off";  // off | none | 2d | 3d
+  double latitude_deg = kNaN;
+  double longitude_deg = kNaN;
+  double altitude_m = kNaN;
+  double gnss_speed_m_per_s = kNaN;
+  double course_deg = kNaN;
+  double gnss_hdop = kNaN;
+  std::uint32_t gnss_satellites = 0;
+  std::string gnss_utc;  // ISO 8601, "" = unknown
 
   bool operator==(const Status&) const = default;
 };

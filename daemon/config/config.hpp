@@ -182,6 +182,21 @@ struct WheelSection {
   double fixed_speed_m_per_s;
 };
 
+// How the ground speed is found (daemon/sprayer/ground_speed.hpp).
+struct SpeedSection {
+  std::string source;  // wheel|gnss|fixed
+};
+
+// The GNSS receiver, read through gpsd.
+struct GnssSection {
+  bool enabled;
+  std::string host;
+  int port;
+  double lost_fix_timeout_s;   // no usable fix for this long: gnss_fix_lost, speed falls back
+  double first_fix_timeout_s;  // after start: the receiver's time to find its first fix
+  double reconnect_max_s;      // ceiling of the reconnection backoff while gpsd is away
+};
+
 struct ModbusSection {
   bool enabled;
   std::string device;
@@ -246,6 +261,8 @@ struct Config {
   AnalogModbusSection analog_modbus;
   FlowSection flow;
   WheelSection wheel;
+  SpeedSection speed;
+  GnssSection gnss;
   ModbusSection modbus;
   AlarmsSection alarms;
   LogSection log;

@@ -393,6 +393,9 @@ class Loader {
       fail("alarms.tank_empty_pct", "must be below alarms.tank_low_pct");
     }
     validate_analog_modbus();
+    if (c.speed.source == "gnss" && !c.gnss.enabled) {
+      fail("speed.source", "\"gnss\" needs gnss.enabled = true", "gnss.enabled");
+    }
     if (c.sim.speed_min_m_per_s > c.sim.speed_max_m_per_s) {
       fail("sim.speed_min_m_per_s", "must not exceed sim.speed_max_m_per_s");
     }

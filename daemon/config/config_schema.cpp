@@ -330,6 +330,26 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "wheel sensor constant"},
     {WS_KEY(wheel, fixed_speed_m_per_s), 1.0, 0, 10, "m/s",
      "speed assumed when source = \"fixed\""},
+    // [speed]
+    {WS_KEY(speed, source), std::string("wheel"), 0, 0, "",
+     "the ground speed of the rate law: \"wheel\" as [wheel] says (its pulses, or its fixed "
+     "speed), \"gnss\" the receiver's speed over ground ([gnss] enabled; the wheel's pulses stay "
+     "the distance base when wheel.source = \"pulses\"; without a usable fix the speed falls back "
+     "to the wheel's pulses, else wheel.fixed_speed_m_per_s), \"fixed\" wheel.fixed_speed_m_per_s",
+     {"wheel", "fixed", "gnss"}},
+    // [gnss]
+    {WS_KEY(gnss, enabled), false, 0, 1, "",
+     "read position, speed and course from gpsd (the receiver is gpsd's: NMEA, u-blox, RTK)"},
+    {WS_KEY(gnss, host), std::string("localhost"), 0, 0, "", "gpsd's host"},
+    {WS_KEY(gnss, port), 2947, 1, 65535, "", "gpsd's TCP port"},
+    {WS_KEY(gnss, lost_fix_timeout_s), 2.0, 0.2, 60, "s",
+     "no 2D/3D fix for this long raises gnss_fix_lost (and a receiver reporting no fix makes "
+     "speed.source = \"gnss\" fall back at once)"},
+    {WS_KEY(gnss, first_fix_timeout_s), 60.0, 1, 3600, "s",
+     "after start, no usable fix for this long raises gnss_fix_lost (a receiver's cold start "
+     "takes 30-60 s); afterwards lost_fix_timeout_s applies"},
+    {WS_KEY(gnss, reconnect_max_s), 5.0, 0.1, 600, "s",
+     "while gpsd is away, reconnection attempts back off from 0.25 s up to this"},
     // [modbus]
     {WS_KEY(modbus, enabled), false, 0, 1, "",
      "read the tank level from a Modbus RTU sensor"},

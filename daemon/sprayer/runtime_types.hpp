@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include "control/spray_rate_law.hpp"
+#include "daemon/sprayer/ground_speed.hpp"
 #include "io/valve_pwm_driver.hpp"
 #include "vision/pipeline.hpp"
 
@@ -96,7 +97,9 @@ struct ControlStatus {
   std::uint64_t overruns = 0;
   std::uint64_t misses = 0;  // lateness that affects spraying (alarms.timing_tolerance_ms)
   double open_fraction = 0;
-  bool inputs_stale = false;  // valves held closed because an input is stale
+  bool inputs_stale = false;                       // valves held closed because an input is stale
+  SpeedSource speed_source = SpeedSource::kFixed;  // where speed_m_per_s came from this cycle
+  bool speed_fell_back = false;                    // speed.source = "gnss" without a usable fix
 };
 
 // Control loop -> as-applied log writer, one per PWM period.

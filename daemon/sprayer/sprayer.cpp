@@ -117,6 +117,7 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
   analog_timing.period = pressure_period();
   analog_io_ = std::make_unique<io::AnalogIoWorker>(*io_.pressure_adc, *io_.return_valve,
                                                     *io_.clock, analog_timing);
+  speed_source_ = parse_speed_source(config.speed.source).value_or(SpeedSource::kWheel);
   if (io_.wheel != nullptr) {
     control::OdometryConfig odometry;
     odometry.pulses_per_metre = config.wheel.pulses_per_metre;
@@ -220,6 +221,9 @@ void Sprayer::start() {
   }
   if (io_.tank != nullptr) {
     add(io::ThreadRole::kModbus, "tank level", [this](std::stop_token st) { tank_loop(st); });
+  }
+  if (io_.gnss != nullptr) {
+    add(io::ThreadRole::kGnss, "gnss", [this](std::stop_token st) { gnss_loop(st); });
   }
 }
 
@@ -379,6 +383,8 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   Nanos flow_window_start = last;
   double fixed_distance = 0;
   std::uint64_t frames_lost = 0;
+  GnssSample gnss;
+  const Nanos lost_fix_timeout = from_seconds(config_.gnss.lost_fix_timeout_s);
   while (!stop.stop_requested()) {
     loop.wait_next();
     const Nanos now = io_.clock->now();
@@ -388,14 +394,28 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       params_version = params_.version();
       params_.try_read(params);
     }
-    // Travel.
+    // Travel: the wheel's pulses are the distance base whenever it is wired; the speed comes
+    // from speed.source (daemon/sprayer/ground_speed.hpp).
+    GroundSpeedInputs speed_in;
+    speed_in.source = speed_source_;
+    speed_in.wheel_wired = odometry_.has_value();
+    speed_in.fixed_speed_m_per_s = config_.wheel.fixed_speed_m_per_s;
     if (odometry_) {
       const io::PulseSnapshot wheel = io_.wheel->snapshot();
       odometry_->update(wheel.count, wheel.last_edge_time, now);
       status.distance_m = odometry_->distance_m();
-      status.speed_m_per_s = odometry_->speed_m_per_s();
-    } else {
-      status.speed_m_per_s = config_.wheel.fixed_speed_m_per_s;
+      speed_in.wheel_speed_m_per_s = odometry_->speed_m_per_s();
+    }
+    if (io_.gnss != nullptr) {
+      gnss_.try_read(gnss);  // a collision with the writer keeps the previous fix
+      speed_in.gnss_usable = gnss_fix_usable(gnss, now, lost_fix_timeout);
+      speed_in.gnss_speed_m_per_s = gnss.value.speed_m_per_s;
+    }
+    const GroundSpeed ground = select_ground_speed(speed_in);
+    status.speed_m_per_s = ground.speed_m_per_s;
+    status.speed_source = ground.used;
+    status.speed_fell_back = ground.fell_back;
+    if (!odometry_) {
       fixed_distance += status.speed_m_per_s * dt;
       status.distance_m = fixed_distance;
     }
@@ -633,6 +653,19 @@ void Sprayer::tank_loop(std::stop_token stop) noexcept {
     while (!stop.stop_requested() && io_.clock->now() < next) {
       io_.clock->sleep_until(std::min(next, io_.clock->now() + 100ms));
     }
+  }
+}
+
+void Sprayer::gnss_loop(std::stop_token stop) noexcept {
+  // Each wait is short so a stop request is honoured promptly; the receiver reconnects itself.
+  constexpr Nanos kWait = 100ms;
+  while (!stop.stop_requested()) {
+    io::GnssFix fix;
+    const bool got = io_.gnss->next_fix(fix, kWait);
+    const io::GnssLinkStats link = io_.gnss->stats();
+    if (got)
+      gnss_.publish(GnssSample{fix, io_.clock->now(), link.connect_failures + link.disconnects});
+    gnss_link_.publish(link);
   }
 }
 

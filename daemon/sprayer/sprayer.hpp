@@ -6,6 +6,7 @@
 //   ws-camera     one per camera: frame -> vision::Pipeline -> zone densities (normal
 //                 priority; weed-model inferences one at a time through a ticket gate)
 //   ws-modbus     tank level
+//   ws-gnss       the gpsd client: each GNSS fix into a LatestValue (when [gnss] is enabled)
 // Threads exchange trivially copyable values through LatestValue slots and SPSC queues; the
 // loops allocate nothing, lock nothing and log nothing after start().
 #pragma once
@@ -23,6 +24,7 @@
 #include "control/spray_rate_law.hpp"
 #include "daemon/backends/backends.hpp"
 #include "daemon/config/config.hpp"
+#include "daemon/sprayer/ground_speed.hpp"
 #include "daemon/sprayer/inference_gate.hpp"
 #include "daemon/sprayer/runtime_types.hpp"
 #include "daemon/sprayer/snapshot_handoff.hpp"
@@ -66,6 +68,9 @@ class Sprayer {
   CameraStatus camera(std::size_t i) const noexcept { return cameras_[i].status.read(); }
   std::size_t camera_count() const noexcept { return camera_count_; }
   io::TankLevelSample tank() const noexcept { return tank_.read(); }
+  // The latest GNSS fix (mode none and sample_time 0 until the first) and the gpsd link.
+  GnssSample gnss() const noexcept { return gnss_.read(); }
+  io::GnssLinkStats gnss_link() const noexcept { return gnss_link_.read(); }
   io::ValvePwmStats pwm() const noexcept { return pwm_driver_->stats(); }
   io::AnalogIoStats analog_io() const noexcept { return analog_io_->stats(); }
   // Failed output writes of the real-time threads (unsafe_error left 0).
@@ -121,6 +126,7 @@ class Sprayer {
   void control_loop(std::stop_token stop) noexcept;
   void camera_loop(std::stop_token stop, CameraWorker& worker) noexcept;
   void tank_loop(std::stop_token stop) noexcept;
+  void gnss_loop(std::stop_token stop) noexcept;
 
   const Config config_;
   Backends& io_;
@@ -129,6 +135,9 @@ class Sprayer {
   io::LatestValue<PressureStatus> pressure_;
   io::LatestValue<ControlStatus> control_;
   io::LatestValue<io::TankLevelSample> tank_;
+  io::LatestValue<GnssSample> gnss_;
+  io::LatestValue<io::GnssLinkStats> gnss_link_;
+  SpeedSource speed_source_ = SpeedSource::kWheel;
   std::unique_ptr<control::PressureController> controller_;
   std::unique_ptr<io::AnalogIoWorker> analog_io_;
   std::unique_ptr<control::PwmSchedule> schedule_;

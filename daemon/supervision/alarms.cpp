@@ -16,6 +16,7 @@ constexpr std::array<std::string_view, kAlarmCount> kNames = {
     "control_overruns",
     "vision_model_failed",
     "output_write_failed",
+    "gnss_fix_lost",
 };
 
 double seconds(std::chrono::nanoseconds t) {
@@ -108,6 +109,8 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
   // A fault: an output that cannot be written may be stuck open; everything else is driven
   // safe, and the failing safe write is retried while in Fault.
   set(AlarmId::kOutputWriteFailed, in.output_write_failed, false);
+  // A warning: the speed falls back as configured (wheel pulses, else the fixed speed).
+  set(AlarmId::kGnssFixLost, in.gnss_fix_lost, false);  // its timeout is the hold
   set(AlarmId::kControlOverruns,
       in.overruns_last_second >= static_cast<std::uint64_t>(t.control_overrun_limit), false);
 

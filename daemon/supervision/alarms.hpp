@@ -26,8 +26,9 @@ enum class AlarmId : std::uint8_t {
   kControlOverruns,    // control loops missing their deadlines
   kVisionModelFailed,  // a camera's weed model fails at run time: that camera's nozzles closed
   kOutputWriteFailed,  // a valve/pump/return-valve/alarm output refused a write (line named)
+  kGnssFixLost,        // GNSS enabled, no usable fix for gnss.lost_fix_timeout_s
 };
-inline constexpr std::size_t kAlarmCount = 12;
+inline constexpr std::size_t kAlarmCount = 13;
 
 using AlarmMask = std::uint32_t;
 constexpr AlarmMask alarm_bit(AlarmId id) noexcept {
@@ -62,6 +63,7 @@ struct AlarmInputs {
   std::uint64_t overruns_last_second = 0;
   bool vision_model_failed = false;  // some camera's latest frame failed in its weed model
   bool output_write_failed = false;  // an output write failed since the last evaluation
+  bool gnss_fix_lost = false;        // see gnss_fix_lost() (daemon/sprayer/ground_speed.hpp)
 };
 
 class AlarmEvaluator {

@@ -22,7 +22,9 @@ constexpr const char* kPython = "/usr/bin/python3";
 const std::string kSlaveScript = std::string(WEEDSPRAY_IO_TEST_DIR) + "/modbus_slave.py";
 }  // namespace
 
-Child::Child(const std::vector<std::string>& argv, const fs::path& stdout_file) {
+Child::Child(const std::vector<std::string>& argv, const fs::path& stdout_file,
+             bool own_process_group)
+    : group_(own_process_group) {
   std::vector<char*> args;
   for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
   args.push_back(nullptr);
@@ -31,20 +33,34 @@ Child::Child(const std::vector<std::string>& argv, const fs::path& stdout_file) 
   posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, stdout_file.c_str(),
                                    O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  const int rc = posix_spawn(&pid_, args[0], &actions, nullptr, args.data(), environ);
+  posix_spawnattr_t attr;
+  posix_spawnattr_init(&attr);
+  if (group_) {
+    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP);
+    posix_spawnattr_setpgroup(&attr, 0);
+  }
+  const int rc = posix_spawn(&pid_, args[0], &actions, &attr, args.data(), environ);
+  posix_spawnattr_destroy(&attr);
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) pid_ = -1;
 }
 
-Child::~Child() {
+void Child::stop() {
   if (pid_ <= 0) return;
-  kill(pid_, SIGTERM);
-  for (int i = 0; i < 50; ++i) {
-    if (waitpid(pid_, nullptr, WNOHANG) == pid_) return;
-    std::this_thread::sleep_for(20ms);
+  const pid_t target = group_ ? -pid_ : pid_;
+  kill(target, SIGTERM);
+  bool exited = false;
+  for (int i = 0; i < 50 && !exited; ++i) {
+    exited = waitpid(pid_, nullptr, WNOHANG) == pid_;
+    if (!exited) std::this_thread::sleep_for(20ms);
   }
-  kill(pid_, SIGKILL);
-  waitpid(pid_, nullptr, 0);
+  if (group_) {
+    kill(target, SIGKILL);  // whatever of the group is left (gpsfake's gpsd)
+  } else if (!exited) {
+    kill(pid_, SIGKILL);
+  }
+  if (!exited) waitpid(pid_, nullptr, 0);
+  pid_ = -1;
 }
 
 bool Child::running() const {

@@ -16,18 +16,23 @@
 
 namespace weedspray::test {
 
-// A child process, killed (by its pid) when the object goes away.
+// A child process, killed (by its pid) when the object goes away or stop() is called. With
+// own_process_group it leads a process group of its own and the whole group is killed (a
+// child that starts helpers of its own, as gpsfake starts gpsd).
 class Child {
  public:
-  Child(const std::vector<std::string>& argv, const std::filesystem::path& stdout_file);
-  ~Child();
+  Child(const std::vector<std::string>& argv, const std::filesystem::path& stdout_file,
+        bool own_process_group = false);
+  ~Child() { stop(); }
   Child(const Child&) = delete;
   Child& operator=(const Child&) = delete;
   bool started() const { return pid_ > 0; }
   bool running() const;
+  void stop();  // SIGTERM, then SIGKILL after 1 s
 
  private:
   pid_t pid_ = -1;
+  bool group_ = false;
 };
 
 std::string read_file(const std::filesystem::path& p);

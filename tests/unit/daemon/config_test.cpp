@@ -295,6 +295,17 @@ TEST(ConfigSchema, FlowMeterOnAKernelCounterOrAGpioLineNotBoth) {
   EXPECT_EQ(both.line(), 4);
 }
 
+TEST(ConfigSchema, GnssSpeedNeedsTheReceiverEnabled) {
+  const Config config = parse("[gnss]\nenabled = true\nport = 2948\n[speed]\nsource = \"gnss\"\n");
+  EXPECT_EQ(config.speed.source, "gnss");
+  EXPECT_EQ(config.gnss.port, 2948);
+  const auto off =
+      parse_error({{"main.toml", "[wheel]\nsource = \"fixed\"\n[speed]\nsource = \"gnss\"\n"}});
+  EXPECT_EQ(off.key(), "speed.source");
+  EXPECT_EQ(off.line(), 4);
+  EXPECT_NE(std::string(off.what()).find("gnss.enabled"), std::string::npos) << off.what();
+}
+
 class ConfigFiles : public ::testing::Test {
  protected:
   void SetUp() override {

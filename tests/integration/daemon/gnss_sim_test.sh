@@ -1,0 +1,131 @@
+#!/usr/bin/env bash
+# weedsprayd --sim with [gnss] on a real gpsd fed the project's recorded track by gpsfake
+# (tests/data/gnss, tools/gnss/make_track.py), speed.source = "gnss", on a PRIVATE session bus:
+#  1. GnssFix 3d, Position on the track, SpeedSource gnss and the rate law's Speed the
+#     receiver's (2 m/s; the simulated wheel turns at 1 m/s);
+#  2. gpsfake stops: gnss_fix_lost is raised, GnssFix none, and the speed falls back to the
+#     wheel's pulses (SpeedSource "wheel (gnss fix lost)", Speed 1 m/s); SIGTERM -> exit 0.
+# usage: gnss_sim_test.sh BUILD_DIR SOURCE_DIR
+set -euo pipefail
+BUILD=$(realpath "$1")
+SOURCE=$(realpath "$2")
+WEEDSPRAYD=$BUILD/daemon/weedsprayd
+SPRAYCTL=$BUILD/daemon/sprayctl
+PY=/usr/bin/python3
+T=$(mktemp -d /tmp/weedspray-gnss-test.XXXXXX)
+DAEMON_PID=
+BUS_PID=
+GPSFAKE_PID=
+
+stop_gpsfake() {  # gpsfake and its gpsd share a process group (setsid)
+  [ -n "$GPSFAKE_PID" ] && kill -TERM -- "-$GPSFAKE_PID" 2>/dev/null || true
+  sleep 0.3
+  [ -n "$GPSFAKE_PID" ] && kill -KILL -- "-$GPSFAKE_PID" 2>/dev/null || true
+  GPSFAKE_PID=
+}
+cleanup() {
+  [ -n "$DAEMON_PID" ] && kill -KILL "$DAEMON_PID" 2>/dev/null || true
+  stop_gpsfake
+  [ -n "$BUS_PID" ] && kill "$BUS_PID" 2>/dev/null || true
+  rm -rf "$T"
+}
+trap cleanup EXIT
+
+fail() {
+  echo "FAIL: $*" >&2
+  echo "--- daemon log (tail) ---" >&2
+  tail -n 30 "$T/daemon.log" >&2 || true
+  echo "--- gpsfake log ---" >&2
+  cat "$T/gpsfake.log" >&2 || true
+  exit 1
+}
+
+[ -x /usr/bin/gpsfake ] && [ -x /usr/sbin/gpsd ] ||
+  fail "gpsd and gpsfake are required (apt-get install gpsd gpsd-clients; ./dev deps installs them)"
+
+dbus-daemon --session --fork --nopidfile --print-address=3 --print-pid=4 3>"$T/bus.addr" 4>"$T/bus.pid"
+export DBUS_SESSION_BUS_ADDRESS=$(cat "$T/bus.addr")
+BUS_PID=$(cat "$T/bus.pid")
+
+status_json() { "$SPRAYCTL" --user status --json; }
+# json_check EXPR: true when the python expression holds for the status object j.
+json_check() {
+  status_json | $PY -c "import json,sys; j=json.load(sys.stdin); sys.exit(0 if ($1) else 1)"
+}
+wait_for() {  # wait_for SECONDS EXPR
+  local tries=$(($1 * 10))
+  for _ in $(seq 1 "$tries"); do
+    json_check "$2" 2>/dev/null && return 0
+    kill -0 "$DAEMON_PID" 2>/dev/null || fail "weedsprayd exited"
+    sleep 0.1
+  done
+  return 1
+}
+
+PORT=$($PY -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+# The track once, 0.1 s a sentence (0.3 s an epoch, ~10 s in all); -W: gpsfake ends 2 s after.
+setsid /usr/bin/gpsfake -1 -q -c 0.1 -W 2 -P "$PORT" "$SOURCE/tests/data/gnss/field_track.nmea" \
+  >"$T/gpsfake.log" 2>&1 &
+GPSFAKE_PID=$!
+# The daemon starts once gpsd listens: its first fix must come within the lost-fix timeout.
+$PY - "$PORT" <<'PYEOF' || fail "gpsd never listened on port $PORT"
+import socket, sys, time
+for _ in range(100):
+    try:
+        socket.create_connection(("127.0.0.1", int(sys.argv[1])), timeout=1).close()
+        sys.exit(0)
+    except OSError:
+        time.sleep(0.1)
+sys.exit(1)
+PYEOF
+
+mkdir -p "$T/state"
+cat >"$T/weedspray.toml" <<TOML
+[gnss]
+enabled = true
+host = "127.0.0.1"
+port = $PORT
+lost_fix_timeout_s = 2.0  # margin for a loaded machine (gpsfake paces in Python)
+first_fix_timeout_s = 10.0
+reconnect_max_s = 0.5
+[speed]
+source = "gnss"
+[sim]
+speed_profile = "constant"
+speed_max_m_per_s = 1.0
+TOML
+"$WEEDSPRAYD" --sim --user --config "$T/weedspray.toml" --state-dir "$T/state" \
+  >"$T/daemon.log" 2>&1 &
+DAEMON_PID=$!
+
+# 1. The receiver's fix on the bus, and its speed in the rate law.
+wait_for 15 'j["GnssFix"] == "3d" and j["SpeedSource"] == "gnss" and
+  abs(j["GnssSpeed"] - 2.0) < 0.001 and j["Speed"] == j["GnssSpeed"]' ||
+  fail "no 3d fix with Speed from gnss: $(status_json)"
+json_check 'abs(j["Position"][0] - 52.0) < 0.001 and abs(j["Position"][1] - 5.0) < 0.001 and
+  j["GnssTime"].startswith("2026-06-24T14:30:") and "gnss_fix_lost" not in j["Alarms"]' ||
+  fail "Position/GNSS fields: $(status_json)"
+echo "ok: 3d fix, Position on the track, Speed from gnss"
+# The turn: the course swings between north and east; the sky view (GSV every 4 s) arrives.
+wait_for 10 '5 < j["Course"] < 85' || fail "never saw the turn's course: $(status_json)"
+# gpsd's first reports of a stream may lack the altitude (a TPV before the epoch's GGA).
+wait_for 5 'j["GnssSatellites"] == 9 and abs(j["GnssHdop"] - 0.8) < 1e-9 and
+  abs(j["Position"][2] - 12.5) < 1e-6' || fail "satellites, HDOP and altitude: $(status_json)"
+json_check '"gnss_fix_lost" not in j["Alarms"]' || fail "gnss_fix_lost while the fix is good: $(status_json)"
+echo "ok: the turn's course, 9 satellites, HDOP 0.8, altitude, no alarm"
+"$SPRAYCTL" --user status | grep -q "^GNSS: *3d fix, position 52.0" || fail "sprayctl status: $("$SPRAYCTL" --user status)"
+
+# 2. gpsd goes away: alarm, GnssFix none, speed from the wheel.
+wait_for 8 'j["GnssTime"] >= "2026-06-24T14:30:27"' || fail "the track's stop never came"
+stop_gpsfake
+wait_for 5 '"gnss_fix_lost" in j["Alarms"] and j["GnssFix"] == "none" and
+  j["SpeedSource"] == "wheel (gnss fix lost)" and abs(j["Speed"] - 1.0) < 0.1' ||
+  fail "no fallback after gpsd stopped: $(status_json)"
+grep -q "alarm raised: gnss_fix_lost (no usable fix for 2 s; gpsd at 127.0.0.1:$PORT not reachable; speed from wheel)" \
+  "$T/daemon.log" || fail "the alarm's log line"
+echo "ok: gnss_fix_lost, speed from the wheel"
+
+kill -TERM "$DAEMON_PID"
+wait "$DAEMON_PID" || fail "weedsprayd exit status $?"
+DAEMON_PID=
+echo "PASS"
