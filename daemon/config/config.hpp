@@ -195,6 +195,19 @@ struct GnssSection {
   double lost_fix_timeout_s;   // no usable fix for this long: gnss_fix_lost, speed falls back
   double first_fix_timeout_s;  // after start: the receiver's time to find its first fix
   double reconnect_max_s;      // ceiling of the reconnection backoff while gpsd is away
+  // Where the antenna sits relative to the middle of the nozzle line (maps place each
+  // nozzle's patch from it): ahead along the direction of travel, and right of the centre.
+  double antenna_ahead_of_nozzles_m;
+  double antenna_right_of_centre_m;
+};
+
+// Turn compensation: on a curve each nozzle moves at its own ground speed
+// v_i = v + yaw_rate x lateral offset (daemon/sprayer/turn_speed.hpp).
+struct TurnSection {
+  bool compensation;
+  std::string yaw_source;    // gnss|none
+  double min_speed_m_per_s;  // below: the course is noise, yaw rate taken as 0
+  double yaw_filter_s;       // time constant of the yaw-rate low-pass
 };
 
 struct ModbusSection {
@@ -263,6 +276,7 @@ struct Config {
   WheelSection wheel;
   SpeedSection speed;
   GnssSection gnss;
+  TurnSection turn;
   ModbusSection modbus;
   AlarmsSection alarms;
   LogSection log;

@@ -350,6 +350,23 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "takes 30-60 s); afterwards lost_fix_timeout_s applies"},
     {WS_KEY(gnss, reconnect_max_s), 5.0, 0.1, 600, "s",
      "while gpsd is away, reconnection attempts back off from 0.25 s up to this"},
+    {WS_KEY(gnss, antenna_ahead_of_nozzles_m), 0.0, -50, 50, "m",
+     "the antenna's distance ahead of the nozzle line along the direction of travel (negative: "
+     "behind it); maps place each nozzle's patch from the antenna's position and course"},
+    {WS_KEY(gnss, antenna_right_of_centre_m), 0.0, -50, 50, "m",
+     "the antenna's distance right of the boom's centre, looking forward (negative: left)"},
+    // [turn]
+    {WS_KEY(turn, compensation), true, 0, 1, "",
+     "on a curve give each nozzle the rate and schedule of its own ground speed, v + yaw rate x "
+     "its lateral offset (nozzle 0 is the leftmost, looking forward); needs a yaw source"},
+    {WS_KEY(turn, yaw_source), std::string("gnss"), 0, 0, "",
+     "where the yaw rate comes from: \"gnss\" the rate of change of the receiver's course "
+     "([gnss] enabled), \"none\" no turn compensation",
+     {"gnss", "none"}},
+    {WS_KEY(turn, min_speed_m_per_s), 0.3, 0, 5, "m/s",
+     "below this ground speed the course over ground is noise: the yaw rate is taken as 0"},
+    {WS_KEY(turn, yaw_filter_s), 0.5, 0, 10, "s",
+     "time constant of the yaw rate's low-pass filter (0 = none)"},
     // [modbus]
     {WS_KEY(modbus, enabled), false, 0, 1, "",
      "read the tank level from a Modbus RTU sensor"},

@@ -1,6 +1,7 @@
 // Configuration -> the control library's camera geometry.
 #pragma once
 
+#include <cstddef>
 #include <numbers>
 
 #include "control/nozzle_scheduler.hpp"
@@ -15,6 +16,13 @@ inline control::CameraGeometry camera_geometry(const CameraSection& camera) {
   g.vertical_fov_rad = camera.vfov_deg * std::numbers::pi / 180.0;
   g.camera_to_nozzle_m = camera.distance_to_nozzles_m;
   return g;
+}
+
+// Lateral offset of nozzle n from the boom's centre, metres, positive to the RIGHT looking
+// forward. Nozzle 0 is the leftmost; the nozzles sit side by side, nozzle_width_m apart.
+inline double nozzle_right_offset_m(const BoomSection& boom, std::size_t n) {
+  return (static_cast<double>(n) - 0.5 * static_cast<double>(boom.nozzles - 1)) *
+         boom.nozzle_width_m;
 }
 
 // Sim speed profile (speed at simulated time t_s).

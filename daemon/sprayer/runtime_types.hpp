@@ -8,6 +8,7 @@
 
 #include "control/spray_rate_law.hpp"
 #include "daemon/sprayer/ground_speed.hpp"
+#include "io/gnss.hpp"
 #include "io/valve_pwm_driver.hpp"
 #include "vision/pipeline.hpp"
 
@@ -115,6 +116,18 @@ struct AppliedRecord {
   std::array<float, io::kMaxValves> duty_pct{};
   std::array<float, io::kMaxValves> density{};       // weed density
   std::array<float, io::kMaxValves> crop_density{};  // share of the ground that is crop
+  // Each nozzle's own ground speed (turn compensation: v + yaw rate x lateral offset; equal to
+  // speed_m_per_s when driving straight or without compensation) and the flow its duty gives
+  // by the calibrated line at the measured pressure (0 when closed): rate = flow / (v_i w).
+  std::array<float, io::kMaxValves> nozzle_speed_m_per_s{};
+  std::array<float, io::kMaxValves> nozzle_flow_l_per_min{};
+  // Where the machine was: the latest GNSS fix (mode kNone: no receiver or no fix yet) and when
+  // it arrived on the daemon's clock. The log writer extrapolates it to `time` along its course
+  // and speed and places each nozzle's patch from it (daemon/sprayer/geometry.hpp).
+  io::GnssFix fix{};
+  Nanos fix_time{};
+  bool fix_usable = false;        // gnss_fix_usable() at `time`
+  double yaw_rate_deg_per_s = 0;  // clockwise positive (the course's rate), as the control used it
 };
 
 }  // namespace weedspray::daemon

@@ -549,6 +549,14 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
         record.duty_pct[n] = static_cast<float>(status.duty_pct[n]);
         record.density[n] = static_cast<float>(status.density[n]);
         record.crop_density[n] = static_cast<float>(status.crop_density[n]);
+        record.nozzle_speed_m_per_s[n] = static_cast<float>(status.speed_m_per_s);
+        record.nozzle_flow_l_per_min[n] = static_cast<float>(control::flow_for_duty_l_per_min(
+            params.line, status.duty_pct[n], pressure.pressure_mpa));
+      }
+      if (io_.gnss != nullptr) {
+        record.fix = gnss.value;
+        record.fix_time = gnss.sample_time;
+        record.fix_usable = speed_in.gnss_usable;
       }
       records_.try_push(record);  // a full queue drops the record (the writer is stuck)
     }
