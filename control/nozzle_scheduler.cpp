@@ -98,6 +98,22 @@ bool NozzleScheduler::add_frame(double frame_odometer_m,
   return true;
 }
 
+bool NozzleScheduler::add_frame(std::span<const double> nozzle_odometer_m,
+                                std::span<const double> duty_pct) noexcept {
+  if (duty_pct.size() != config_.rows * config_.nozzles ||
+      nozzle_odometer_m.size() != config_.nozzles) {
+    return false;
+  }
+  for (std::size_t r = 0; r < config_.rows; ++r) {
+    const GroundInterval& zone = row_intervals_[r];
+    for (std::size_t n = 0; n < config_.nozzles; ++n) {
+      add_interval(n, nozzle_odometer_m[n] + zone.near_m, nozzle_odometer_m[n] + zone.far_m,
+                   duty_pct[r * config_.nozzles + n]);
+    }
+  }
+  return true;
+}
+
 void NozzleScheduler::add_interval(std::size_t nozzle, double ground_start_m, double ground_end_m,
                                    double duty_pct) noexcept {
   if (nozzle >= config_.nozzles || !std::isfinite(ground_start_m) || !std::isfinite(ground_end_m) ||

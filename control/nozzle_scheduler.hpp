@@ -68,6 +68,15 @@ class NozzleScheduler {
   // Pin one frame's decisions: duty_pct is rows x nozzles, row-major (row 0 = image top).
   // frame_odometer_m = Odometry::distance_at(frame timestamp). Size mismatch: ignored, false.
   bool add_frame(double frame_odometer_m, std::span<const double> duty_pct) noexcept;
+  // The same on a turn, where each nozzle runs on its own arc: nozzle_odometer_m[n] is the
+  // distance nozzle n itself had travelled when the frame was taken (centre line + v_n - v
+  // integrated), and duty_at()/value_at() get that nozzle's own odometer and speed. The
+  // ground a zone showed near..far ahead of the nadir comes under the nozzle after about
+  // near..far + camera_to_nozzle of the NOZZLE's travel (on a 12 m curve, a point 3.2 m ahead
+  // of a nozzle 1.5 m off the centre line: within 4 cm; on the centre line's odometer: 40 cm
+  // off). Equal odometers are add_frame() above. Size mismatch: false.
+  bool add_frame(std::span<const double> nozzle_odometer_m,
+                 std::span<const double> duty_pct) noexcept;
   // Pin one interval directly (absolute odometer coordinates of the ground).
   void add_interval(std::size_t nozzle, double ground_start_m, double ground_end_m,
                     double duty_pct) noexcept;

@@ -736,6 +736,7 @@ class Daemon final : public CommandHandler {
     s.tank_level_pct = sprayer_->tank().level_pct;
     s.speed_m_per_s = control.speed_m_per_s;
     s.speed_source = std::string(to_string(control.speed_source));
+    s.yaw_rate_deg_per_s = control.yaw_rate_deg_per_s;
     if (control.speed_fell_back) s.speed_source += " (gnss fix lost)";
     s.distance_m = control.distance_m;
     if (backends_.gnss != nullptr) {

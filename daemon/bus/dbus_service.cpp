@@ -73,6 +73,7 @@ std::vector<const char*> changed_properties(const Status& a, const Status& b) {
   check(differs(a.gnss_hdop, b.gnss_hdop), "GnssHdop");
   check(a.gnss_satellites != b.gnss_satellites, "GnssSatellites");
   check(a.gnss_utc != b.gnss_utc, "GnssTime");
+  check(a.yaw_rate_deg_per_s != b.yaw_rate_deg_per_s, "YawRate");
   return names;
 }
 
@@ -104,6 +105,7 @@ const sd_bus_vtable kVtable[] = {
     WS_PROPERTY("GnssHdop", "d"),
     WS_PROPERTY("GnssSatellites", "u"),
     WS_PROPERTY("GnssTime", "s"),
+    WS_PROPERTY("YawRate", "d"),
     SD_BUS_METHOD("Start", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("Stop", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("SetPressureSetpoint", "d", "", DbusService::method, kMethodFlags),
@@ -198,6 +200,7 @@ int DbusService::get_property(sd_bus*, const char*, const char*, const char* pro
   if (p == "Course") return sd_bus_message_append(reply, "d", s.course_deg);
   if (p == "GnssHdop") return sd_bus_message_append(reply, "d", s.gnss_hdop);
   if (p == "GnssSatellites") return sd_bus_message_append(reply, "u", s.gnss_satellites);
+  if (p == "YawRate") return sd_bus_message_append(reply, "d", s.yaw_rate_deg_per_s);
   if (p == "GnssTime") return sd_bus_message_append(reply, "s", s.gnss_utc.c_str());
   return sd_bus_error_setf(error, SD_BUS_ERROR_UNKNOWN_PROPERTY, "no property %s", property);
 }

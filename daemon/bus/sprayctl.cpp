@@ -346,7 +346,8 @@ void print_status(const Properties& p, bool json) {
             << " ms (p99 " << get("VisionLatencyP99Ms") << " ms)\n"
             << "GNSS:          " << get("GnssFix") << " fix, position " << get_precise("Position")
             << ", " << get("GnssSpeed") << " m/s, course " << get("Course") << " deg, "
-            << get("GnssSatellites") << " satellites, HDOP " << get("GnssHdop") << "\n"
+            << get("GnssSatellites") << " satellites, HDOP " << get("GnssHdop") << ", yaw rate "
+            << get("YawRate") << " deg/s\n"
             << "Overruns:      " << get("ControlOverruns") << "\n"
             << "Alarms:        " << get("Alarms") << "\n";
 }

@@ -42,6 +42,8 @@ struct Status {
   double gnss_hdop = kNaN;
   std::uint32_t gnss_satellites = 0;
   std::string gnss_utc;  // ISO 8601, "" = unknown
+  // Turn compensation's yaw rate, deg/s clockwise (0: off, straight, or too slow for a course).
+  double yaw_rate_deg_per_s = 0;
 
   bool operator==(const Status&) const = default;
 };

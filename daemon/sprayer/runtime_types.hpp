@@ -101,6 +101,7 @@ struct ControlStatus {
   bool inputs_stale = false;                       // valves held closed because an input is stale
   SpeedSource speed_source = SpeedSource::kFixed;  // where speed_m_per_s came from this cycle
   bool speed_fell_back = false;                    // speed.source = "gnss" without a usable fix
+  double yaw_rate_deg_per_s = 0;  // turn compensation's yaw rate, clockwise (0: off or straight)
 };
 
 // Control loop -> as-applied log writer, one per PWM period.

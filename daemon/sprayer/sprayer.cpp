@@ -8,6 +8,7 @@
 #include <mutex>
 #include <opencv2/core.hpp>
 
+#include "control/turn_rate.hpp"
 #include "daemon/config/vision_config.hpp"
 #include "daemon/sprayer/geometry.hpp"
 #include "io/signal_conversion.hpp"
@@ -368,7 +369,6 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   io::PeriodicLoop loop(*io_.clock, kPeriod, io_.clock->now(), &timing_.control_loop,
                         from_seconds(config_.alarms.timing_tolerance_ms / 1e3));
   const std::size_t nozzles = nozzle_owner_.size();
-  const double boom_width_m = config_.boom.nozzle_width_m * static_cast<double>(nozzles);
   const double flow_ppl = config_.flow.pulses_per_litre;
   const Nanos record_period = from_seconds(1.0 / config_.pwm.frequency_hz);
   LiveParams params = params_.read();
@@ -385,6 +385,23 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   std::uint64_t frames_lost = 0;
   GnssSample gnss;
   const Nanos lost_fix_timeout = from_seconds(config_.gnss.lost_fix_timeout_s);
+  // Turn compensation (control/turn_rate.hpp): each nozzle's ground speed and the extra
+  // distance its arc has run beyond the centre line's, so the rate law and the schedule use
+  // the nozzle's own travel on a curve.
+  const bool turn_compensation =
+      config_.turn.compensation && config_.turn.yaw_source == "gnss" && io_.gnss != nullptr;
+  control::YawRateConfig yaw_config;
+  yaw_config.min_speed_m_per_s = config_.turn.min_speed_m_per_s;
+  yaw_config.filter_time_constant_s = config_.turn.yaw_filter_s;
+  yaw_config.max_fix_gap_s = config_.gnss.lost_fix_timeout_s;
+  control::YawRateEstimator yaw_rate(yaw_config);
+  Nanos last_fix_time{-1};
+  std::array<double, io::kMaxValves> right_offset_m{};
+  for (std::size_t n = 0; n < nozzles; ++n)
+    right_offset_m[n] = nozzle_right_offset_m(config_.boom, n);
+  std::array<double, io::kMaxValves> nozzle_speed{};
+  std::array<double, io::kMaxValves> arc_extra_m{};  // nozzle's travel minus the centre line's
+  std::array<double, io::kMaxValves> frame_odometer{};
   while (!stop.stop_requested()) {
     loop.wait_next();
     const Nanos now = io_.clock->now();
@@ -410,6 +427,19 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       gnss_.try_read(gnss);  // a collision with the writer keeps the previous fix
       speed_in.gnss_usable = gnss_fix_usable(gnss, now, lost_fix_timeout);
       speed_in.gnss_speed_m_per_s = gnss.value.speed_m_per_s;
+      if (turn_compensation && gnss.sample_time != last_fix_time) {
+        last_fix_time = gnss.sample_time;
+        // The receiver's own fix times difference best (no USB or gpsd latency jitter).
+        const double fix_time_s = gnss.value.utc_ns != 0
+                                      ? static_cast<double>(gnss.value.utc_ns) * 1e-9
+                                      : seconds(gnss.sample_time);
+        if (speed_in.gnss_usable) {
+          yaw_rate.add_fix(gnss.value.course_deg, gnss.value.speed_m_per_s, fix_time_s);
+        } else {
+          yaw_rate.reset();
+        }
+      }
+      if (turn_compensation && !speed_in.gnss_usable) yaw_rate.reset();
     }
     const GroundSpeed ground = select_ground_speed(speed_in);
     status.speed_m_per_s = ground.speed_m_per_s;
@@ -418,6 +448,12 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
     if (!odometry_) {
       fixed_distance += status.speed_m_per_s * dt;
       status.distance_m = fixed_distance;
+    }
+    status.yaw_rate_deg_per_s = turn_compensation ? yaw_rate.rate_deg_per_s() : 0.0;
+    for (std::size_t n = 0; n < nozzles; ++n) {
+      nozzle_speed[n] = control::nozzle_ground_speed_m_per_s(
+          status.speed_m_per_s, status.yaw_rate_deg_per_s, right_offset_m[n]);
+      arc_extra_m[n] += (nozzle_speed[n] - status.speed_m_per_s) * dt;
     }
     if (io_.flow != nullptr) {
       const io::PulseSnapshot flow = io_.flow->snapshot();
@@ -450,10 +486,20 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
         }
         worker.last_frame_distance_m = frame_distance;
         worker.vision_failed = frame->vision_failed;
-        worker.scheduler->add_frame(frame_distance,
+        // Each nozzle's own travel when the frame was taken (the centre line's when driving
+        // straight): the plan and the look-ahead are in that nozzle's odometer.
+        const auto count = static_cast<std::size_t>(worker.nozzle_count);
+        const double since_capture_s = seconds(now - frame->capture_time);
+        for (std::size_t local = 0; local < count; ++local) {
+          const std::size_t n = local + static_cast<std::size_t>(worker.first_nozzle);
+          const double extra = nozzle_speed[n] - status.speed_m_per_s;
+          frame_odometer[local] = frame_distance + arc_extra_m[n] - extra * since_capture_s;
+        }
+        const std::span<const double> odometers(frame_odometer.data(), count);
+        worker.scheduler->add_frame(odometers,
                                     std::span<const double>(frame->density.data(), zones));
         worker.crop_scheduler->add_frame(
-            frame_distance, std::span<const double>(frame->crop_density.data(), zones));
+            odometers, std::span<const double>(frame->crop_density.data(), zones));
         const Nanos scheduled = io_.clock->now();
         status.last_latency_ms = seconds(scheduled - frame->capture_time) * 1e3;
         ++status.frames_scheduled;
@@ -480,15 +526,15 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
         // The plan holds densities: the rate law says which of them open the valve, so ground
         // that needs no spray closes the valve with the closing lead.
         const auto sprays = [&](double planned_density) {
-          return control::spray_decision(params.law, params.line, planned_density,
-                                         status.speed_m_per_s, compensation_pressure)
+          return control::spray_decision(params.law, params.line, planned_density, nozzle_speed[n],
+                                         compensation_pressure)
                      .duty_pct > 0.0;
         };
         const std::size_t local = n - static_cast<std::size_t>(worker.first_nozzle);
-        density =
-            worker.scheduler->value_at(local, status.distance_m, status.speed_m_per_s, sprays);
+        const double nozzle_odometer = status.distance_m + arc_extra_m[n];
+        density = worker.scheduler->value_at(local, nozzle_odometer, nozzle_speed[n], sprays);
         status.crop_density[n] =
-            worker.crop_scheduler->duty_at(local, status.distance_m, status.speed_m_per_s);
+            worker.crop_scheduler->duty_at(local, nozzle_odometer, nozzle_speed[n]);
       }
       status.density[n] = density;
       // A camera whose weed model fails closes its own nozzles until it processes frames again.
@@ -496,7 +542,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       double duty = 0;
       if (spray && !blind) {
         const control::SprayDecision decision = control::spray_decision(
-            params.law, params.line, density, status.speed_m_per_s, compensation_pressure);
+            params.law, params.line, density, nozzle_speed[n], compensation_pressure);
         duty = decision.duty_pct;
         if (!quantisers_.empty()) {
           duty = control::clamp_duty_for_flow_pct(
@@ -529,7 +575,9 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
     for (std::size_t n = 0; n < nozzles; ++n) status.duty_pct[n] = command.duty_pct[n];
 
     if (spray && status.speed_m_per_s > 0) {
-      const double area = status.speed_m_per_s * dt * boom_width_m;
+      double nozzle_speed_sum = 0;  // the boom's swept width x speed, each nozzle on its arc
+      for (std::size_t n = 0; n < nozzles; ++n) nozzle_speed_sum += nozzle_speed[n];
+      const double area = nozzle_speed_sum * dt * config_.boom.nozzle_width_m;
       status.area_m2 += area;
       status.uniform_volume_l += control::nominal_dose_l_per_m2(params.law) * area;
     }
@@ -549,7 +597,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
         record.duty_pct[n] = static_cast<float>(status.duty_pct[n]);
         record.density[n] = static_cast<float>(status.density[n]);
         record.crop_density[n] = static_cast<float>(status.crop_density[n]);
-        record.nozzle_speed_m_per_s[n] = static_cast<float>(status.speed_m_per_s);
+        record.nozzle_speed_m_per_s[n] = static_cast<float>(nozzle_speed[n]);
         record.nozzle_flow_l_per_min[n] = static_cast<float>(control::flow_for_duty_l_per_min(
             params.line, status.duty_pct[n], pressure.pressure_mpa));
       }
@@ -558,6 +606,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
         record.fix_time = gnss.sample_time;
         record.fix_usable = speed_in.gnss_usable;
       }
+      record.yaw_rate_deg_per_s = status.yaw_rate_deg_per_s;
       records_.try_push(record);  // a full queue drops the record (the writer is stuck)
     }
     status.time = now;
