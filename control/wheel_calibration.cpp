@@ -21,6 +21,20 @@ double ground_distance_m(double lat1_deg, double lon1_deg, double lat2_deg,
   return std::hypot(north, east);
 }
 
+std::string_view to_string(WheelCalibrationState state) noexcept {
+  switch (state) {
+    case WheelCalibrationState::kIdle:
+      return "idle";
+    case WheelCalibrationState::kWaitingForRun:
+      return "waiting";
+    case WheelCalibrationState::kRunning:
+      return "running";
+    case WheelCalibrationState::kDone:
+      return "done";
+  }
+  return "idle";
+}
+
 void WheelCalibration::start() noexcept {
   status_ = WheelCalibrationStatus{};
   status_.state = WheelCalibrationState::kWaitingForRun;

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string_view>
 
 namespace weedspray::control {
 
@@ -21,6 +22,8 @@ struct WheelCalibrationConfig {
 };
 
 enum class WheelCalibrationState : std::uint8_t { kIdle, kWaitingForRun, kRunning, kDone };
+// "idle", "waiting" (for a straight run at speed), "running", "done"
+std::string_view to_string(WheelCalibrationState state) noexcept;
 
 struct WheelCalibrationStatus {
   WheelCalibrationState state = WheelCalibrationState::kIdle;

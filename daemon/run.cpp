@@ -411,6 +411,23 @@ class Daemon final : public CommandHandler {
     return live_view_->request(camera, backends_.clock->now(), std::move(reply));
   }
 
+  CommandResult calibrate_wheel(double run_distance_m, std::uint64_t& request) override {
+    if (!(run_distance_m >= 10.0 && run_distance_m <= 5000.0)) {
+      return {kErrorInvalidArgument,
+              "CalibrateWheel: the straight run must be 10..5000 m (100 m or more for an "
+              "autonomous receiver, 1.5 m position error at each end)"};
+    }
+    if (!sprayer_) return {kErrorUnavailable, "CalibrateWheel: the sprayer is not running yet"};
+    request = sprayer_->start_wheel_calibration(run_distance_m);
+    if (request == 0) {
+      return {kErrorNotPermitted,
+              "CalibrateWheel: needs a GNSS receiver ([gnss] enabled = true) and a wheel sensor "
+              "(wheel.source = \"pulses\")"};
+    }
+    spdlog::info("wheel calibration {} started: {:.0f} m straight run", request, run_distance_m);
+    return {};
+  }
+
   CommandResult inject_sim_fault(const std::string& name) override {
     if (!backends_.with_plant)
       return {kErrorNotPermitted, "InjectSimFault: only a simulation (--sim) takes faults"};
@@ -737,6 +754,12 @@ class Daemon final : public CommandHandler {
     s.speed_m_per_s = control.speed_m_per_s;
     s.speed_source = std::string(to_string(control.speed_source));
     s.yaw_rate_deg_per_s = control.yaw_rate_deg_per_s;
+    const WheelCalibrationReport calibration = sprayer_->wheel_calibration();
+    s.wheel_calibration_request = calibration.request;
+    s.wheel_calibration_state = std::string(to_string(calibration.status.state));
+    s.wheel_calibration_distance_m = calibration.status.distance_m;
+    s.wheel_calibration_pulses = calibration.status.pulses;
+    s.wheel_calibration_pulses_per_metre = calibration.status.pulses_per_metre;
     if (control.speed_fell_back) s.speed_source += " (gnss fix lost)";
     s.distance_m = control.distance_m;
     if (backends_.gnss != nullptr) {

@@ -48,6 +48,7 @@ Backends make_sim_backends(const Config& config, const Options& options) {
   auto& plant = rig_config.plant;
   plant.nozzle_count = config.boom.nozzles;
   plant.wheel.nominal_pulses_per_m = config.wheel.pulses_per_metre;
+  plant.wheel.slip = config.sim.wheel_slip_pct / 100.0;
   plant.flow_meter.nominal_pulses_per_l = config.flow.pulses_per_litre;
   plant.pressure_sensor.full_scale_mpa = config.pressure.sensor_max_mpa;
   plant.pressure_sensor.shunt_ohms = config.adc.shunt_ohms;

@@ -74,6 +74,12 @@ std::vector<const char*> changed_properties(const Status& a, const Status& b) {
   check(a.gnss_satellites != b.gnss_satellites, "GnssSatellites");
   check(a.gnss_utc != b.gnss_utc, "GnssTime");
   check(a.yaw_rate_deg_per_s != b.yaw_rate_deg_per_s, "YawRate");
+  check(a.wheel_calibration_request != b.wheel_calibration_request ||
+            a.wheel_calibration_state != b.wheel_calibration_state ||
+            a.wheel_calibration_distance_m != b.wheel_calibration_distance_m ||
+            a.wheel_calibration_pulses != b.wheel_calibration_pulses ||
+            a.wheel_calibration_pulses_per_metre != b.wheel_calibration_pulses_per_metre,
+        "WheelCalibration");
   return names;
 }
 
@@ -106,6 +112,7 @@ const sd_bus_vtable kVtable[] = {
     WS_PROPERTY("GnssSatellites", "u"),
     WS_PROPERTY("GnssTime", "s"),
     WS_PROPERTY("YawRate", "d"),
+    WS_PROPERTY("WheelCalibration", "(tsdtd)"),
     SD_BUS_METHOD("Start", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("Stop", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("SetPressureSetpoint", "d", "", DbusService::method, kMethodFlags),
@@ -113,6 +120,7 @@ const sd_bus_vtable kVtable[] = {
     SD_BUS_METHOD("ClearAlarms", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("InjectSimFault", "s", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("Snapshot", "u", "ay", DbusService::method, kMethodFlags),
+    SD_BUS_METHOD("CalibrateWheel", "d", "t", DbusService::method, kMethodFlags),
     SD_BUS_SIGNAL("AlarmRaised", "s", 0),
     SD_BUS_SIGNAL("AlarmCleared", "s", 0),
     SD_BUS_VTABLE_END,
@@ -201,6 +209,11 @@ int DbusService::get_property(sd_bus*, const char*, const char*, const char* pro
   if (p == "GnssHdop") return sd_bus_message_append(reply, "d", s.gnss_hdop);
   if (p == "GnssSatellites") return sd_bus_message_append(reply, "u", s.gnss_satellites);
   if (p == "YawRate") return sd_bus_message_append(reply, "d", s.yaw_rate_deg_per_s);
+  if (p == "WheelCalibration") {
+    return sd_bus_message_append(reply, "(tsdtd)", s.wheel_calibration_request,
+                                 s.wheel_calibration_state.c_str(), s.wheel_calibration_distance_m,
+                                 s.wheel_calibration_pulses, s.wheel_calibration_pulses_per_metre);
+  }
   if (p == "GnssTime") return sd_bus_message_append(reply, "s", s.gnss_utc.c_str());
   return sd_bus_error_setf(error, SD_BUS_ERROR_UNKNOWN_PROPERTY, "no property %s", property);
 }
@@ -258,6 +271,13 @@ int dispatch(sd_bus_message* message, CommandHandler& handler, sd_bus_error* err
     if (r < 0) return r;
     result = handler.snapshot(camera, deferred_snapshot_reply(message));
     if (result.ok()) return 1;  // the handler replies once the frame is there
+  } else if (member == "CalibrateWheel") {
+    double distance_m = 0;
+    const int r = sd_bus_message_read(message, "d", &distance_m);
+    if (r < 0) return r;
+    std::uint64_t request = 0;
+    result = handler.calibrate_wheel(distance_m, request);
+    if (result.ok()) return sd_bus_reply_method_return(message, "t", request);
   } else {
     return sd_bus_error_setf(error, SD_BUS_ERROR_UNKNOWN_METHOD, "no method %s",
                              std::string(member).c_str());

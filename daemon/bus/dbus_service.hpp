@@ -6,7 +6,9 @@
 //     VisionLatencyMs d, VisionLatencyP99Ms d, ControlOverruns t, Mode s
 //   methods: Start(), Stop(), SetPressureSetpoint(d), ReloadConfig(), ClearAlarms(),
 //     InjectSimFault(s) (simulation only), Snapshot(u camera) -> ay PNG (live view, at most
-//     2 a second; the reply comes when the camera's next frame is processed)
+//     2 a second; the reply comes when the camera's next frame is processed),
+//     CalibrateWheel(d metres) -> t request (wheel pulses per metre from GNSS over a straight
+//     run; the WheelCalibration property reports it)
 //   signals: AlarmRaised(s), AlarmCleared(s)
 #pragma once
 

@@ -1,10 +1,11 @@
 // sprayctl: a small command-line client of weedsprayd over D-Bus (sd-bus).
 //   sprayctl [--user] [--json] status|monitor|start|stop|set-pressure
-//   MPA|alarms|clear-alarms|reload|snapshot [--camera N] OUT.png
+//   MPA|alarms|clear-alarms|reload|snapshot [--camera N] OUT.png|calibrate-wheel [--distance M]
 #include <systemd/sd-bus.h>
 #include <CLI/CLI.hpp>
 
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -16,6 +17,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <variant>
 #include <vector>
 
@@ -148,6 +150,18 @@ Value read_variant(sd_bus_message* m) {
     double x[3] = {0, 0, 0};
     check(sd_bus_message_read(m, "(ddd)", &x[0], &x[1], &x[2]), "read (ddd)");
     value = std::vector<double>(x, x + 3);
+  } else if (sig == "(tsdtd)") {  // WheelCalibration: request, state, metres, pulses, pulses/m
+    std::uint64_t request = 0, pulses = 0;
+    const char* state = nullptr;
+    double metres = 0, per_metre = 0;
+    check(sd_bus_message_read(m, "(tsdtd)", &request, &state, &metres, &pulses, &per_metre),
+          "read (tsdtd)");
+    std::ostringstream text;
+    text << std::fixed << std::setprecision(3);
+    text << "request " << request << ": " << state << ", " << metres << " m, " << pulses
+         << " pulses";
+    if (std::string_view(state) == "done") text << ", " << per_metre << " pulses/m";
+    value = text.str();
   } else if (sig == "b") {
     int b = 0;
     check(sd_bus_message_read(m, "b", &b), "read b");
@@ -226,6 +240,43 @@ class Client {
                                            &reply, signature, argument);
     if (r < 0) fail(error, r);
     sd_bus_message_unref(reply);
+  }
+
+  // Wheel calibration: starts one, returns its request number.
+  std::uint64_t calibrate_wheel(double run_distance_m) {
+    sd_bus_error error = SD_BUS_ERROR_NULL;
+    sd_bus_message* reply = nullptr;
+    const int r = sd_bus_call_method(bus_, kBusName, kObjectPath, kInterface, "CalibrateWheel",
+                                     &error, &reply, "d", run_distance_m);
+    if (r < 0) fail(error, r);
+    std::uint64_t request = 0;
+    const int read = sd_bus_message_read(reply, "t", &request);
+    sd_bus_message_unref(reply);
+    check(read, "read the request");
+    return request;
+  }
+
+  struct WheelCalibration {
+    std::uint64_t request = 0;
+    std::string state;
+    double distance_m = 0;
+    std::uint64_t pulses = 0;
+    double pulses_per_metre = 0;
+  };
+  WheelCalibration wheel_calibration() {
+    sd_bus_error error = SD_BUS_ERROR_NULL;
+    sd_bus_message* reply = nullptr;
+    const int r = sd_bus_get_property(bus_, kBusName, kObjectPath, kInterface, "WheelCalibration",
+                                      &error, &reply, "(tsdtd)");
+    if (r < 0) fail(error, r);
+    WheelCalibration c;
+    const char* state = nullptr;
+    const int read = sd_bus_message_read(reply, "(tsdtd)", &c.request, &state, &c.distance_m,
+                                         &c.pulses, &c.pulses_per_metre);
+    if (read >= 0) c.state = state;
+    sd_bus_message_unref(reply);
+    check(read, "read WheelCalibration");
+    return c;
   }
 
   // The live view: camera `camera`'s next frame with its overlay, as PNG bytes.
@@ -352,6 +403,38 @@ void print_status(const Properties& p, bool json) {
             << "Alarms:        " << get("Alarms") << "\n";
 }
 
+// Starts a calibration and follows it until done, printing each change of state.
+int run_wheel_calibration(Client& client, double run_distance_m, double timeout_s) {
+  const std::uint64_t request = client.calibrate_wheel(run_distance_m);
+  std::cout << "wheel calibration " << request << ": drive straight for " << run_distance_m
+            << " m at working speed\n"
+            << std::flush;
+  std::string last_state;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (std::chrono::steady_clock::now() < deadline) {
+    const Client::WheelCalibration c = client.wheel_calibration();
+    if (c.request == request) {
+      if (c.state != last_state) {
+        std::cout << "  " << c.state
+                  << (c.state == "waiting" ? " (for a straight run at speed)" : "") << "\n"
+                  << std::flush;
+        last_state = c.state;
+      }
+      if (c.state == "done") {
+        std::cout << std::fixed << std::setprecision(3) << c.pulses << " pulses over "
+                  << c.distance_m << " m\n"
+                  << "[wheel]\npulses_per_metre = " << c.pulses_per_metre << "\n";
+        return 0;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  std::cerr << "sprayctl: calibrate-wheel: no straight run of " << run_distance_m << " m within "
+            << timeout_s << " s (state " << (last_state.empty() ? "not started" : last_state)
+            << ")\n";
+  return 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -379,6 +462,17 @@ int main(int argc, char** argv) {
   std::string snapshot_path;
   snapshot->add_option("--camera", camera, "camera index (0 = the first [[camera]])");
   snapshot->add_option("OUT", snapshot_path, "PNG file to write")->required();
+  auto* calibrate_wheel = app.add_subcommand(
+      "calibrate-wheel",
+      "measure the wheel sensor's pulses per metre with the GNSS receiver: drive straight at a "
+      "steady working speed; a turn or a stop starts the run again. Prints the value for "
+      "wheel.pulses_per_metre");
+  double run_distance_m = 100.0;
+  double calibration_timeout_s = 600.0;
+  calibrate_wheel->add_option("--distance", run_distance_m, "straight run, metres (10..5000)")
+      ->capture_default_str();
+  calibrate_wheel->add_option("--timeout", calibration_timeout_s, "give up after, seconds")
+      ->capture_default_str();
   for (auto* sub : {status, monitor, alarms}) sub->add_flag("--json", json, "JSON output");
   CLI11_PARSE(app, argc, argv);
 
@@ -405,6 +499,8 @@ int main(int argc, char** argv) {
       client.call("ClearAlarms");
     } else if (*reload) {
       client.call("ReloadConfig");
+    } else if (*calibrate_wheel) {
+      return run_wheel_calibration(client, run_distance_m, calibration_timeout_s);
     } else if (*snapshot) {
       // Written here, by the operator's own process: the daemon runs as user weedspray and
       // never writes where a caller asks.

@@ -44,6 +44,14 @@ struct Status {
   std::string gnss_utc;  // ISO 8601, "" = unknown
   // Turn compensation's yaw rate, deg/s clockwise (0: off, straight, or too slow for a course).
   double yaw_rate_deg_per_s = 0;
+  // The latest wheel calibration (CalibrateWheel): its request number (0: none yet), state
+  // (idle, waiting for a straight run, running, done), straight distance and pulses so far, and
+  // the result in pulses per metre once done.
+  std::uint64_t wheel_calibration_request = 0;
+  std::string wheel_calibration_state = "idle";
+  double wheel_calibration_distance_m = 0;
+  std::uint64_t wheel_calibration_pulses = 0;
+  double wheel_calibration_pulses_per_metre = 0;
 
   bool operator==(const Status&) const = default;
 };
@@ -79,6 +87,9 @@ class CommandHandler {
   // returned at once (and `reply` never called); once accepted, `reply` is called exactly
   // once, later, from the main thread (the frame comes from the camera thread).
   virtual CommandResult snapshot(std::uint32_t camera, SnapshotReply reply) = 0;
+  // Wheel calibration from GNSS over a straight run of `run_distance_m`: sets `request` to the
+  // number the WheelCalibration property reports it under.
+  virtual CommandResult calibrate_wheel(double run_distance_m, std::uint64_t& request) = 0;
 };
 
 }  // namespace weedspray::daemon

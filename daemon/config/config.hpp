@@ -252,6 +252,7 @@ struct SimSection {
   double speed_period_s;
   std::string images_dir;  // "" = the bundled field images
   int seed;
+  double wheel_slip_pct;  // the simulated wheel's slip (calibrate-wheel's truth)
 };
 
 // Where a key's value came from (file and line; line 0 = built-in default).

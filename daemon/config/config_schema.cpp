@@ -432,6 +432,10 @@ const std::vector<KeySpec<Config>>& config_keys() {
     {WS_KEY(sim, images_dir), std::string(""), 0, 0, "path",
      "field images used as the simulated camera (empty = the bundled ones)"},
     {WS_KEY(sim, seed), 1, 0, INT_MAX, "", "random seed of the simulation"},
+    {WS_KEY(sim, wheel_slip_pct), 0.0, -20, 45, "%",
+     "the simulated wheel sensor turns this much more than the ground it covers (a driven "
+     "wheel spinning > 0, a trailed wheel skidding < 0): its pulses per ground metre are "
+     "wheel.pulses_per_metre x (1 + slip), what sprayctl calibrate-wheel measures"},
   };
   // clang-format on
   return keys;

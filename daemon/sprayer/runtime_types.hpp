@@ -7,6 +7,7 @@
 #include <cstdint>
 
 #include "control/spray_rate_law.hpp"
+#include "control/wheel_calibration.hpp"
 #include "daemon/sprayer/ground_speed.hpp"
 #include "io/gnss.hpp"
 #include "io/valve_pwm_driver.hpp"
@@ -102,6 +103,12 @@ struct ControlStatus {
   SpeedSource speed_source = SpeedSource::kFixed;  // where speed_m_per_s came from this cycle
   bool speed_fell_back = false;                    // speed.source = "gnss" without a usable fix
   double yaw_rate_deg_per_s = 0;  // turn compensation's yaw rate, clockwise (0: off or straight)
+};
+
+// gpsd thread -> main thread: the wheel calibration of request `request` (0: none asked).
+struct WheelCalibrationReport {
+  std::uint64_t request = 0;
+  control::WheelCalibrationStatus status{};
 };
 
 // Control loop -> as-applied log writer, one per PWM period.

@@ -1,6 +1,7 @@
 #include "daemon/sprayer/sprayer.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <stdexcept>
 
@@ -716,14 +717,45 @@ void Sprayer::tank_loop(std::stop_token stop) noexcept {
 void Sprayer::gnss_loop(std::stop_token stop) noexcept {
   // Each wait is short so a stop request is honoured promptly; the receiver reconnects itself.
   constexpr Nanos kWait = 100ms;
+  const Nanos lost_fix_timeout = from_seconds(config_.gnss.lost_fix_timeout_s);
+  control::WheelCalibration calibration(control::WheelCalibrationConfig{});
+  std::uint64_t calibration_requests_served = 0;
   while (!stop.stop_requested()) {
     io::GnssFix fix;
     const bool got = io_.gnss->next_fix(fix, kWait);
+    // The wheel counter as the fix arrives: the same latency at both ends of a run cancels.
+    const std::uint64_t wheel_count = io_.wheel != nullptr ? io_.wheel->snapshot().count : 0;
+    const Nanos arrived = io_.clock->now();
     const io::GnssLinkStats link = io_.gnss->stats();
-    if (got)
-      gnss_.publish(GnssSample{fix, io_.clock->now(), link.connect_failures + link.disconnects});
+    if (got) gnss_.publish(GnssSample{fix, arrived, link.connect_failures + link.disconnects});
     gnss_link_.publish(link);
+    const std::uint64_t requests = wheel_calibration_requests_.load();
+    if (requests != calibration_requests_served) {
+      calibration_requests_served = requests;
+      control::WheelCalibrationConfig config;
+      config.run_distance_m = std::bit_cast<double>(wheel_calibration_distance_bits_.load());
+      calibration = control::WheelCalibration(config);
+      calibration.start();
+      wheel_calibration_.publish({requests, calibration.status()});
+    }
+    if (got && calibration.status().state != control::WheelCalibrationState::kIdle &&
+        calibration.status().state != control::WheelCalibrationState::kDone) {
+      const GnssSample sample{fix, arrived, 0};
+      control::CalibrationFix c;
+      c.usable = gnss_fix_usable(sample, arrived, lost_fix_timeout);
+      c.latitude_deg = fix.latitude_deg;
+      c.longitude_deg = fix.longitude_deg;
+      c.course_deg = fix.course_deg;
+      c.speed_m_per_s = fix.speed_m_per_s;
+      wheel_calibration_.publish({requests, calibration.add_fix(c, wheel_count)});
+    }
   }
+}
+
+std::uint64_t Sprayer::start_wheel_calibration(double run_distance_m) noexcept {
+  if (io_.gnss == nullptr || io_.wheel == nullptr) return 0;
+  wheel_calibration_distance_bits_.store(std::bit_cast<std::uint64_t>(run_distance_m));
+  return wheel_calibration_requests_.fetch_add(1) + 1;
 }
 
 }  // namespace weedspray::daemon

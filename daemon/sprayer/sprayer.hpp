@@ -22,6 +22,7 @@
 #include "control/pressure_controller.hpp"
 #include "control/pwm_schedule.hpp"
 #include "control/spray_rate_law.hpp"
+#include "control/wheel_calibration.hpp"
 #include "daemon/backends/backends.hpp"
 #include "daemon/config/config.hpp"
 #include "daemon/sprayer/ground_speed.hpp"
@@ -71,6 +72,13 @@ class Sprayer {
   // The latest GNSS fix (mode none and sample_time 0 until the first) and the gpsd link.
   GnssSample gnss() const noexcept { return gnss_.read(); }
   io::GnssLinkStats gnss_link() const noexcept { return gnss_link_.read(); }
+  // Wheel calibration from GNSS (control/wheel_calibration.hpp), run by the gpsd thread on
+  // each fix with the wheel counter read as the fix arrives. Starting forgets an earlier
+  // result.
+  // Returns the request's number (its report carries it), 0 when there is no receiver or no
+  // wheel sensor to calibrate.
+  std::uint64_t start_wheel_calibration(double run_distance_m) noexcept;
+  WheelCalibrationReport wheel_calibration() const noexcept { return wheel_calibration_.read(); }
   io::ValvePwmStats pwm() const noexcept { return pwm_driver_->stats(); }
   io::AnalogIoStats analog_io() const noexcept { return analog_io_->stats(); }
   // Failed output writes of the real-time threads (unsafe_error left 0).
@@ -137,6 +145,11 @@ class Sprayer {
   io::LatestValue<io::TankLevelSample> tank_;
   io::LatestValue<GnssSample> gnss_;
   io::LatestValue<io::GnssLinkStats> gnss_link_;
+  io::LatestValue<WheelCalibrationReport> wheel_calibration_;
+  // start_wheel_calibration(): the run distance (as bits of a double) and a request counter
+  // the gpsd thread compares with the last one it served.
+  std::atomic<std::uint64_t> wheel_calibration_distance_bits_{0};
+  std::atomic<std::uint64_t> wheel_calibration_requests_{0};
   SpeedSource speed_source_ = SpeedSource::kWheel;
   std::unique_ptr<control::PressureController> controller_;
   std::unique_ptr<io::AnalogIoWorker> analog_io_;

@@ -31,6 +31,12 @@ class Handler final : public weedspray::daemon::CommandHandler {
       return {weedspray::daemon::kErrorInvalidArgument, "unknown fault"};
     return {};
   }
+  CommandResult calibrate_wheel(double run_distance_m, std::uint64_t& request) override {
+    if (!(run_distance_m >= 10.0 && run_distance_m <= 5000.0))
+      return {weedspray::daemon::kErrorInvalidArgument, "out of range"};
+    request = 1;
+    return {};
+  }
   // One camera; its reply at once (the daemon's comes from a later main-loop tick).
   CommandResult snapshot(std::uint32_t camera, weedspray::daemon::SnapshotReply reply) override {
     if (camera != 0) return {weedspray::daemon::kErrorInvalidArgument, "no such camera"};
@@ -40,9 +46,9 @@ class Handler final : public weedspray::daemon::CommandHandler {
   }
 };
 
-constexpr const char* kMembers[] = {"Start",        "Stop",        "SetPressureSetpoint",
-                                    "ReloadConfig", "ClearAlarms", "InjectSimFault",
-                                    "Get",          "SetPressure", "Snapshot"};
+constexpr const char* kMembers[] = {
+    "Start",          "Stop", "SetPressureSetpoint", "ReloadConfig", "ClearAlarms",
+    "InjectSimFault", "Get",  "SetPressure",         "Snapshot",     "CalibrateWheel"};
 
 }  // namespace
 

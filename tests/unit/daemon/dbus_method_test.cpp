@@ -33,6 +33,11 @@ class RecordingHandler final : public CommandHandler {
     snapshot_reply = std::move(reply);
     return {};
   }
+  CommandResult calibrate_wheel(double run_distance_m, std::uint64_t& request) override {
+    if (run_distance_m < 10) return {kErrorInvalidArgument, "too short"};
+    request = 7;
+    return {};
+  }
   std::int64_t snapshot_camera = -1;
   SnapshotReply snapshot_reply;
   int starts = 0;
