@@ -1,0 +1,195 @@
+#!/usr/bin/env bash
+# Turn compensation and the GNSS wheel calibration, end to end: weedsprayd --sim with an
+# 8-nozzle, 4 m boom on a real gpsd fed by gpsfake with the 5 Hz turn track
+# (tests/data/gnss/turn_track.nmea, tools/gnss/make_turn_track.py: 16 m north, a 90-degree
+# right turn on a 12 m circle, 16 m east) over a field of uniform weed density, twice:
+#  1. [turn] compensation = true: on the turn the inner nozzle's volume per area (from its duty
+#     by the calibrated line at the logged pressure, over the ground its logged patch positions
+#     swept) equals the outer's within 5 %; and `sprayctl calibrate-wheel --distance 12` on the
+#     first straight measures the simulated wheel's pulses per metre (100 x 1.05 slip) within 2 %;
+#  2. compensation = false: the same figure differs by the ratio of the nozzles' radii
+#     (13.75 / 10.25 = 1.34), more than 20 %.
+# usage: turn_sim_test.sh BUILD_DIR SOURCE_DIR
+set -euo pipefail
+BUILD=$(realpath "$1")
+SOURCE=$(realpath "$2")
+WEEDSPRAYD=$BUILD/daemon/weedsprayd
+SPRAYCTL=$BUILD/daemon/sprayctl
+PY=/usr/bin/python3
+T=$(mktemp -d /tmp/weedspray-turn-test.XXXXXX)
+DAEMON_PID=
+BUS_PID=
+GPSFAKE_PID=
+
+cleanup() {
+  [ -n "$DAEMON_PID" ] && kill -KILL "$DAEMON_PID" 2>/dev/null || true
+  [ -n "$GPSFAKE_PID" ] && kill -KILL -- "-$GPSFAKE_PID" 2>/dev/null || true
+  [ -n "$BUS_PID" ] && kill "$BUS_PID" 2>/dev/null || true
+  rm -rf "$T"
+}
+trap cleanup EXIT
+fail() {
+  echo "FAIL: $*" >&2
+  for log in "$T"/*/daemon.log; do echo "--- $log (tail) ---" >&2; tail -n 20 "$log" >&2; done
+  exit 1
+}
+[ -x /usr/bin/gpsfake ] && [ -x /usr/sbin/gpsd ] ||
+  fail "gpsd and gpsfake are required (./dev deps installs them)"
+
+# A field of uniform weed density: an 8 px green/soil checkerboard (half of every zone green).
+mkdir -p "$T/field"
+$PY - "$T/field/checker.bmp" <<'PYEOF'
+import struct, sys
+w, h = 640, 400
+row = bytearray()
+rows = []
+for y in range(h):
+    line = bytearray()
+    for x in range(w):
+        line += bytes((0, 150, 0)) if ((x // 8) + (y // 8)) % 2 == 0 else bytes((50, 70, 100))
+    rows.append(bytes(line))
+data = b"".join(rows)
+header = b"BM" + struct.pack("<IHHI", 54 + len(data), 0, 0, 54) + struct.pack(
+    "<IiiHHIIiiII", 40, w, h, 1, 24, 0, len(data), 2835, 2835, 0, 0)
+open(sys.argv[1], "wb").write(header + data)
+PYEOF
+
+dbus-daemon --session --fork --nopidfile --print-address=3 --print-pid=4 3>"$T/bus.addr" 4>"$T/bus.pid"
+export DBUS_SESSION_BUS_ADDRESS=$(cat "$T/bus.addr")
+BUS_PID=$(cat "$T/bus.pid")
+
+# run COMPENSATION: one drive along the track; the as-applied log in $T/$1/log.
+run() {
+  local dir=$T/$1
+  mkdir -p "$dir/state"
+  local port
+  port=$($PY -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+  cat >"$dir/weedspray.toml" <<TOML
+[boom]
+nozzles = 8
+nozzle_width_m = 0.5
+[[camera]]
+width = 640
+height = 400
+[spray]
+nominal_flow_l_per_min = 0.8
+nominal_speed_m_per_s = 2.0
+calibration_slope_l_per_min_per_pct = 0.00393
+calibration_offset_l_per_min = 0.217
+calibration_pressure_mpa = 0.4
+[gnss]
+enabled = true
+host = "127.0.0.1"
+port = $port
+first_fix_timeout_s = 30.0
+[speed]
+source = "gnss"
+[turn]
+compensation = $1
+[sim]
+speed_profile = "constant"
+speed_max_m_per_s = 2.0
+images_dir = "$T/field"
+wheel_slip_pct = 5.0
+[log]
+dir = "$dir/log"
+TOML
+  "$WEEDSPRAYD" --sim --user --config "$dir/weedspray.toml" --state-dir "$dir/state" \
+    >"$dir/daemon.log" 2>&1 &
+  DAEMON_PID=$!
+  for _ in $(seq 1 100); do
+    "$SPRAYCTL" --user status >/dev/null 2>&1 && break
+    kill -0 "$DAEMON_PID" 2>/dev/null || fail "weedsprayd exited"
+    sleep 0.1
+  done
+  "$SPRAYCTL" --user start || fail "sprayctl start"
+  if [ "$1" = true ]; then
+    "$SPRAYCTL" --user calibrate-wheel --distance 12 --timeout 40 >"$dir/calibration.txt" 2>&1 &
+    CAL_PID=$!
+  fi
+  # The track in real time: 3 sentences an epoch, 0.2 s an epoch.
+  setsid /usr/bin/gpsfake -1 -q -c 0.0667 -W 2 -P "$port" \
+    "$SOURCE/tests/data/gnss/turn_track.nmea" >"$dir/gpsfake.log" 2>&1 &
+  GPSFAKE_PID=$!
+  # Drive until the track's stop (15:00:34.8), then stop spraying and the daemon.
+  local done=
+  for _ in $(seq 1 600); do
+    if "$SPRAYCTL" --user status --json 2>/dev/null |
+      $PY -c 'import json,sys; sys.exit(0 if json.load(sys.stdin)["GnssTime"] >= "2026-06-25T15:00:34" else 1)'; then
+      done=1
+      break
+    fi
+    kill -0 "$DAEMON_PID" 2>/dev/null || fail "weedsprayd exited"
+    sleep 0.1
+  done
+  [ -n "$done" ] || fail "the track's end never came ($1)"
+  if [ "$1" = true ]; then
+    wait "$CAL_PID" || fail "calibrate-wheel: $(cat "$dir/calibration.txt")"
+  fi
+  kill -TERM "$DAEMON_PID"
+  wait "$DAEMON_PID" || fail "weedsprayd exit status $? ($1)"
+  DAEMON_PID=
+  kill -KILL -- "-$GPSFAKE_PID" 2>/dev/null || true
+  GPSFAKE_PID=
+}
+
+run true
+run false
+
+# Volume per area of nozzle 0 (left: the outer) and 7 (right: the inner) on the steady part of
+# the turn (the track turns 15:00:08.0-15:00:17.4; the yaw rate settles within ~1.5 s).
+$PY - "$T" <<'PYEOF' || fail "volume per area on the turn"
+import csv, glob, math, sys
+T = sys.argv[1]
+A, B, P_CAL = 0.00393, 0.217, 0.4  # the test's calibrated line
+W = 0.5
+
+def ground(lat1, lon1, lat2, lon2):  # metres, local WGS84 radii (as control/wheel_calibration)
+    a, e2 = 6378137.0, 6.69437999014e-3
+    phi = math.radians((lat1 + lat2) / 2)
+    w = 1 - e2 * math.sin(phi) ** 2
+    m, n = a * (1 - e2) / w ** 1.5, a / math.sqrt(w)
+    return math.hypot(math.radians(lat2 - lat1) * m, math.radians(lon2 - lon1) * n * math.cos(phi))
+
+def per_area(run, nozzle):
+    rows = []
+    for path in sorted(glob.glob(f"{T}/{run}/log/as-applied-*.csv")):
+        with open(path) as f:
+            rows += [r for r in csv.DictReader(f)]
+    volume = area = 0.0
+    prev = None
+    for r in rows:
+        inside = "2026-06-25T15:00:10" <= r["utc"] <= "2026-06-25T15:00:16.5"
+        lat, lon = r.get(f"latitude_deg_{nozzle}"), r.get(f"longitude_deg_{nozzle}")
+        if not inside or not lat:
+            prev = None
+            continue
+        t, lat, lon = float(r["time_s"]), float(lat), float(lon)
+        if prev is not None:
+            duty = float(r[f"duty_pct_{nozzle}"])
+            flow = 0.0 if duty <= 0 else (A * min(duty, 100) + B) * math.sqrt(
+                max(float(r["pressure_mpa"]), 0) / P_CAL)
+            volume += flow / 60.0 * (t - prev[0])
+            area += ground(prev[1], prev[2], lat, lon) * W
+        prev = (t, lat, lon)
+    if area <= 0:
+        sys.exit(f"{run}: no positioned records of nozzle {nozzle} on the turn")
+    return volume / area * 10000.0, area
+
+results = {}
+for run in ("true", "false"):
+    outer, outer_area = per_area(run, 0)
+    inner, inner_area = per_area(run, 7)
+    results[run] = inner / outer
+    print(f"compensation={run}: outer {outer:.1f} L/ha over {outer_area:.2f} m2, inner "
+          f"{inner:.1f} L/ha over {inner_area:.2f} m2, inner/outer {inner / outer:.3f}")
+ok = abs(results["true"] - 1) <= 0.05 and results["false"] - 1 > 0.20
+sys.exit(0 if ok else 1)
+PYEOF
+
+# The wheel: 100 pulses/m configured, the simulated wheel slips 5 %: 105 per ground metre.
+cat "$T/true/calibration.txt"
+ppm=$(sed -n 's/^pulses_per_metre = //p' "$T/true/calibration.txt")
+$PY -c "import sys; v=float('$ppm'); sys.exit(0 if abs(v - 105.0) <= 2.1 else 1)" ||
+  fail "calibrate-wheel measured $ppm pulses/m, the simulated wheel gives 105"
+echo "PASS"
