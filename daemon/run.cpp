@@ -132,9 +132,12 @@ class Daemon final : public CommandHandler {
       base_totals_ = load_totals(totals_file_, &totals_error);
     }
     if (!totals_error.empty()) spdlog::warn("totals not restored: {}", totals_error);
-    log_ = std::make_unique<AsAppliedLog>(config_.as_applied_dir(),
-                                          static_cast<std::uintmax_t>(config_.log.rotate_bytes),
-                                          config_.log.keep_files);
+    log_ = std::make_unique<AsAppliedLog>(
+        config_.as_applied_dir(), static_cast<std::uintmax_t>(config_.log.rotate_bytes),
+        config_.log.keep_files,
+        NozzlePlacement{
+            config_.boom.nozzle_width_m,
+            {config_.gnss.antenna_ahead_of_nozzles_m, config_.gnss.antenna_right_of_centre_m}});
 
     check(sd_event_default(&event_), "sd_event_default");
     for (int signal : {SIGTERM, SIGINT, SIGHUP}) {

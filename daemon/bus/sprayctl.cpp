@@ -1,7 +1,9 @@
 // sprayctl: a small command-line client of weedsprayd over D-Bus (sd-bus).
 //   sprayctl [--user] [--json] status|monitor|start|stop|set-pressure
 //   MPA|alarms|clear-alarms|reload|snapshot [--camera N] OUT.png|calibrate-wheel [--distance M]
+//   sprayctl export-map ...   runs weedspray-export-map (no bus; GDAL stays out of sprayctl)
 #include <systemd/sd-bus.h>
+#include <unistd.h>
 #include <CLI/CLI.hpp>
 
 #include <cerrno>
@@ -437,6 +439,28 @@ int run_wheel_calibration(Client& client, double run_distance_m, double timeout_
 
 }  // namespace
 
+// Replaces this process with weedspray-export-map: the one beside sprayctl (an install's bin
+// folder, or the build tree's daemon/), else the first on PATH. Returns only on failure.
+int exec_export_map(const std::vector<std::string>& args) {
+  std::vector<std::string> argv_strings{"weedspray-export-map"};
+  argv_strings.insert(argv_strings.end(), args.begin(), args.end());
+  std::vector<char*> argv_c;
+  for (auto& a : argv_strings) argv_c.push_back(a.data());
+  argv_c.push_back(nullptr);
+  char self[4096];
+  const ssize_t n = ::readlink("/proc/self/exe", self, sizeof self - 1);
+  if (n > 0) {
+    std::string beside(self, static_cast<std::size_t>(n));
+    beside = beside.substr(0, beside.rfind('/') + 1) + "weedspray-export-map";
+    if (::access(beside.c_str(), X_OK) == 0) ::execv(beside.c_str(), argv_c.data());
+  }
+  ::execvp("weedspray-export-map", argv_c.data());
+  std::cerr << "sprayctl: cannot run weedspray-export-map: " << std::strerror(errno)
+            << " (it is built where GDAL is: not in the arm64 build; export on a PC from a copy "
+               "of the as-applied log folder)\n";
+  return 1;
+}
+
 int main(int argc, char** argv) {
   CLI::App app{"sprayctl: status and control of weedsprayd over D-Bus"};
   bool user_bus = false;
@@ -473,8 +497,17 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   calibrate_wheel->add_option("--timeout", calibration_timeout_s, "give up after, seconds")
       ->capture_default_str();
+  auto* export_map = app.add_subcommand(
+      "export-map",
+      "the as-applied log as a map a GIS opens: export-map [--from T] [--to T] --format "
+      "geojson|gpkg|shp [--dir LOGDIR] [--config FILE] OUT (runs weedspray-export-map; "
+      "`sprayctl export-map --help` lists its options)");
+  // Every argument after export-map, --help included, is the exporter's.
+  export_map->prefix_command();
+  export_map->set_help_flag();
   for (auto* sub : {status, monitor, alarms}) sub->add_flag("--json", json, "JSON output");
   CLI11_PARSE(app, argc, argv);
+  if (*export_map) return exec_export_map(export_map->remaining());
 
   try {
     Client client(user_bus);

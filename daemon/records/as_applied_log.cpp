@@ -3,15 +3,23 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <ctime>
 #include <stdexcept>
 #include <system_error>
 #include <vector>
 
+#include "daemon/sprayer/geometry.hpp"
+
 namespace weedspray::daemon {
 
-AsAppliedLog::AsAppliedLog(std::filesystem::path dir, std::uintmax_t rotate_bytes, int keep_files)
-    : dir_(std::move(dir)), rotate_bytes_(rotate_bytes), keep_files_(keep_files) {
+AsAppliedLog::AsAppliedLog(std::filesystem::path dir, std::uintmax_t rotate_bytes, int keep_files,
+                           NozzlePlacement placement)
+    : dir_(std::move(dir)),
+      placement_(placement),
+      rotate_bytes_(rotate_bytes),
+      keep_files_(keep_files) {
   std::error_code ec;
   std::filesystem::create_directories(dir_, ec);
   if (ec) throw std::runtime_error(dir_.string() + ": " + ec.message());
@@ -43,6 +51,11 @@ void AsAppliedLog::open_new(std::uint32_t nozzles) {
   for (std::uint32_t i = 0; i < nozzles; ++i) n += std::fprintf(file_, ",duty_pct_%u", i);
   for (std::uint32_t i = 0; i < nozzles; ++i) n += std::fprintf(file_, ",density_%u", i);
   for (std::uint32_t i = 0; i < nozzles; ++i) n += std::fprintf(file_, ",crop_density_%u", i);
+  // Appended after the columns of the first format, so scripts reading by position still work.
+  n += std::fprintf(file_, ",utc,latitude_deg,longitude_deg,course_deg,nozzle_width_m");
+  for (const char* name : {"latitude_deg", "longitude_deg", "rate_l_per_ha", "speed_m_per_s"}) {
+    for (std::uint32_t i = 0; i < nozzles; ++i) n += std::fprintf(file_, ",%s_%u", name, i);
+  }
   n += std::fprintf(file_, "\n");
   bytes_ = static_cast<std::uintmax_t>(std::max(n, 0));
   prune();
@@ -73,6 +86,7 @@ bool AsAppliedLog::write(const AppliedRecord& r) {
   for (std::uint32_t i = 0; i < r.nozzles; ++i) {
     n += std::fprintf(file_, ",%.4f", r.crop_density[i]);
   }
+  n += write_position(r);
   n += std::fprintf(file_, "\n");
   if (n <= 0 || std::ferror(file_)) {
     ++write_errors_;
@@ -80,6 +94,57 @@ bool AsAppliedLog::write(const AppliedRecord& r) {
   }
   bytes_ += static_cast<std::uintmax_t>(n);
   return true;
+}
+
+int AsAppliedLog::write_position(const AppliedRecord& r) {
+  // The fix arrived at fix_time; the record is `time`: carry the antenna forward (or back) along
+  // its course by the difference (at most the receiver's period, ~0.1-1 s).
+  const double since_fix_s = std::chrono::duration<double>(r.time - r.fix_time).count();
+  const std::optional<LatLon> antenna =
+      r.fix_usable ? antenna_at(r.fix, since_fix_s) : std::optional<LatLon>();
+  const double heading = r.fix.course_deg + r.yaw_rate_deg_per_s * since_fix_s;
+  const bool placed = antenna.has_value() && std::isfinite(heading);
+  int n = 0;
+  if (antenna.has_value() && r.fix.utc_ns != 0) {
+    char utc[40];
+    format_utc_ms(r.fix.utc_ns + static_cast<std::int64_t>(since_fix_s * 1e9), utc, sizeof utc);
+    n += std::fprintf(file_, ",%s", utc);
+  } else {
+    n += std::fprintf(file_, ",");
+  }
+  if (antenna.has_value()) {
+    n += std::fprintf(file_, ",%.8f,%.8f", antenna->latitude_deg, antenna->longitude_deg);
+  } else {
+    n += std::fprintf(file_, ",,");
+  }
+  if (placed) {
+    n += std::fprintf(file_, ",%.2f", std::fmod(std::fmod(heading, 360.0) + 360.0, 360.0));
+  } else {
+    n += std::fprintf(file_, ",");
+  }
+  n += std::fprintf(file_, ",%.3f", placement_.nozzle_width_m);
+  BoomSection boom{};
+  boom.nozzles = static_cast<int>(r.nozzles);
+  boom.nozzle_width_m = placement_.nozzle_width_m;
+  std::array<LatLon, io::kMaxValves> patch{};
+  for (std::uint32_t i = 0; placed && i < r.nozzles; ++i) {
+    patch[i] = nozzle_patch(*antenna, heading, placement_.antenna, nozzle_right_offset_m(boom, i));
+  }
+  for (std::uint32_t i = 0; i < r.nozzles; ++i) {
+    n += placed ? std::fprintf(file_, ",%.8f", patch[i].latitude_deg) : std::fprintf(file_, ",");
+  }
+  for (std::uint32_t i = 0; i < r.nozzles; ++i) {
+    n += placed ? std::fprintf(file_, ",%.8f", patch[i].longitude_deg) : std::fprintf(file_, ",");
+  }
+  for (std::uint32_t i = 0; i < r.nozzles; ++i) {
+    n += std::fprintf(file_, ",%.1f",
+                      rate_l_per_ha(r.nozzle_flow_l_per_min[i], r.nozzle_speed_m_per_s[i],
+                                    placement_.nozzle_width_m));
+  }
+  for (std::uint32_t i = 0; i < r.nozzles; ++i) {
+    n += std::fprintf(file_, ",%.3f", r.nozzle_speed_m_per_s[i]);
+  }
+  return n;
 }
 
 void AsAppliedLog::flush() {

@@ -71,7 +71,11 @@ TEST(AsAppliedLog, WritesOneLinePerRecordAndRotates) {
             "time_s,distance_m,speed_m_per_s,pressure_mpa,flow_l_per_min,volume_l,duty_pct_0,"
             "duty_pct_1,"
             "duty_pct_2,duty_pct_3,density_0,density_1,density_2,density_3,crop_density_0,"
-            "crop_density_1,crop_density_2,crop_density_3");
+            "crop_density_1,crop_density_2,crop_density_3,utc,latitude_deg,longitude_deg,"
+            "course_deg,nozzle_width_m,latitude_deg_0,latitude_deg_1,latitude_deg_2,"
+            "latitude_deg_3,longitude_deg_0,longitude_deg_1,longitude_deg_2,longitude_deg_3,"
+            "rate_l_per_ha_0,rate_l_per_ha_1,rate_l_per_ha_2,rate_l_per_ha_3,speed_m_per_s_0,"
+            "speed_m_per_s_1,speed_m_per_s_2,speed_m_per_s_3");
   std::string line;
   std::getline(in, line);
   EXPECT_NE(line.find(",1.5000,"), std::string::npos) << line;
