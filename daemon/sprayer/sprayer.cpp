@@ -564,10 +564,18 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
           flow_trim_.update(requested_l_per_min, status.flow_l_per_min, status.open_fraction, dt);
       for (std::size_t n = 0; n < nozzles; ++n) {
         // The trim moves duties only inside the calibrated band, never into the closed one.
+        // It scales each nozzle's FLOW (q = A s + b), not its duty: scaling duties would move
+        // a low-duty nozzle's flow by less than a high-duty one's (the intercept b), so nozzles
+        // sprayed at different rates (densities, the inner and outer side of a turn) would no
+        // longer keep their ratio.
         const double d = command.duty_pct[n];
         if (d > 0 && d < 100) {
+          const double flow =
+              control::flow_for_duty_l_per_min(params.line, d, compensation_pressure);
+          const double trimmed =
+              control::raw_duty_for_flow_pct(params.line, flow * correction, compensation_pressure);
           command.duty_pct[n] =
-              std::clamp(d * correction, params.law.min_duty_pct, params.law.max_duty_pct);
+              std::clamp(trimmed, params.law.min_duty_pct, params.law.max_duty_pct);
         }
       }
     }
