@@ -148,7 +148,9 @@ for format in gpkg shp geojson; do
   for layer in sprayed weed_density; do
     info=$(ogrinfo -so "$(src $layer)" "$layer" 2>&1) || fail "ogrinfo $(src $layer) $layer: $info"
     grep -q "^Feature Count: [1-9]" <<<"$info" || fail "$format $layer: no features: $info"
-    grep -q 'ID\["EPSG",4326\]' <<<"$info" || fail "$format $layer: CRS is not EPSG:4326: $info"
+    # The layer's CRS itself (a projected CRS's WKT names EPSG:4326 too, as its base).
+    grep -q '^GEOGCRS\["WGS 84",$' <<<"$info" && grep -q '^    ID\["EPSG",4326\]\]$' <<<"$info" ||
+      fail "$format $layer: CRS is not EPSG:4326: $info"
     grep -q "^Geometry: Polygon" <<<"$info" || fail "$format $layer: not polygons: $info"
   done
   info=$(ogrinfo -so "$(src sprayed)" sprayed)
