@@ -166,6 +166,19 @@ for format in gpkg shp geojson; do
     "$T/json.$format/weed_density.geojson" "$LOG" "$SOURCE/tests/data/gnss/field_track.nmea" \
     2.0 0.3 || fail "map_check on the $format export"
 done
+# A UTC window: fewer stretches, each inside it.
+"$SPRAYCTL" export-map --format geojson --dir "$LOG" --from 2026-06-24T14:30:08Z \
+  --to 2026-06-24T14:30:20.5Z "$T/window" >/dev/null || fail "export-map --from/--to"
+$PY - "$T/window/sprayed.geojson" "$T/json.geojson/sprayed.geojson" <<'PYEOF' || fail "the --from/--to window"
+import json, sys
+part = [f["properties"] for f in json.load(open(sys.argv[1]))["features"]]
+whole = json.load(open(sys.argv[2]))["features"]
+assert 0 < len(part) < len(whole), (len(part), len(whole))
+# Records are picked by their UTC; a stretch's first one covers the record period before it.
+for p in part:
+    assert "2026-06-24T14:30:07.800Z" <= p["utc_start"], p
+    assert "2026-06-24T14:30:08.000Z" <= p["utc_end"] <= "2026-06-24T14:30:20.500Z", p
+PYEOF
 # An existing OUT is kept unless --overwrite; a bad --from names itself.
 "$SPRAYCTL" export-map --format gpkg --dir "$LOG" "$T/map.gpkg" 2>"$T/err.txt" &&
   fail "export-map replaced an existing file without --overwrite"
