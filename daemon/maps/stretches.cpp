@@ -43,8 +43,9 @@ void StretchBuilder::add(const AsAppliedRow& row, double covers_s) {
     const double travel_m = std::max(speed, 0.0) * covers_s;
     const std::int64_t covers_ns = static_cast<std::int64_t>(covers_s * 1e9);
     LatLon left, right;
-    if (is_open_[n] && s.length_m >= options_.max_length_m - 1e-9) {  // sums of steps: round-off
-      // Long enough: close it and go on from its last edge, so the strip has no gap.
+    // Would this record take it past max_length_m? Close it and go on from its last edge, so
+    // the strip has no gap (1e-9: sums of equal steps land a hair off the limit).
+    if (is_open_[n] && s.length_m > 0 && s.length_m + travel_m > options_.max_length_m + 1e-9) {
       const LatLon last_left = s.left.back();
       const LatLon last_right = s.right.back();
       const std::int64_t last_utc = s.utc_end_ns;

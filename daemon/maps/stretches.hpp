@@ -1,9 +1,9 @@
 // Per-nozzle sprayed stretches from as-applied rows: consecutive records in which one nozzle
 // sprayed become one polygon, the strip its patch swept (nozzle width wide, following the
 // heading through turns). A stretch ends when the nozzle closes, its position is lost, the
-// caller ends every stretch (a gap in the log, the end of the time window), or it reaches
-// max_length_m, so a field map keeps detail along travel; the next stretch then starts where
-// that one ended, without a gap. Pure: rows in, stretches out through a callback.
+// caller ends every stretch (a gap in the log, the end of the time window), or the next record
+// would take it past max_length_m, so a field map keeps detail along travel; the next stretch
+// then starts where that one ended, without a gap. Pure: rows in, stretches out through a callback.
 #pragma once
 
 #include <cstddef>

@@ -5,6 +5,10 @@
 #     receiver's (2 m/s; the simulated wheel turns at 1 m/s);
 #  2. gpsfake stops: gnss_fix_lost is raised, GnssFix none, and the speed falls back to the
 #     wheel's pulses (SpeedSource "wheel (gnss fix lost)", Speed 1 m/s); SIGTERM -> exit 0.
+#  3. Maps: the daemon sprayed the track (Start after the first fix) with its antenna 2 m ahead
+#     of the nozzles and 0.3 m right of the boom's centre; `sprayctl export-map` in each format
+#     is read back with ogrinfo (both layers, feature count > 0, fields, CRS EPSG:4326) and,
+#     converted to GeoJSON by ogr2ogr, checked by map_check.py against the log and the track.
 # usage: gnss_sim_test.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
 BUILD=$(realpath "$1")
@@ -86,6 +90,8 @@ enabled = true
 host = "127.0.0.1"
 port = $PORT
 lost_fix_timeout_s = 2.0  # margin for a loaded machine (gpsfake paces in Python)
+antenna_ahead_of_nozzles_m = 2.0
+antenna_right_of_centre_m = 0.3
 first_fix_timeout_s = 10.0
 reconnect_max_s = 0.5
 [speed]
@@ -106,6 +112,7 @@ json_check 'abs(j["Position"][0] - 52.0) < 0.001 and abs(j["Position"][1] - 5.0)
   j["GnssTime"].startswith("2026-06-24T14:30:") and "gnss_fix_lost" not in j["Alarms"]' ||
   fail "Position/GNSS fields: $(status_json)"
 echo "ok: 3d fix, Position on the track, Speed from gnss"
+"$SPRAYCTL" --user start || fail "Start refused"
 # The turn: the course swings between north and east; the sky view (GSV every 4 s) arrives.
 wait_for 10 '5 < j["Course"] < 85' || fail "never saw the turn's course: $(status_json)"
 # gpsd's first reports of a stream may lack the altitude (a TPV before the epoch's GGA).
@@ -128,4 +135,56 @@ echo "ok: gnss_fix_lost, speed from the wheel"
 kill -TERM "$DAEMON_PID"
 wait "$DAEMON_PID" || fail "weedsprayd exit status $?"
 DAEMON_PID=
+
+# 3. Maps from the as-applied log the run left.
+LOG="$T/state/as-applied"
+for format in gpkg shp geojson; do
+  out="$T/map.$format"
+  "$SPRAYCTL" export-map --format "$format" --dir "$LOG" "$out" >"$T/export.log" 2>&1 ||
+    fail "export-map --format $format: $(cat "$T/export.log")"
+  grep -q " [1-9][0-9]* sprayed polygons" "$T/export.log" || fail "export-map: $(cat "$T/export.log")"
+  # GeoJSON holds one layer a file: OUT is a folder of them.
+  src() { if [ "$format" = geojson ]; then echo "$out/$1.geojson"; else echo "$out"; fi; }
+  for layer in sprayed weed_density; do
+    info=$(ogrinfo -so "$(src $layer)" "$layer" 2>&1) || fail "ogrinfo $(src $layer) $layer: $info"
+    grep -q "^Feature Count: [1-9]" <<<"$info" || fail "$format $layer: no features: $info"
+    # The layer's CRS itself (a projected CRS's WKT names EPSG:4326 too, as its base).
+    grep -q '^GEOGCRS\["WGS 84",$' <<<"$info" && grep -q '^    ID\["EPSG",4326\]\]$' <<<"$info" ||
+      fail "$format $layer: CRS is not EPSG:4326: $info"
+    grep -q "^Geometry: Polygon" <<<"$info" || fail "$format $layer: not polygons: $info"
+  done
+  info=$(ogrinfo -so "$(src sprayed)" sprayed)
+  for field in nozzle utc_start utc_end rate_l_ha volume_l area_m2 duty_pct weed_dens crop_dens speed_m_s; do
+    grep -q "^$field: " <<<"$info" || fail "$format sprayed: no field $field: $info"
+  done
+  mkdir -p "$T/json.$format"
+  for layer in sprayed weed_density; do
+    ogr2ogr -f GeoJSON "$T/json.$format/$layer.geojson" "$(src $layer)" "$layer" ||
+      fail "ogr2ogr $out $layer"
+  done
+  $PY "$SOURCE/tests/integration/daemon/map_check.py" "$T/json.$format/sprayed.geojson" \
+    "$T/json.$format/weed_density.geojson" "$LOG" "$SOURCE/tests/data/gnss/field_track.nmea" \
+    2.0 0.3 || fail "map_check on the $format export"
+done
+# A UTC window: fewer stretches, each inside it.
+"$SPRAYCTL" export-map --format geojson --dir "$LOG" --from 2026-06-24T14:30:08Z \
+  --to 2026-06-24T14:30:20.5Z "$T/window" >/dev/null || fail "export-map --from/--to"
+$PY - "$T/window/sprayed.geojson" "$T/json.geojson/sprayed.geojson" <<'PYEOF' || fail "the --from/--to window"
+import json, sys
+part = [f["properties"] for f in json.load(open(sys.argv[1]))["features"]]
+whole = json.load(open(sys.argv[2]))["features"]
+assert 0 < len(part) < len(whole), (len(part), len(whole))
+# Records are picked by their UTC; a stretch's first one covers the record period before it.
+for p in part:
+    assert "2026-06-24T14:30:07.800Z" <= p["utc_start"], p
+    assert "2026-06-24T14:30:08.000Z" <= p["utc_end"] <= "2026-06-24T14:30:20.500Z", p
+PYEOF
+# An existing OUT is kept unless --overwrite; a bad --from names itself.
+"$SPRAYCTL" export-map --format gpkg --dir "$LOG" "$T/map.gpkg" 2>"$T/err.txt" &&
+  fail "export-map replaced an existing file without --overwrite"
+grep -q "map.gpkg: exists" "$T/err.txt" || fail "existing OUT: $(cat "$T/err.txt")"
+"$SPRAYCTL" export-map --format gpkg --dir "$LOG" --from 2026-06-24T25:00 "$T/x.gpkg" 2>"$T/err.txt" &&
+  fail "export-map accepted --from 2026-06-24T25:00"
+grep -q -- "--from 2026-06-24T25:00: not a UTC time" "$T/err.txt" || fail "bad --from: $(cat "$T/err.txt")"
+echo "ok: export-map gpkg, shp, geojson read back by ogrinfo and map_check.py"
 echo "PASS"

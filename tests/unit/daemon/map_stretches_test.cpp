@@ -110,6 +110,21 @@ TEST(Stretches, ALongStretchIsCutAtMaxLengthWithoutAGap) {
   EXPECT_NEAR(c.stretches[0].area_m2 + c.stretches[1].area_m2, 3.0 * kWidth, 1e-9);
 }
 
+TEST(Stretches, NoStretchRunsPastMaxLength) {
+  // 1.5 m/s, a record every 0.2 s: 0.3 m a record, 2 m is not a whole number of records.
+  Collect c(2.0);
+  double along = 0;
+  for (int i = 0; i < 20; ++i) c.builder.add(row(along += 0.3, 60, 0, 1.5), kPeriod);  // 6 m
+  c.builder.end_all();
+  double total = 0;
+  for (const Stretch& s : c.stretches) {
+    EXPECT_LE(s.length_m, 2.0 + 1e-9);
+    total += s.length_m;
+  }
+  EXPECT_EQ(c.stretches.size(), 4U);  // 1.8 + 1.8 + 1.8 + 0.6
+  EXPECT_NEAR(total, 6.0, 1e-9);
+}
+
 TEST(Stretches, ALostFixEndsTheStretch) {
   Collect c;
   c.builder.add(row(0.2, 50), kPeriod);
