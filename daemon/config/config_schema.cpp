@@ -418,8 +418,10 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "as-applied CSV folder (empty = <daemon.state_dir>/as-applied)"},
     {WS_KEY(log, rotate_bytes), 10 * 1024 * 1024, 4096, INT_MAX, "bytes",
      "start a new as-applied file past this size"},
-    {WS_KEY(log, keep_files), 20, 1, 10000, "",
-     "rotated as-applied files kept (oldest deleted)"},
+    {WS_KEY(log, keep_files), 150, 1, 10000, "",
+     "rotated as-applied files kept (oldest deleted); the default 150 x 10 MB holds about 6 days "
+     "of 8 h with 24 nozzles (1.35 kB a record, 5 records a second), so a week's work can be "
+     "exported before it goes"},
     // [sim]
     {WS_KEY(sim, speed_profile), std::string("sine"), 0, 0, "",
      "simulated travel speed over time", {"constant", "sine", "ramp"}},
