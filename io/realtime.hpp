@@ -27,6 +27,7 @@ enum class ThreadRole {
   kCamera,        // capture + vision (normal priority)
   kModbus,        // tank level (normal priority; blocking reads)
   kGnss,          // the gpsd client (normal priority; blocking reads)
+  kImu,           // the yaw-rate gyro's sysfs reads (normal priority; may wait on I2C)
 };
 
 struct ThreadPriority {
@@ -38,7 +39,7 @@ struct ThreadPriority {
 // The one table. The loops sit above the kernel's threaded IRQ handlers (50) so device
 // interrupts cannot delay a deadline; each only runs briefly and then sleeps (a blocked read,
 // e.g. an I2C conversion, sleeps too, so the IRQ thread that completes it still runs).
-inline constexpr std::array<ThreadPriority, 9> kThreadPriorities{{
+inline constexpr std::array<ThreadPriority, 10> kThreadPriorities{{
     {ThreadRole::kValvePwm, "ws-valve-pwm", 80},
     {ThreadRole::kPulseInput, "ws-pulses", 70},
     {ThreadRole::kAnalogIo, "ws-analog", 65},
@@ -48,6 +49,7 @@ inline constexpr std::array<ThreadPriority, 9> kThreadPriorities{{
     {ThreadRole::kCamera, "ws-camera", 0},
     {ThreadRole::kModbus, "ws-modbus", 0},
     {ThreadRole::kGnss, "ws-gnss", 0},
+    {ThreadRole::kImu, "ws-imu", 0},
 }};
 
 constexpr const ThreadPriority& thread_priority(ThreadRole role) noexcept {

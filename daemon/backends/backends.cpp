@@ -1,6 +1,7 @@
 #include "daemon/backends/backends.hpp"
 
 #include "io/linux/gpsd_gnss.hpp"
+#include "io/linux/iio_gyro.hpp"
 
 namespace weedspray::daemon {
 
@@ -84,6 +85,17 @@ io::ValveDriveConfig valve_drive_config(const Config& config) {
   drive.dac_full_scale_volts = config.dac.full_scale_v;
   drive.amplifier_gain = drive.valve_full_scale_volts / config.dac.full_scale_v;
   return drive;
+}
+
+void add_yaw_sensor(Backends& b, const Config& config) {
+  if (config.turn.yaw_source != "imu") return;
+  io::hw::IioGyroConfig gyro;
+  gyro.device = config.turn.imu_device;
+  gyro.axis = config.turn.imu_axis.empty() ? 'z' : config.turn.imu_axis.front();
+  gyro.axis_points_up = config.turn.imu_axis_up;
+  auto sensor = std::make_shared<io::hw::IioGyro>(gyro);
+  b.yaw_sensor = sensor.get();
+  b.owned.push_back(sensor);
 }
 
 void add_gnss(Backends& b, const Config& config) {

@@ -20,6 +20,7 @@
 #include "io/pulse_input.hpp"
 #include "io/signal_conversion.hpp"
 #include "io/tank_level.hpp"
+#include "io/yaw_rate_sensor.hpp"
 
 namespace weedspray::control::plant {
 class HydraulicPlant;
@@ -38,12 +39,13 @@ struct Backends {
   io::DigitalOutputBank* heartbeat = nullptr;  // null: not wired (valve thread's square wave)
   io::AnalogInput* pressure_adc = nullptr;
   io::AnalogOutput* return_valve = nullptr;
-  io::PulseInput* flow = nullptr;       // null: no flow meter
-  io::PulseInput* wheel = nullptr;      // null: fixed speed
-  io::DigitalInput* key = nullptr;      // null: no start/stop key
-  io::TankLevelSensor* tank = nullptr;  // null: no tank sensor
-  io::GnssReceiver* gnss = nullptr;     // null: gnss.enabled = false
-  std::vector<io::Camera*> cameras;     // one per [[camera]]
+  io::PulseInput* flow = nullptr;           // null: no flow meter
+  io::PulseInput* wheel = nullptr;          // null: fixed speed
+  io::DigitalInput* key = nullptr;          // null: no start/stop key
+  io::TankLevelSensor* tank = nullptr;      // null: no tank sensor
+  io::GnssReceiver* gnss = nullptr;         // null: gnss.enabled = false
+  io::YawRateSensor* yaw_sensor = nullptr;  // null: turn.yaw_source is not "imu"
+  std::vector<io::Camera*> cameras;         // one per [[camera]]
   io::CurrentLoopSensorConfig sensor{};
   io::ValveDriveConfig drive{};
   std::string mode;  // "hw" | "sim"
@@ -82,6 +84,9 @@ io::ValveDriveConfig valve_drive_config(const Config& config);
 // The GNSS receiver when gnss.enabled: gpsd at gnss.host:gnss.port in both modes (a simulation
 // feeds its gpsd from gpsfake, so the whole client path runs).
 void add_gnss(Backends& b, const Config& config);
+// The yaw-rate gyro when turn.yaw_source = "imu" (IIO, in both modes). Throws naming the
+// device or file.
+void add_yaw_sensor(Backends& b, const Config& config);
 
 // Throws std::runtime_error naming the device that could not be opened.
 // For ExecStopPost (weedsprayd --safe-outputs), after the daemon has gone however it went

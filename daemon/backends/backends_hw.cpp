@@ -117,6 +117,7 @@ Backends make_hw_backends(const Config& config) {
     b.cameras.push_back(keep(b, std::make_shared<io::hw::V4l2Camera>(v4l2, *b.clock)));
   }
   add_gnss(b, config);
+  add_yaw_sensor(b, config);
   return b;
 }
 

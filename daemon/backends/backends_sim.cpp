@@ -174,6 +174,9 @@ Backends make_sim_backends(const Config& config, const Options& options) {
     return true;
   };
   add_gnss(b, config);
+  // A gyro is read through IIO in both modes: a simulation on the bench can use the board's
+  // real IMU (or a test's fake sysfs tree), there being no yaw in the hydraulic plant.
+  add_yaw_sensor(b, config);
   return b;
 }
 

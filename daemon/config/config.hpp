@@ -205,7 +205,10 @@ struct GnssSection {
 // v_i = v + yaw_rate x lateral offset (daemon/sprayer/turn_speed.hpp).
 struct TurnSection {
   bool compensation;
-  std::string yaw_source;    // gnss|none
+  std::string yaw_source;    // gnss|imu|none
+  std::string imu_device;    // IIO gyro: "iio:deviceN", a directory, or its name
+  std::string imu_axis;      // x|y|z: the sensor axis that is vertical on the machine
+  bool imu_axis_up;          // that axis points up (else down)
   double min_speed_m_per_s;  // below: the course is noise, yaw rate taken as 0
   double yaw_filter_s;       // time constant of the yaw-rate low-pass
 };

@@ -393,6 +393,9 @@ class Loader {
       fail("alarms.tank_empty_pct", "must be below alarms.tank_low_pct");
     }
     validate_analog_modbus();
+    if (c.turn.yaw_source == "imu" && c.turn.imu_device.empty()) {
+      fail("turn.yaw_source", "\"imu\" needs turn.imu_device (the IIO gyro)", "turn.imu_device");
+    }
     if (c.speed.source == "gnss" && !c.gnss.enabled) {
       fail("speed.source", "\"gnss\" needs gnss.enabled = true", "gnss.enabled");
     }

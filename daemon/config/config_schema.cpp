@@ -361,8 +361,18 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "its lateral offset (nozzle 0 is the leftmost, looking forward); needs a yaw source"},
     {WS_KEY(turn, yaw_source), std::string("gnss"), 0, 0, "",
      "where the yaw rate comes from: \"gnss\" the rate of change of the receiver's course "
-     "([gnss] enabled), \"none\" no turn compensation",
-     {"gnss", "none"}},
+     "([gnss] enabled), \"imu\" a gyro through IIO (turn.imu_device), \"none\" "
+     "no turn compensation",
+     {"gnss", "imu", "none"}},
+    {WS_KEY(turn, imu_device), std::string(""), 0, 0, "",
+     "yaw_source = \"imu\": the IIO gyro (e.g. MPU-6050 with inv_mpu6050, LSM6DS3 with "
+     "st_lsm6dsx): \"iio:deviceN\", its directory, or its name; read at 100 Hz from "
+     "in_anglvel_<axis>_raw x its scale"},
+    {WS_KEY(turn, imu_axis), std::string("z"), 0, 0, "",
+     "the gyro axis that is vertical on the machine", {"x", "y", "z"}},
+    {WS_KEY(turn, imu_axis_up), true, 0, 1, "",
+     "that axis points up (IIO's right-hand rule: a left turn is positive about an up axis); "
+     "false when the sensor is mounted with it pointing down"},
     {WS_KEY(turn, min_speed_m_per_s), 0.3, 0, 5, "m/s",
      "below this ground speed the course over ground is noise: the yaw rate is taken as 0"},
     {WS_KEY(turn, yaw_filter_s), 0.5, 0, 10, "s",

@@ -227,6 +227,9 @@ void Sprayer::start() {
   if (io_.gnss != nullptr) {
     add(io::ThreadRole::kGnss, "gnss", [this](std::stop_token st) { gnss_loop(st); });
   }
+  if (io_.yaw_sensor != nullptr) {
+    add(io::ThreadRole::kImu, "imu", [this](std::stop_token st) { imu_loop(st); });
+  }
 }
 
 std::vector<std::string> Sprayer::realtime_warnings() const {
@@ -389,8 +392,11 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   // Turn compensation (control/turn_rate.hpp): each nozzle's ground speed and the extra
   // distance its arc has run beyond the centre line's, so the rate law and the schedule use
   // the nozzle's own travel on a curve.
-  const bool turn_compensation =
-      config_.turn.compensation && config_.turn.yaw_source == "gnss" && io_.gnss != nullptr;
+  const bool gnss_yaw = config_.turn.yaw_source == "gnss" && io_.gnss != nullptr;
+  const bool imu_yaw = config_.turn.yaw_source == "imu" && io_.yaw_sensor != nullptr;
+  const bool turn_compensation = config_.turn.compensation && (gnss_yaw || imu_yaw);
+  constexpr Nanos kImuStale = 100ms;  // 10 of its samples: an older rate is not used
+  io::Stamped<double> imu_sample;
   control::YawRateConfig yaw_config;
   yaw_config.min_speed_m_per_s = config_.turn.min_speed_m_per_s;
   yaw_config.filter_time_constant_s = config_.turn.yaw_filter_s;
@@ -428,7 +434,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       gnss_.try_read(gnss);  // a collision with the writer keeps the previous fix
       speed_in.gnss_usable = gnss_fix_usable(gnss, now, lost_fix_timeout);
       speed_in.gnss_speed_m_per_s = gnss.value.speed_m_per_s;
-      if (turn_compensation && gnss.sample_time != last_fix_time) {
+      if (turn_compensation && gnss_yaw && gnss.sample_time != last_fix_time) {
         last_fix_time = gnss.sample_time;
         // The receiver's own fix times difference best (no USB or gpsd latency jitter).
         const double fix_time_s = gnss.value.utc_ns != 0
@@ -440,7 +446,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
           yaw_rate.reset();
         }
       }
-      if (turn_compensation && !speed_in.gnss_usable) yaw_rate.reset();
+      if (turn_compensation && gnss_yaw && !speed_in.gnss_usable) yaw_rate.reset();
     }
     const GroundSpeed ground = select_ground_speed(speed_in);
     status.speed_m_per_s = ground.speed_m_per_s;
@@ -450,7 +456,12 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       fixed_distance += status.speed_m_per_s * dt;
       status.distance_m = fixed_distance;
     }
-    status.yaw_rate_deg_per_s = turn_compensation ? yaw_rate.rate_deg_per_s() : 0.0;
+    status.yaw_rate_deg_per_s = 0.0;
+    if (turn_compensation && gnss_yaw) status.yaw_rate_deg_per_s = yaw_rate.rate_deg_per_s();
+    if (turn_compensation && imu_yaw && imu_yaw_rate_.try_read(imu_sample) &&
+        now - imu_sample.sample_time <= kImuStale) {
+      status.yaw_rate_deg_per_s = imu_sample.value;
+    }
     for (std::size_t n = 0; n < nozzles; ++n) {
       nozzle_speed[n] = control::nozzle_ground_speed_m_per_s(
           status.speed_m_per_s, status.yaw_rate_deg_per_s, right_offset_m[n]);
@@ -757,6 +768,22 @@ void Sprayer::gnss_loop(std::stop_token stop) noexcept {
       c.speed_m_per_s = fix.speed_m_per_s;
       wheel_calibration_.publish({requests, calibration.add_fix(c, wheel_count)});
     }
+  }
+}
+
+void Sprayer::imu_loop(std::stop_token stop) noexcept {
+  // 100 Hz: a sysfs read of an I2C gyro takes ~0.3 ms; the control loop uses the latest.
+  constexpr Nanos kPeriod = 10ms;
+  io::PeriodicLoop loop(*io_.clock, kPeriod, io_.clock->now());
+  std::uint64_t errors = 0;
+  while (!stop.stop_requested()) {
+    loop.wait_next();
+    const io::YawRateSample sample = io_.yaw_sensor->read();
+    if (!sample.ok) {
+      ++errors;
+      continue;  // the control loop stops using the rate once it is stale
+    }
+    imu_yaw_rate_.publish(io::Stamped<double>{sample.deg_per_s, io_.clock->now(), errors});
   }
 }
 

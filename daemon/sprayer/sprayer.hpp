@@ -134,6 +134,7 @@ class Sprayer {
   void control_loop(std::stop_token stop) noexcept;
   void camera_loop(std::stop_token stop, CameraWorker& worker) noexcept;
   void tank_loop(std::stop_token stop) noexcept;
+  void imu_loop(std::stop_token stop) noexcept;
   void gnss_loop(std::stop_token stop) noexcept;
 
   const Config config_;
@@ -146,6 +147,7 @@ class Sprayer {
   io::LatestValue<GnssSample> gnss_;
   io::LatestValue<io::GnssLinkStats> gnss_link_;
   io::LatestValue<WheelCalibrationReport> wheel_calibration_;
+  io::LatestValue<io::Stamped<double>> imu_yaw_rate_;  // deg/s clockwise, from imu_loop
   // start_wheel_calibration(): the run distance (as bits of a double) and a request counter
   // the gpsd thread compares with the last one it served.
   std::atomic<std::uint64_t> wheel_calibration_distance_bits_{0};

@@ -27,19 +27,12 @@ std::string read_text(const fs::path& path) {
 
 // Scale in millivolts per count: the channel's own _scale, else the shared one.
 double read_scale_mv(const fs::path& dir, const std::string& prefix, int channel) {
-  for (const fs::path& p :
-       {dir / (prefix + std::to_string(channel) + "_scale"), dir / (prefix + "_scale")}) {
-    if (!fs::exists(p)) continue;
-    const std::string text = read_text(p);
-    char* end = nullptr;
-    const double scale = std::strtod(text.c_str(), &end);
-    if (text.empty() || end == text.c_str() || !(scale > 0.0) || !std::isfinite(scale))
-      throw std::runtime_error("IIO: cannot parse a positive scale from " + p.string() + ": '" +
-                               text + "'");
-    return scale;
+  const std::string own = prefix + std::to_string(channel);
+  if (!fs::exists(dir / (own + "_scale")) && !fs::exists(dir / (prefix + "_scale"))) {
+    throw std::runtime_error("IIO: no " + own + "_scale or " + prefix + "_scale in " +
+                             dir.string() + " (set scale_mv_override)");
   }
-  throw std::runtime_error("IIO: no " + prefix + std::to_string(channel) + "_scale or " + prefix +
-                           "_scale in " + dir.string() + " (set scale_mv_override)");
+  return read_iio_scale(dir.string(), own, prefix);
 }
 
 int open_attribute(const fs::path& path, int flags) {
@@ -50,6 +43,22 @@ int open_attribute(const fs::path& path, int flags) {
 }
 
 }  // namespace
+
+double read_iio_scale(const std::string& dir, const std::string& channel,
+                      const std::string& shared) {
+  for (const fs::path& p :
+       {fs::path(dir) / (channel + "_scale"), fs::path(dir) / (shared + "_scale")}) {
+    if (!fs::exists(p)) continue;
+    const std::string text = read_text(p);
+    char* end = nullptr;
+    const double scale = std::strtod(text.c_str(), &end);
+    if (text.empty() || end == text.c_str() || !(scale > 0.0) || !std::isfinite(scale))
+      throw std::runtime_error("IIO: cannot parse a positive scale from " + p.string() + ": '" +
+                               text + "'");
+    return scale;
+  }
+  throw std::runtime_error("IIO: no " + channel + "_scale or " + shared + "_scale in " + dir);
+}
 
 std::string resolve_iio_device_dir(const std::string& device, const std::string& sysfs_root) {
   if (device.empty()) throw std::runtime_error("IIO: no device configured");

@@ -11,6 +11,7 @@
 #include "io/linux/gpio_output_bank.hpp"
 #include "io/linux/gpio_pulse_input.hpp"
 #include "io/linux/iio_analog.hpp"
+#include "io/linux/iio_gyro.hpp"
 #include "io/linux/monotonic_clock.hpp"
 #include "io/linux/v4l2_camera.hpp"
 
@@ -105,6 +106,62 @@ TEST_F(FakeIio, ClearErrorsNameTheDeviceOrFile) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("scale"), std::string::npos) << e.what();
   }
+}
+
+// An MPU-6050 as inv_mpu6050 shows it: a shared rad/s scale (250 deg/s range: 1/131 deg/s per
+// count), and a BMI160-like device with a per-axis scale and an offset.
+TEST_F(FakeIio, GyroGivesTheYawRateClockwise) {
+  const fs::path imu = root_ / "iio:device2";
+  fs::create_directories(imu);
+  put(imu / "name", "mpu6050");
+  put(imu / "in_anglvel_scale", "0.000133090");  // rad/s per count
+  put(imu / "in_anglvel_z_raw", "-1179");        // a right (clockwise) turn, z up
+  IioGyro up({"mpu6050", 'z', true, root_.string()});
+  YawRateSample s = up.read();
+  ASSERT_TRUE(s.ok);
+  EXPECT_NEAR(s.deg_per_s, 1179 * 0.000133090 * 180 / M_PI, 1e-9);  // +8.99 deg/s
+  EXPECT_NEAR(s.deg_per_s, 8.99, 0.01);
+  // Mounted upside down, the same reading is a left turn.
+  IioGyro down({"mpu6050", 'z', false, root_.string()});
+  EXPECT_NEAR(down.read().deg_per_s, -8.99, 0.01);
+  // The file is re-read each time; a bad value is a failed sample, not a number.
+  put(imu / "in_anglvel_z_raw", "0");
+  EXPECT_DOUBLE_EQ(up.read().deg_per_s, 0.0);
+  put(imu / "in_anglvel_z_raw", "oops");
+  EXPECT_FALSE(up.read().ok);
+
+  const fs::path bmi = root_ / "iio:device3";
+  fs::create_directories(bmi);
+  put(bmi / "name", "bmi160");
+  put(bmi / "in_anglvel_x_scale", "0.001");
+  put(bmi / "in_anglvel_x_offset", "-10");
+  put(bmi / "in_anglvel_x_raw", "110");
+  IioGyro x({"bmi160", 'x', true, root_.string()});
+  EXPECT_NEAR(x.read().deg_per_s, -100 * 0.001 * 180 / M_PI, 1e-9);
+}
+
+TEST_F(FakeIio, GyroErrorsNameTheDeviceOrFile) {
+  const fs::path imu = root_ / "iio:device2";
+  fs::create_directories(imu);
+  put(imu / "name", "mpu6050");
+  put(imu / "in_anglvel_z_raw", "0");
+  try {
+    IioGyro gyro({"mpu6050", 'z', true, root_.string()});
+    FAIL() << "no scale accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("in_anglvel_z_scale or in_anglvel_scale"),
+              std::string::npos)
+        << e.what();
+  }
+  put(imu / "in_anglvel_scale", "0.0001");
+  EXPECT_THROW(IioGyro({"mpu6050", 'q', true, root_.string()}), std::runtime_error);
+  try {
+    IioGyro gyro({"mpu6050", 'y', true, root_.string()});
+    FAIL() << "no y axis file accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("in_anglvel_y_raw"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(IioGyro({"bno055", 'z', true, root_.string()}), std::runtime_error);
 }
 
 TEST(GpioBackends, MissingChipOrLineIsAClearError) {
