@@ -224,9 +224,12 @@ run_guest() { # -> $guest_log; returns QEMU's status
   # arm64 virt has no such port: the guest powers off through PSCI (QEMU exits 0); the
   # markers are the verdict either way. Its PL011 UART is ttyAMA0, and its PL061 GPIO
   # controller is a gpiochip of its own beside the gpio-sim ones.
+  # arm64: each guest program may take 300 s instead of 180 s (guest-init.sh):
+  # the io suite (~45 s here) made the whole test take 187 s once, with another emulator and
+  # builds beside it on the 2 host cores.
   if [ "$vm_arch" = arm64 ]; then
     machine=(qemu-system-aarch64 -M virt -cpu cortex-a72 -append
-      "console=ttyAMA0 quiet loglevel=3 panic=-1 oops=panic")
+      "console=ttyAMA0 quiet loglevel=3 panic=-1 oops=panic weedspray.program_timeout_s=300")
   else
     # shellcheck disable=SC2054 # the commas are QEMU's option syntax
     machine=(qemu-system-x86_64 -cpu qemu64 -device isa-debug-exit,iobase=0xf4,iosize=0x04
