@@ -20,7 +20,7 @@
 # build or boot problem is an error, never a skip.
 #
 # The kernel, headers and sources come from the Debian archive (`apt-get download`), chosen at
-# run time from what linux-image-amd64 depends on, and are cached in DIR (default
+# run time from what linux-image-amd64 (-arm64) depends on, and are cached in DIR (default
 # $WEEDSPRAY_BUILD_DIR/vm-cache, or $WEEDSPRAY_VM_CACHE) so later runs only pack and boot.
 # --log keeps the guest's console; WEEDSPRAY_VM_KEEP_WORK=1 keeps the initramfs work dir.
 set -Eeuo pipefail
@@ -45,14 +45,20 @@ while (($#)); do
     --cache) cache_dir="${2:?--cache needs a directory}"; shift 2 ;;
     --log) log_file="${2:?--log needs a file}"; shift 2 ;;
     --timeout) boot_timeout_s="${2:?--timeout needs seconds}"; shift 2 ;;
-    -h | --help) sed -n '2,26p' "$0"; exit 0 ;;
+    -h | --help) sed -n '2,25p' "$0"; exit 0 ;;
     -*) die "unknown option '$1' (see --help)" ;;
     *) guest_programs+=("$1"); shift ;;
   esac
 done
 ((${#guest_programs[@]})) || die "no guest program given (see --help)"
+# ELF e_machine (2 bytes at offset 18) of each guest architecture: x86-64 62, aarch64 183.
+case "$vm_arch" in amd64) guest_machine=62 ;; arm64) guest_machine=183 ;; *) guest_machine="" ;; esac
 for program in "${guest_programs[@]}"; do
   [ -x "$program" ] || die "guest program '$program' does not exist or is not executable"
+  [ "$(head -c4 "$program" | od -An -c | tr -d ' ')" = '177ELF' ] || continue # a script
+  machine="$(od -An -t u2 -j 18 -N 2 "$program" | tr -d ' ')"
+  [ "$machine" = "$guest_machine" ] ||
+    die "guest program '$program' is ELF machine $machine, not the $vm_arch guest's ($guest_machine)"
 done
 mkdir -p "$cache_dir" || die "cannot create the cache directory '$cache_dir'"
 cache_dir="$(cd "$cache_dir" && pwd)" # absolute: make -C changes directory
