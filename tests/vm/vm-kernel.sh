@@ -61,7 +61,8 @@ Dir::Cache "$dir/cache";
 Acquire::Languages "none";
 APTCONF
   note "updating the arm64 package index in $dir"
-  APT_CONFIG="$dir/apt.conf" apt-get update -qq >"$dir/update.log" 2>&1 || {
+  # vm_kernel_init runs before the caller takes the cache lock: runs sharing a cache queue here.
+  flock "$dir/update.lock" env APT_CONFIG="$dir/apt.conf" apt-get update -qq >"$dir/update.log" 2>&1 || {
     cat "$dir/update.log" >&2
     die "apt-get update of the arm64 package index failed (network?)"
   }
