@@ -6,9 +6,11 @@
 #   industrialio-configfs + industrialio-sw-device + iio_dummy (IIO_SIMPLE_DUMMY without its
 #   buffer and event parts: one ADC input in_voltage0_raw and one DAC output out_voltage0_raw).
 #
-# The caller defines die, note, require_tool and cache_dir (absolute), then calls
+# The caller defines die, note, require_tool and cache_dir (absolute), optionally vm_arch
+# (amd64, the default, or arm64: Debian's arm64 kernel for qemu-system-aarch64 -M virt, the
+# modules cross-built with aarch64-linux-gnu-gcc), then calls
 #   vm_kernel_init      picks the kernel from the package index, sets kernel_release,
-#                       kernel_dir, vmlinux, module_root
+#                       kernel_dir, vmlinux (for arm64: the uncompressed Image), module_root
 #   prepare_kernel      downloads + builds once per kernel and module set (cached in kernel_dir;
 #                       hold the cache lock)
 #   vm_module_load_list MODULE...   insmod paths (/lib/modules/...), dependencies first
@@ -18,6 +20,7 @@
 # modprobe.
 
 vm_kernel_lib_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+vm_arch="${vm_arch:-amd64}"
 
 # The modules built here, from linux-source (file lists in extract_module_sources).
 built_modules=(gpio-sim counter interrupt-cnt industrialio-configfs industrialio-sw-device iio_dummy)
@@ -33,11 +36,61 @@ fixture_source="$vm_kernel_lib_dir/interrupt_counter_fixture.c"
 # one is removed), so a cache never lacks a module the guest now expects.
 module_build_revision=3
 
+# --- package indices -----------------------------------------------------------------------
+# amd64 packages come through the host's apt. The arm64 kernel and the arm64 guest's programs
+# come through a private arm64 index in the cache (the host's sources, apt state of its own):
+# `dpkg --add-architecture arm64` would change the host (cmake/toolchains/arm64-sysroot.sh
+# says why the project avoids it). It is refreshed when missing or older than the host's index
+# (so `apt-get update` on the host moves both), ~9 MB, a few seconds.
+# shellcheck disable=SC2154 # cache_dir: the sourcing script's
+vm_arm64_apt_dir() { echo "$cache_dir/apt-arm64"; }
+
+vm_arm64_index_update() {
+  local dir
+  dir="$(vm_arm64_apt_dir)"
+  mkdir -p "$dir/lists/partial" "$dir/cache/archives/partial"
+  : >"$dir/status"
+  cat >"$dir/apt.conf" <<APTCONF
+APT::Architecture "arm64";
+APT::Architectures { "arm64"; };
+APT::Sandbox::User "$(id -un)";
+Dir::State "$dir";
+Dir::State::Lists "$dir/lists";
+Dir::State::status "$dir/status";
+Dir::Cache "$dir/cache";
+Acquire::Languages "none";
+APTCONF
+  note "updating the arm64 package index in $dir"
+  # vm_kernel_init runs before the caller takes the cache lock: runs sharing a cache queue here.
+  flock "$dir/update.lock" env APT_CONFIG="$dir/apt.conf" apt-get update -qq >"$dir/update.log" 2>&1 || {
+    cat "$dir/update.log" >&2
+    die "apt-get update of the arm64 package index failed (network?)"
+  }
+  touch "$dir/updated"
+}
+
+vm_arm64_index_ensure() {
+  local stamp
+  stamp="$(vm_arm64_apt_dir)/updated"
+  if [ ! -f "$stamp" ] ||
+    [ -n "$(find /var/lib/apt/lists -maxdepth 1 -name '*_Packages*' -newer "$stamp" 2>/dev/null)" ]; then
+    vm_arm64_index_update
+  fi
+}
+
+# apt-cache / apt-get against the index that holds the guest's architecture (vm_arch).
+vm_apt_cache() {
+  if [ "$vm_arch" = arm64 ]; then APT_CONFIG="$(vm_arm64_apt_dir)/apt.conf" apt-cache "$@"; else apt-cache "$@"; fi
+}
+vm_apt_get() {
+  if [ "$vm_arch" = arm64 ]; then APT_CONFIG="$(vm_arm64_apt_dir)/apt.conf" apt-get "$@"; else apt-get "$@"; fi
+}
+
 # --- which kernel --------------------------------------------------------------------------
 # The ABI (6.1.0-NN) moves with Debian's point releases, so ask the package index.
 kernel_image_package() {
-  apt-cache depends linux-image-amd64 2>/dev/null |
-    sed -n 's/^ *Depends: \(linux-image-[0-9][^ ]*-amd64\)$/\1/p' | head -n1 || true
+  vm_apt_cache depends "linux-image-$vm_arch" 2>/dev/null |
+    sed -n "s/^ *Depends: \(linux-image-[0-9][^ ]*-$vm_arch\)\$/\1/p" | head -n1 || true
 }
 
 vm_kernel_init() {
@@ -51,24 +104,41 @@ vm_kernel_init() {
   require_tool make make
   require_tool gcc gcc
   [ -f "$fixture_source" ] || die "$fixture_source is missing"
+  case "$vm_arch" in
+    amd64) ;;
+    arm64) vm_arm64_index_ensure ;;
+    *) die "unknown guest architecture '$vm_arch' (amd64 or arm64)" ;;
+  esac
   image_package="$(kernel_image_package)"
-  if [ -z "$image_package" ] && [ "$(id -u)" -eq 0 ]; then
+  if [ -z "$image_package" ] && [ "$vm_arch" = arm64 ]; then
+    vm_arm64_index_update
+    image_package="$(kernel_image_package)"
+  elif [ -z "$image_package" ] && [ "$(id -u)" -eq 0 ]; then
     note "linux-image-amd64 is not in the package index; running apt-get update"
     apt-get update -qq || die "apt-get update failed"
     image_package="$(kernel_image_package)"
   fi
   [ -n "$image_package" ] ||
-    die "cannot find what linux-image-amd64 depends on in the package index (run apt-get update)"
+    die "cannot find what linux-image-$vm_arch depends on in the package index (run apt-get update)"
   kernel_release="${image_package#linux-image-}"
-  kernel_version="$(apt-cache show --no-all-versions "$image_package" 2>/dev/null |
+  kernel_version="$(vm_apt_cache show --no-all-versions "$image_package" 2>/dev/null |
     sed -n 's/^Version: //p' || true)"
   [ -n "$kernel_version" ] || die "no version of $image_package in the package index"
-  abi="${kernel_release%-amd64}"                    # 6.1.0-56
+  abi="${kernel_release%-"$vm_arch"}"               # 6.1.0-56
   series="$(echo "$kernel_release" | cut -d. -f1,2)" # 6.1: linux-source-6.1
-  gcc_version="$(apt-cache depends "linux-headers-$kernel_release" 2>/dev/null |
-    sed -n 's/^ *Depends: linux-compiler-gcc-\([0-9]*\)-x86$/\1/p' | head -n1 || true)"
+  # amd64 headers depend on linux-compiler-gcc-N-x86, arm64 ones on gcc-N.
+  gcc_version="$(vm_apt_cache depends "linux-headers-$kernel_release" 2>/dev/null |
+    sed -n -e 's/^ *Depends: linux-compiler-gcc-\([0-9]*\)-x86$/\1/p' \
+      -e 's/^ *Depends: gcc-\([0-9]*\)$/\1/p' | head -n1 || true)"
   [ -n "$gcc_version" ] || die "cannot tell which gcc linux-headers-$kernel_release is built with"
-  require_tool "gcc-$gcc_version" "gcc-$gcc_version"
+  module_make_flags=()
+  if [ "$vm_arch" = arm64 ]; then
+    # The headers' .kernelvariables make CC $(CROSS_COMPILE)gcc-N and ARCH arm64.
+    require_tool "aarch64-linux-gnu-gcc-$gcc_version" "gcc-$gcc_version-aarch64-linux-gnu"
+    module_make_flags=(ARCH=arm64 CROSS_COMPILE=aarch64-linux-gnu-)
+  else
+    require_tool "gcc-$gcc_version" "gcc-$gcc_version"
+  fi
 
   module_set_key="$( (
     echo "$module_build_revision ${built_modules[*]} / ${vm_staged_modules[*]}"
@@ -76,17 +146,21 @@ vm_kernel_init() {
   ) | sha256sum | cut -c1-12)"
   kernel_dir="$cache_dir/$kernel_release-$kernel_version-modules-$module_set_key"
   vmlinux="$kernel_dir/vmlinux"
+  [ "$vm_arch" = amd64 ] || vmlinux="$kernel_dir/Image"
   module_root="$kernel_dir/modules" # lib/modules/$kernel_release with only what guests need
 }
 
 fetch_packages() { # -> $kernel_dir/debs
   local debs="$kernel_dir/debs"
   mkdir -p "$debs"
-  local packages=("$image_package=$kernel_version" "linux-headers-$kernel_release=$kernel_version"
-    "linux-headers-$abi-common=$kernel_version" "linux-kbuild-$series=$kernel_version"
+  # The image and its headers are the guest's architecture; the common headers and the
+  # sources are arch: all, and linux-kbuild (fixdep, modpost) must run here: the host's.
+  local guest=("$image_package=$kernel_version" "linux-headers-$kernel_release=$kernel_version")
+  local host=("linux-headers-$abi-common=$kernel_version" "linux-kbuild-$series=$kernel_version"
     "linux-source-$series=$kernel_version")
-  note "downloading ${packages[*]} from the Debian archive"
-  (cd "$debs" && apt-get download -q "${packages[@]}") >"$kernel_dir/download.log" 2>&1 || {
+  note "downloading ${guest[*]} ${host[*]} from the Debian archive"
+  (cd "$debs" && vm_apt_get download -q "${guest[@]}" && apt-get download -q "${host[@]}") \
+    >"$kernel_dir/download.log" 2>&1 || {
     cat "$kernel_dir/download.log" >&2
     die "apt-get download failed (network? stale index: run apt-get update)"
   }
@@ -100,6 +174,20 @@ extract_vmlinux() { # vmlinuz -> vmlinux: booting the ELF via PVH skips emulated
   xz -dc --single-stream <(tail -c +$((offset + 1)) "$vmlinuz" 2>/dev/null || true) >"$vmlinux.tmp"
   [ "$(head -c4 "$vmlinux.tmp" | od -An -c | tr -d ' ')" = '177ELF' ] ||
     die "the xz payload of $vmlinuz is not an ELF vmlinux"
+  mv "$vmlinux.tmp" "$vmlinux"
+}
+
+# arm64: Debian's vmlinuz is the kernel's Image (QEMU boots it directly); gzip'd in some
+# releases, so unpack it if it is.
+extract_arm64_image() {
+  local vmlinuz="$1"
+  if [ "$(head -c2 "$vmlinuz" | od -An -tx1 | tr -d ' ')" = 1f8b ]; then
+    gzip -dc "$vmlinuz" >"$vmlinux.tmp"
+  else
+    cp "$vmlinuz" "$vmlinux.tmp"
+  fi
+  # The arm64 Image header carries "ARM\x64" at offset 56.
+  [ "$(tail -c +57 "$vmlinux.tmp" | head -c3)" = ARM ] || die "$vmlinuz is not an arm64 Image"
   mv "$vmlinux.tmp" "$vmlinux"
 }
 
@@ -144,7 +232,8 @@ KBUILD
   # The headers' Makefile includes the -common one by absolute /usr/src path.
   sed -i "s#^include /usr/src/#include $root/usr/src/#" "$headers/Makefile"
   note "building ${built_modules[*]} and the interrupt-cnt fixture against linux-headers-$kernel_release"
-  make -C "$headers" M="$src" -j2 modules >"$kernel_dir/modules-build.log" 2>&1 || {
+  make -C "$headers" M="$src" "${module_make_flags[@]}" -j2 modules \
+    >"$kernel_dir/modules-build.log" 2>&1 || {
     cat "$kernel_dir/modules-build.log" >&2
     die "building the out-of-tree modules failed"
   }
@@ -211,15 +300,20 @@ prepare_kernel() {
   local sources_job=$!
   mkdir -p "$root"
   for deb in "$kernel_dir"/debs/linux-{image,headers,kbuild}-*.deb; do dpkg-deb -x "$deb" "$root"; done
-  extract_vmlinux "$root/boot/vmlinuz-$kernel_release"
+  if [ "$vm_arch" = arm64 ]; then
+    extract_arm64_image "$root/boot/vmlinuz-$kernel_release"
+  else
+    extract_vmlinux "$root/boot/vmlinuz-$kernel_release"
+  fi
   wait "$sources_job" || die "extracting the module sources from linux-source-$series failed"
   build_modules "$root"
   stage_modules "$root"
   rm -rf "$root" "$module_src" "$kernel_dir/debs" # keep what boots, ~80 MB
   # Keep only this kernel: older ABIs and module sets are never booted again. Only kernel
-  # directories: the cache also holds other guests' files (e.g. the systemd guest's rootfs).
-  find "$cache_dir" -mindepth 1 -maxdepth 1 -type d -name '*-modules-*' ! -path "$kernel_dir" \
-    -exec rm -rf {} +
+  # directories of this architecture: the cache also holds other guests' files (e.g. the
+  # systemd guest's rootfs, the other architecture's kernel).
+  find "$cache_dir" -mindepth 1 -maxdepth 1 -type d -name "*-$vm_arch-*-modules-*" \
+    ! -path "$kernel_dir" -exec rm -rf {} +
   touch "$kernel_dir/ready"
   note "kernel $kernel_release ($kernel_version) prepared in $((SECONDS - started)) s"
 }
