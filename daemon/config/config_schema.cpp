@@ -363,7 +363,7 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "where the yaw rate comes from: \"gnss\" the rate of change of the receiver's course "
      "([gnss] enabled), \"imu\" a gyro through IIO (turn.imu_device), \"none\" "
      "no turn compensation",
-     {"gnss", "imu", "none"}},
+     {"gnss", "none", "imu"}},
     {WS_KEY(turn, imu_device), std::string(""), 0, 0, "",
      "yaw_source = \"imu\": the IIO gyro (e.g. MPU-6050 with inv_mpu6050, LSM6DS3 with "
      "st_lsm6dsx): \"iio:deviceN\", its directory, or its name; read at 100 Hz from "

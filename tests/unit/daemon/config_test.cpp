@@ -306,6 +306,21 @@ TEST(ConfigSchema, GnssSpeedNeedsTheReceiverEnabled) {
   EXPECT_NE(std::string(off.what()).find("gnss.enabled"), std::string::npos) << off.what();
 }
 
+TEST(ConfigSchema, ImuYawSourceNeedsItsDevice) {
+  const Config config =
+      parse("[turn]\nyaw_source = \"imu\"\nimu_device = \"mpu6050\"\nimu_axis = \"x\"\n");
+  EXPECT_EQ(config.turn.imu_device, "mpu6050");
+  EXPECT_EQ(config.turn.imu_axis, "x");
+  EXPECT_TRUE(config.turn.imu_axis_up);
+  const auto missing = parse_error({{"main.toml", "[turn]\nyaw_source = \"imu\"\n"}});
+  EXPECT_EQ(missing.key(), "turn.yaw_source");
+  EXPECT_EQ(missing.line(), 2);
+  EXPECT_NE(std::string(missing.what()).find("turn.imu_device"), std::string::npos)
+      << missing.what();
+  const auto axis = parse_error({{"main.toml", "[turn]\nimu_axis = \"w\"\n"}});
+  EXPECT_EQ(axis.key(), "turn.imu_axis");
+}
+
 class ConfigFiles : public ::testing::Test {
  protected:
   void SetUp() override {
