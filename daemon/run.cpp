@@ -26,6 +26,7 @@
 #include "daemon/config/config.hpp"
 #include "daemon/logging.hpp"
 #include "daemon/records/as_applied_log.hpp"
+#include "daemon/records/map_geometry.hpp"
 #include "daemon/records/totals.hpp"
 #include "daemon/sprayer/live_view.hpp"
 #include "daemon/sprayer/sprayer.hpp"
@@ -52,17 +53,9 @@ Nanos from_seconds(double s) {
   return std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(s));
 }
 
-// "2026-06-24T14:30:05.000Z"; "" for 0 (unknown).
+// "2026-06-24T14:30:05.000Z" (the as-applied log's format); "" for 0 (unknown).
 std::string utc_iso8601(std::int64_t utc_ns) {
-  if (utc_ns == 0) return {};
-  const std::time_t t = static_cast<std::time_t>(utc_ns / 1'000'000'000);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char text[96];  // room for any int the format could be given (GCC checks)
-  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
-                tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec,
-                static_cast<int>(utc_ns % 1'000'000'000 / 1'000'000));
-  return text;
+  return utc_ns == 0 ? std::string() : format_utc_ms(utc_ns);
 }
 
 // Where a simulation keeps its totals and as-applied logs: never the sprayer's own records.

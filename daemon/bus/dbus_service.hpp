@@ -3,7 +3,9 @@
 //   properties: State s, Pressure d, PressureSetpoint d (MPa), Flow d (L/min), TankLevel d (%),
 //     Speed d (m/s), Distance d (m), NozzleDuty ad (%), ZoneDensity ad, Alarms as,
 //     VolumeSprayed d (L), AreaCovered d (m^2), SavingsPercent d, FrameRate d (Hz),
-//     VisionLatencyMs d, VisionLatencyP99Ms d, ControlOverruns t, Mode s
+//     VisionLatencyMs d, VisionLatencyP99Ms d, ControlOverruns t, Mode s, SpeedSource s,
+//     GnssFix s, Position (ddd), GnssSpeed d, Course d, GnssHdop d, GnssSatellites u,
+//     GnssTime s, YawRate d (deg/s clockwise), WheelCalibration (tsdtd) (README: D-Bus API)
 //   methods: Start(), Stop(), SetPressureSetpoint(d), ReloadConfig(), ClearAlarms(),
 //     InjectSimFault(s) (simulation only), Snapshot(u camera) -> ay PNG (live view, at most
 //     2 a second; the reply comes when the camera's next frame is processed),

@@ -27,12 +27,8 @@ std::string read_text(const fs::path& path) {
 
 // Scale in millivolts per count: the channel's own _scale, else the shared one.
 double read_scale_mv(const fs::path& dir, const std::string& prefix, int channel) {
-  const std::string own = prefix + std::to_string(channel);
-  if (!fs::exists(dir / (own + "_scale")) && !fs::exists(dir / (prefix + "_scale"))) {
-    throw std::runtime_error("IIO: no " + own + "_scale or " + prefix + "_scale in " +
-                             dir.string() + " (set scale_mv_override)");
-  }
-  return read_iio_scale(dir.string(), own, prefix);
+  return read_iio_scale(dir.string(), prefix + std::to_string(channel), prefix,
+                        " (set scale_mv_override)");
 }
 
 int open_attribute(const fs::path& path, int flags) {
@@ -44,8 +40,8 @@ int open_attribute(const fs::path& path, int flags) {
 
 }  // namespace
 
-double read_iio_scale(const std::string& dir, const std::string& channel,
-                      const std::string& shared) {
+double read_iio_scale(const std::string& dir, const std::string& channel, const std::string& shared,
+                      const std::string& missing_hint) {
   for (const fs::path& p :
        {fs::path(dir) / (channel + "_scale"), fs::path(dir) / (shared + "_scale")}) {
     if (!fs::exists(p)) continue;
@@ -57,7 +53,8 @@ double read_iio_scale(const std::string& dir, const std::string& channel,
                                text + "'");
     return scale;
   }
-  throw std::runtime_error("IIO: no " + channel + "_scale or " + shared + "_scale in " + dir);
+  throw std::runtime_error("IIO: no " + channel + "_scale or " + shared + "_scale in " + dir +
+                           missing_hint);
 }
 
 std::string resolve_iio_device_dir(const std::string& device, const std::string& sysfs_root) {

@@ -31,9 +31,10 @@ struct IioAnalogOutputConfig {
 };
 
 // A channel's scale: `channel`_scale (e.g. in_anglvel_z_scale), else the shared `shared`_scale
-// (in_anglvel_scale). Throws std::runtime_error naming the files.
-double read_iio_scale(const std::string& dir, const std::string& channel,
-                      const std::string& shared);
+// (in_anglvel_scale). Throws std::runtime_error naming the files (+ missing_hint when neither
+// exists).
+double read_iio_scale(const std::string& dir, const std::string& channel, const std::string& shared,
+                      const std::string& missing_hint = "");
 
 // Finds the device directory for `device` (see IioChannelConfig). Throws std::runtime_error.
 std::string resolve_iio_device_dir(const std::string& device, const std::string& sysfs_root);

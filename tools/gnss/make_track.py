@@ -53,6 +53,18 @@ def lon_field(lon):
     return "%03d%09.6f,%s" % (d, (abs(lon) - d) * 60.0, "E" if lon >= 0 else "W")
 
 
+def fix_sentences(stamp, lat, lon, speed, course, date, course_format="%.1f"):
+    """One epoch's RMC, GGA and GSA: time hhmmss.ss, position, speed m/s, course, date ddmmyy."""
+    return [
+        nmea(("GPRMC,%s,A,%s,%s,%.3f," + course_format + ",%s,,,A") % (
+            stamp, lat_field(lat), lon_field(lon), speed * KNOTS_PER_M_S, course, date)),
+        nmea("GPGGA,%s,%s,%s,1,09,0.8,%.1f,M,46.9,M,," % (
+            stamp, lat_field(lat), lon_field(lon), ALT_M)),
+        nmea("GPGSA,A,3,%s,,,,1.5,0.8,1.2" % ",".join(
+            "%02d" % prn for prn, _, _, _ in SATELLITES)),
+    ]
+
+
 def main():
     out_dir = sys.argv[1] if len(sys.argv) > 1 else "tests/data/gnss"
     north = east = 0.0
@@ -69,13 +81,7 @@ def main():
         stamp = "%02d%02d%02d.00" % (t // 3600, t // 60 % 60, t % 60)
         segment = "straight" if k < 10 else "turn" if k < 20 else "straight" if k < 24 else (
             "braking" if speed > 0 else "stop")
-        speed_kn = speed * KNOTS_PER_M_S
-        nmea_lines.append(nmea("GPRMC,%s,A,%s,%s,%.3f,%.1f,%s,,,A" % (
-            stamp, lat_field(lat), lon_field(lon), speed_kn, course, DATE)))
-        nmea_lines.append(nmea("GPGGA,%s,%s,%s,1,09,0.8,%.1f,M,46.9,M,," % (
-            stamp, lat_field(lat), lon_field(lon), ALT_M)))
-        nmea_lines.append(nmea("GPGSA,A,3,%s,,,,1.5,0.8,1.2" % ",".join(
-            "%02d" % prn for prn, _, _, _ in SATELLITES)))
+        nmea_lines += fix_sentences(stamp, lat, lon, speed, course, DATE)
         if k % 4 == 3:  # the sky view every 4 s, as many receivers send it: gpsd's SKY report
             for i in range(0, len(SATELLITES), 4):
                 body = ",".join("%02d,%02d,%03d,%02d" % sat for sat in SATELLITES[i:i + 4])

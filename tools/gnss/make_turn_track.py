@@ -14,8 +14,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from make_track import (ALT_M, EARTH_RADIUS_M, KNOTS_PER_M_S, SATELLITES, START_LAT,  # noqa: E402
-                        START_LON, lat_field, lon_field, nmea)
+from make_track import EARTH_RADIUS_M, START_LAT, START_LON, fix_sentences  # noqa: E402
 
 DATE = "250626"  # ddmmyy
 START_S = 15 * 3600  # 15:00:00 UTC
@@ -56,12 +55,7 @@ def main():
         centis = int(round((START_S + t) * 100))
         s = centis // 100
         stamp = "%02d%02d%02d.%02d" % (s // 3600, s // 60 % 60, s % 60, centis % 100)
-        nmea_lines.append(nmea("GPRMC,%s,A,%s,%s,%.3f,%.2f,%s,,,A" % (
-            stamp, lat_field(lat), lon_field(lon), speed * KNOTS_PER_M_S, course, DATE)))
-        nmea_lines.append(nmea("GPGGA,%s,%s,%s,1,09,0.8,%.1f,M,46.9,M,," % (
-            stamp, lat_field(lat), lon_field(lon), ALT_M)))
-        nmea_lines.append(nmea("GPGSA,A,3,%s,,,,1.5,0.8,1.2" % ",".join(
-            "%02d" % prn for prn, _, _, _ in SATELLITES)))
+        nmea_lines += fix_sentences(stamp, lat, lon, speed, course, DATE, "%.2f")
         iso = "20%s-%s-%sT%s:%s:%s.%sZ" % (DATE[4:6], DATE[2:4], DATE[0:2], stamp[0:2],
                                            stamp[2:4], stamp[4:6], stamp[7:9])
         csv_lines.append("%s,%.9f,%.9f,%.3f,%.2f,%s" % (iso, lat, lon, speed, course, segment))

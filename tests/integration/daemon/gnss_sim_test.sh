@@ -16,40 +16,11 @@ SOURCE=$(realpath "$2")
 WEEDSPRAYD=$BUILD/daemon/weedsprayd
 SPRAYCTL=$BUILD/daemon/sprayctl
 PY=/usr/bin/python3
-T=$(mktemp -d /tmp/weedspray-gnss-test.XXXXXX)
-DAEMON_PID=
-BUS_PID=
-GPSFAKE_PID=
-
-stop_gpsfake() {  # gpsfake and its gpsd share a process group (setsid)
-  [ -n "$GPSFAKE_PID" ] && kill -TERM -- "-$GPSFAKE_PID" 2>/dev/null || true
-  sleep 0.3
-  [ -n "$GPSFAKE_PID" ] && kill -KILL -- "-$GPSFAKE_PID" 2>/dev/null || true
-  GPSFAKE_PID=
-}
-cleanup() {
-  [ -n "$DAEMON_PID" ] && kill -KILL "$DAEMON_PID" 2>/dev/null || true
-  stop_gpsfake
-  [ -n "$BUS_PID" ] && kill "$BUS_PID" 2>/dev/null || true
-  rm -rf "$T"
-}
-trap cleanup EXIT
-
-fail() {
-  echo "FAIL: $*" >&2
-  echo "--- daemon log (tail) ---" >&2
-  tail -n 30 "$T/daemon.log" >&2 || true
-  echo "--- gpsfake log ---" >&2
-  cat "$T/gpsfake.log" >&2 || true
-  exit 1
-}
-
-[ -x /usr/bin/gpsfake ] && [ -x /usr/sbin/gpsd ] ||
-  fail "gpsd and gpsfake are required (apt-get install gpsd gpsd-clients; ./dev deps installs them)"
-
-dbus-daemon --session --fork --nopidfile --print-address=3 --print-pid=4 3>"$T/bus.addr" 4>"$T/bus.pid"
-export DBUS_SESSION_BUS_ADDRESS=$(cat "$T/bus.addr")
-BUS_PID=$(cat "$T/bus.pid")
+. "$(dirname "$0")/private_bus_lib.sh" gnss
+. "$(dirname "$0")/gpsfake_lib.sh"
+FAIL_LOGS+=("$T/gpsfake.log")
+require_gpsfake
+start_private_bus
 
 status_json() { "$SPRAYCTL" --user status --json; }
 # json_check EXPR: true when the python expression holds for the status object j.
@@ -66,11 +37,9 @@ wait_for() {  # wait_for SECONDS EXPR
   return 1
 }
 
-PORT=$($PY -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
+PORT=$(free_port)
 # The track once, 0.1 s a sentence (0.3 s an epoch, ~10 s in all); -W: gpsfake ends 2 s after.
-setsid /usr/bin/gpsfake -1 -q -c 0.1 -W 2 -P "$PORT" "$SOURCE/tests/data/gnss/field_track.nmea" \
-  >"$T/gpsfake.log" 2>&1 &
-GPSFAKE_PID=$!
+start_gpsfake "$PORT" "$T/gpsfake.log" -1 -q -c 0.1 -W 2 "$SOURCE/tests/data/gnss/field_track.nmea"
 # The daemon starts once gpsd listens: its first fix must come within the lost-fix timeout.
 $PY - "$PORT" <<'PYEOF' || fail "gpsd never listened on port $PORT"
 import socket, sys, time

@@ -11,23 +11,8 @@ BUILD=$(realpath "$1")
 WEEDSPRAYD=$BUILD/daemon/weedsprayd
 SPRAYCTL=$BUILD/daemon/sprayctl
 PY=/usr/bin/python3
-T=$(mktemp -d /tmp/weedspray-imu-test.XXXXXX)
-DAEMON_PID=
-BUS_PID=
-cleanup() {
-  [ -n "$DAEMON_PID" ] && kill -KILL "$DAEMON_PID" 2>/dev/null || true
-  [ -n "$BUS_PID" ] && kill "$BUS_PID" 2>/dev/null || true
-  rm -rf "$T"
-}
-trap cleanup EXIT
-fail() {
-  echo "FAIL: $*" >&2
-  grep -v "^Spraying\|^Idle" "$T/daemon.log" | tail -n 20 >&2 || true
-  exit 1
-}
-dbus-daemon --session --fork --nopidfile --print-address=3 --print-pid=4 3>"$T/bus.addr" 4>"$T/bus.pid"
-export DBUS_SESSION_BUS_ADDRESS=$(cat "$T/bus.addr")
-BUS_PID=$(cat "$T/bus.pid")
+. "$(dirname "$0")/private_bus_lib.sh" imu
+start_private_bus
 
 IMU=$T/iio/iio:device0
 mkdir -p "$IMU" "$T/state"

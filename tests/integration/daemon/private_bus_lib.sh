@@ -1,22 +1,32 @@
+# shellcheck shell=bash
 # Sourced by the daemon's D-Bus test scripts: a scratch folder $T, removed at exit together with
-# the daemon and the bus the script started ($DAEMON_PID, $BUS_PID), fail() with the daemon's
-# log, and start_private_bus.
-# usage: . private_bus_lib.sh NAME   ($T is /tmp/weedspray-NAME-test.XXXXXX)
+# the daemon and the bus the script started ($DAEMON_PID, $BUS_PID) and whatever the script
+# adds to EXIT_HOOKS (commands, run after the daemon is killed), fail() with the tails of the
+# logs in FAIL_LOGS (default: $T/daemon.log), and start_private_bus.
+# usage: . private_bus_lib.sh NAME   ($T is /tmp/weedspray-NAME-test.XXXXXX; KEEP=1 keeps it)
 T=$(mktemp -d "/tmp/weedspray-$1-test.XXXXXX")
 DAEMON_PID=
 BUS_PID=
+EXIT_HOOKS=()
+FAIL_LOGS=("$T/daemon.log")
 
 cleanup() {
   [ -n "$DAEMON_PID" ] && kill -KILL "$DAEMON_PID" 2>/dev/null || true
+  local hook
+  for hook in "${EXIT_HOOKS[@]}"; do $hook || true; done
   [ -n "$BUS_PID" ] && kill "$BUS_PID" 2>/dev/null || true
-  rm -rf "$T"
+  [ -n "${KEEP:-}" ] || rm -rf "$T"
 }
 trap cleanup EXIT
 
 fail() {
   echo "FAIL: $*" >&2
-  echo "--- daemon log (tail) ---" >&2
-  tail -n 40 "$T/daemon.log" >&2 || true
+  local log
+  for log in "${FAIL_LOGS[@]}"; do
+    [ -e "$log" ] || continue
+    echo "--- $log (tail; status lines left out) ---" >&2
+    grep -v "^Spraying\|^Idle" "$log" | tail -n 30 >&2 || true
+  done
   exit 1
 }
 
