@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <initializer_list>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -84,6 +85,16 @@ void print_metrics_json(const char* key, const ex::StepRun& run, const control::
 void print_spread_json(const char* key, const ex::Spread& s, bool comma = true) {
   std::printf("\"%s\": {\"mean\": %.6g, \"sd\": %.6g, \"worst\": %.6g, \"n\": %d}%s", key, s.mean,
               s.sd, s.worst, s.count, comma ? ", " : "");
+}
+
+// One object of named spreads: "key": {"a": {...}, "b": {...}}.
+void print_spreads_json(const char* key,
+                        std::initializer_list<std::pair<const char*, const ex::Spread*>> spreads,
+                        bool comma) {
+  std::printf("\"%s\": {", key);
+  std::size_t i = 0;
+  for (const auto& [name, spread] : spreads) print_spread_json(name, *spread, ++i < spreads.size());
+  std::printf("}%s", comma ? ", " : "");
 }
 
 void print_spread_row(const char* name, const ex::Spread& s, const char* format) {
@@ -253,22 +264,18 @@ int run_ripple_fleet_command(const ExperimentOptions& o) {
   return 0;
 }
 
-void print_orthogonal_row_json(const char* key, const ex::OrthogonalFleetRow& row, bool comma) {
-  std::printf("\"%s\": {", key);
-  print_spread_json("mean_error_pct", row.mean_error_pct);
-  print_spread_json("max_error_pct", row.max_error_pct);
-  print_spread_json("pressure_band_mpa", row.pressure_band_mpa, false);
-  std::printf("}%s", comma ? ", " : "");
-}
-
 int run_orthogonal_fleet_command(const ExperimentOptions& o) {
   const ex::FleetOptions fleet{o.seed, o.plants, true};
   const ex::OrthogonalFleetResult r = ex::run_orthogonal_fleet(fleet);
   if (o.json) {
     std::printf("{\"plants\": %d, \"seed\": %llu, \"changed_after_calibration\": true, ", o.plants,
                 static_cast<unsigned long long>(o.seed));
-    print_orthogonal_row_json("trim_on", r.trim_on, true);
-    print_orthogonal_row_json("trim_off", r.trim_off, false);
+    for (const auto* row : {&r.trim_on, &r.trim_off})
+      print_spreads_json(row == &r.trim_on ? "trim_on" : "trim_off",
+                         {{"mean_error_pct", &row->mean_error_pct},
+                          {"max_error_pct", &row->max_error_pct},
+                          {"pressure_band_mpa", &row->pressure_band_mpa}},
+                         row == &r.trim_on);
     std::printf("}\n");
   } else {
     std::printf(
@@ -577,7 +584,36 @@ int run_orthogonal_command(const ExperimentOptions& o) {
   return 0;
 }
 
+int run_dose_fleet_command(const ExperimentOptions& o) {
+  const ex::DoseFleetResult r = ex::run_dose_fleet({o.seed, o.plants, true});
+  if (o.json) {
+    std::printf("{\"plants\": %d, \"seed\": %llu, \"changed_after_calibration\": true, ", o.plants,
+                static_cast<unsigned long long>(o.seed));
+    for (const auto* row : {&r.trim_on, &r.trim_off})
+      print_spreads_json(row == &r.trim_on ? "trim_on" : "trim_off",
+                         {{"r2", &row->r2},
+                          {"mean_error_pct", &row->mean_error_pct},
+                          {"max_error_pct", &row->max_error_pct}},
+                         row == &r.trim_on);
+    std::printf("}\n");
+  } else {
+    std::printf(
+        "wheat paper dose check (densities 0.40-0.75, 1 m/s, 0.4 MPa, 5 Hz, nozzle 1), %d drawn "
+        "machines (seed %llu), each calibrated as made, then changed\n",
+        o.plants, static_cast<unsigned long long>(o.seed));
+    std::printf("%-34s%12s%12s%12s\n", "over the machines", "mean", "sd", "worst");
+    for (const auto* row : {&r.trim_on, &r.trim_off}) {
+      std::printf("-- online flow trim %s\n", row == &r.trim_on ? "ON" : "OFF");
+      print_spread_row("R2 (worst = lowest)", row->r2, "%12.5f");
+      print_spread_row("mean error [%]", row->mean_error_pct, "%12.3f");
+      print_spread_row("max error [%]", row->max_error_pct, "%12.3f");
+    }
+  }
+  return 0;
+}
+
 int run_dose_command(const ExperimentOptions& o) {
+  if (o.plants > 0) return run_dose_fleet_command(o);
   ex::DoseOptions options;
   options.seed = o.seed;
   const ex::DoseResult r = ex::run_dose(options);
@@ -652,6 +688,33 @@ int run_savings_command(const ExperimentOptions& o) {
   options.max_density = 1.0;
   options.decision_threshold =
       o.decision_threshold >= 0 ? o.decision_threshold : default_decision_threshold();
+  if (o.plants > 0) {
+    const ex::SavingsFleetResult f =
+        ex::run_savings_fleet(field.weed_density, {o.seed, o.plants, false}, options);
+    if (o.json) {
+      std::printf(
+          "{\"plants\": %d, \"seed\": %llu, \"changed_after_calibration\": false, "
+          "\"images\": %zu, \"weed_source\": \"%s\", \"decision_threshold\": %.4f, ",
+          o.plants, static_cast<unsigned long long>(o.seed), photos.size(), o.weed_source.c_str(),
+          options.decision_threshold);
+      print_spread_json("savings_pct", f.savings_pct);
+      print_spread_json("under_dosed_pct", f.under_dosed_pct);
+      print_spread_json("uniform_l", f.uniform_l);
+      print_spread_json("variable_l", f.variable_l, false);
+      std::printf("}\n");
+    } else {
+      std::printf(
+          "savings at equal coverage, %zu photos, weed density: %s, %d drawn machines (seed "
+          "%llu) as made\n",
+          photos.size(), o.weed_source.c_str(), o.plants, static_cast<unsigned long long>(o.seed));
+      std::printf("%-34s%12s%12s%12s\n", "over the machines", "mean", "sd", "worst");
+      print_spread_row("savings [%] (worst = lowest)", f.savings_pct, "%12.2f");
+      print_spread_row("under-dosed nozzle-zones [%]", f.under_dosed_pct, "%12.2f");
+      print_spread_row("uniform [L]", f.uniform_l, "%12.3f");
+      print_spread_row("variable [L]", f.variable_l, "%12.3f");
+    }
+    return 0;
+  }
   const ex::SavingsResult r = ex::run_savings(field.weed_density, options);
   const ex::SavingsRun& clamp = r.spec_clamp;
   const ex::TruthTally equal_truth = ex::tally_against_truth(r.equal_coverage, field.truth);
@@ -719,8 +782,6 @@ int run_savings_command(const ExperimentOptions& o) {
 }
 
 int run_experiment(const ExperimentOptions& o) {
-  if (o.plants > 0 && (o.name == "dose" || o.name == "savings"))
-    throw std::runtime_error("--plants: dose and savings do not run over drawn machines yet");
   const auto t0 = std::chrono::steady_clock::now();
   int rc = 0;
   if (o.name == "step")
@@ -767,7 +828,7 @@ void add_experiment_commands(CLI::App& app) {
                   "step --plants --tune: evaluations per controller (same for both)")
       ->check(CLI::Range(10, 100000));
   cmd->add_option("--plants", options->plants,
-                  "step/orthogonal/ripple/linearity/calibrate/blockage: over N machines drawn from "
+                  "every experiment (savings: machines as made): over N machines drawn from "
                   "documented spreads (seed "
                   "--seed); prints mean, sd and worst")
       ->check(CLI::Range(1, 1000));

@@ -200,6 +200,11 @@ struct DoseOptions {
   std::vector<double> densities{0.40, 0.45, 0.50, 0.55, 0.60, 0.65, 0.70, 0.75};
   double settle_s = 3.0;
   double run_s = 60.0;
+  // The machine (PlantParams{} = the ideal bench), calibrated as made; `change` is applied
+  // after the calibration, before each density's run (ramps over the measured minute).
+  plant::PlantParams plant{};
+  std::optional<MachineChange> change{};
+  bool flow_feedback = true;  // online flow trim
 };
 DoseResult run_dose(const DoseOptions& options);
 
@@ -225,6 +230,8 @@ struct SavingsOptions {
   double decision_threshold = 0.0;
   // A zone is under-dosed when it received less than this fraction of its target volume.
   double under_dose_fraction = 0.9;
+  // The machine (PlantParams{} = the ideal bench), calibrated as made.
+  plant::PlantParams plant{};
 };
 struct SavingsRun {
   LowDutyPolicy policy = LowDutyPolicy::kClose;
@@ -308,6 +315,26 @@ struct LinearityFleetResult {
 // Calibrated as made, tested after the drawn change, trim on.
 LinearityFleetResult run_linearity_fleet(const FleetOptions& fleet,
                                          const SprayRunOptions& base = {});
+struct DoseFleetRow {
+  Spread r2;              // delivered vs theoretical over the densities (worst = lowest)
+  Spread mean_error_pct;  // per machine: mean |delivered - theoretical| / theoretical
+  Spread max_error_pct;   // per machine: its worst density
+};
+struct DoseFleetResult {
+  DoseFleetRow trim_on, trim_off;
+};
+// Calibrated as made (0.4 MPa, 5 Hz), tested after the drawn change, trim on and off.
+DoseFleetResult run_dose_fleet(const FleetOptions& fleet, const DoseOptions& base = {});
+// Over drawn machines as made (no change: the track is laid out at a fixed ground speed, and
+// what a change does to accuracy is what dose/orthogonal --plants measure): the headline
+// (equal-coverage) figures per machine.
+struct SavingsFleetResult {
+  Spread savings_pct;      // worst = lowest
+  Spread under_dosed_pct;  // under-dosed nozzle-zones, % of all nozzle-zones
+  Spread uniform_l, variable_l;
+};
+SavingsFleetResult run_savings_fleet(const std::vector<std::array<double, 4>>& zone_densities,
+                                     const FleetOptions& fleet, const SavingsOptions& base);
 struct CalibrationFleetResult {
   Spread meter_error_pct;      // |calibrated K - true K| / true K (as made)
   Spread full_open_error_pct;  // per machine: worst nozzle |metered - true| full-open flow

@@ -22,13 +22,15 @@ struct CalibratedMachine {
 };
 
 CalibratedMachine calibrate(std::uint64_t seed, double pressure_mpa, double frequency_hz,
-                            const SprayLawConfig& law) {
+                            const SprayLawConfig& law, const plant::PlantParams& plant = {}) {
   CalibrationOptions cal_options;
   cal_options.seed = seed;
   cal_options.pressure_mpa = pressure_mpa;
   cal_options.frequency_hz = frequency_hz;
+  cal_options.plant = plant;
   const CalibrationResult& cal = cached_calibration(cal_options);
   CalibratedMachine m;
+  m.config.plant = plant;
   m.config.seed = seed;
   m.config.setpoint_mpa = pressure_mpa;
   m.config.pwm_frequency_hz = frequency_hz;
@@ -52,18 +54,29 @@ ClosedLoopRig make_rig(const CalibratedMachine& m) {
 DoseResult run_dose(const DoseOptions& options) {
   SprayLawConfig law;
   law.max_density = options.max_density;
-  const CalibratedMachine m =
-      calibrate(options.seed, options.pressure_mpa, options.frequency_hz, law);
+  CalibratedMachine m =
+      calibrate(options.seed, options.pressure_mpa, options.frequency_hz, law, options.plant);
+  m.config.fixes.flow_feedback = options.flow_feedback;
   DoseResult result;
   std::vector<double> x, y;
   for (double density : options.densities) {
     ClosedLoopRig rig = make_rig(m);
     const double q = target_flow_l_per_min(law, density, options.speed_m_per_s);
     rig.request_flows(std::vector<double>(m.full_flows.size(), q));
+    if (options.change) apply_change(rig.plant(), *options.change);
     rig.start();
     rig.run_for(options.settle_s);
     const double v0 = rig.plant().nozzle_delivered_l(0);
-    rig.run_for(options.run_s);
+    if (options.change) {
+      // The change's ramps (supply voltage, ground speed) move over the measured minute.
+      const double step = m.config.control_period_s;
+      for (double t = 0.0; t < options.run_s - 1e-9; t += step) {
+        apply_change_progress(rig.plant(), *options.change, t / options.run_s);
+        rig.run_for(step);
+      }
+    } else {
+      rig.run_for(options.run_s);
+    }
     DosePoint p;
     p.density = density;
     p.theoretical_l_per_min = q;
@@ -77,6 +90,33 @@ DoseResult run_dose(const DoseOptions& options) {
   result.mean_error_pct /= static_cast<double>(result.points.size());
   result.r2 = fit_line(x, y).r_squared;
   return result;
+}
+
+DoseFleetResult run_dose_fleet(const FleetOptions& fleet, const DoseOptions& base) {
+  std::vector<double> r2[2], mean[2], max[2];
+  const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
+  for (std::size_t i = 0; i < machines.size(); ++i) {
+    DoseOptions options = base;
+    options.seed = machines[i].seed;
+    options.plant = machines[i].params;
+    options.change = fleet.changed ? draw_change(machines[i], fleet.seed, static_cast<int>(i))
+                                   : no_change(machines[i]);
+    for (int trim = 0; trim < 2; ++trim) {
+      options.flow_feedback = trim == 0;
+      const DoseResult r = run_dose(options);
+      double worst = 0.0;
+      for (const auto& p : r.points)
+        worst = std::max(worst, std::abs(p.delivered_l_per_min - p.theoretical_l_per_min) /
+                                    p.theoretical_l_per_min * 100.0);
+      r2[trim].push_back(r.r2);
+      mean[trim].push_back(r.mean_error_pct);
+      max[trim].push_back(worst);
+    }
+  }
+  const auto row = [&](int trim) {
+    return DoseFleetRow{spread_of(r2[trim], true), spread_of(mean[trim]), spread_of(max[trim])};
+  };
+  return {row(0), row(1)};
 }
 
 namespace {
@@ -120,7 +160,7 @@ SavingsRun run_savings_variable(const std::vector<std::array<double, 4>>& zone_d
   law.decision_threshold = options.decision_threshold;
   law.low_duty_policy = policy;
   const CalibratedMachine m =
-      calibrate(options.seed, options.pressure_mpa, options.frequency_hz, law);
+      calibrate(options.seed, options.pressure_mpa, options.frequency_hz, law, options.plant);
   const std::size_t nozzles = std::min<std::size_t>(4, m.full_flows.size());
   const std::size_t zones = zone_densities.size();
   const double length = options.zone_length_m;
@@ -219,7 +259,7 @@ SavingsResult run_savings(const std::vector<std::array<double, 4>>& zone_densiti
   SprayLawConfig law;
   law.max_density = options.max_density;
   const CalibratedMachine m =
-      calibrate(options.seed, options.pressure_mpa, options.frequency_hz, law);
+      calibrate(options.seed, options.pressure_mpa, options.frequency_hz, law, options.plant);
   const std::size_t nozzles = std::min<std::size_t>(4, m.full_flows.size());
   const double zone_s = options.zone_length_m / options.speed_m_per_s;
   SavingsResult result;
@@ -286,6 +326,22 @@ TruthTally tally_against_truth(const SavingsRun& run,
     }
   }
   return tally;
+}
+
+SavingsFleetResult run_savings_fleet(const std::vector<std::array<double, 4>>& zone_densities,
+                                     const FleetOptions& fleet, const SavingsOptions& base) {
+  std::vector<double> savings, under, uniform, variable;
+  for (const Machine& machine : draw_machines(fleet.seed, fleet.plants)) {
+    SavingsOptions options = base;
+    options.seed = machine.seed;
+    options.plant = machine.params;
+    const SavingsResult r = run_savings(zone_densities, options);
+    savings.push_back(r.savings_pct);
+    under.push_back(r.zones > 0 ? 100.0 * r.under_dosed_zones / r.zones : 0.0);
+    uniform.push_back(r.uniform_l);
+    variable.push_back(r.variable_l);
+  }
+  return {spread_of(savings, true), spread_of(under), spread_of(uniform), spread_of(variable)};
 }
 
 }  // namespace weedspray::control::experiments

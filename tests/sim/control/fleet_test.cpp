@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "control/experiments/experiments.hpp"
@@ -72,6 +73,22 @@ TEST(FleetRipple, StaggeringCutsThePressureSwingOnEveryMachine) {
 
 // One drawn machine, trim on: a minute healthy without an alarm, then a nozzle 20 % blocked is
 // named (the right one) within 10 s.
+// The dose check over drawn machines: each calibrated as made, then changed; the trim's worth
+// shows on every machine, and the delivered flow stays a straight line of the theoretical one.
+TEST(FleetDose, OnEveryMachineTheTrimKeepsTheDoseLine) {
+  DoseOptions base;
+  base.densities = {0.40, 0.55, 0.75};
+  base.run_s = 15.0;
+  const DoseFleetResult r = run_dose_fleet({1, 2, true}, base);
+  std::printf("dose, 2 machines: trim on mean %.2f %% (worst max %.2f %%), off %.2f %% (%.2f %%)\n",
+              r.trim_on.mean_error_pct.mean, r.trim_on.max_error_pct.worst,
+              r.trim_off.mean_error_pct.mean, r.trim_off.max_error_pct.worst);
+  EXPECT_EQ(r.trim_on.mean_error_pct.count, 2);
+  EXPECT_LT(r.trim_on.mean_error_pct.mean, 0.6 * r.trim_off.mean_error_pct.mean);
+  EXPECT_LT(r.trim_on.max_error_pct.worst, r.trim_off.max_error_pct.worst);
+  EXPECT_GT(r.trim_on.r2.worst, 0.999);
+}
+
 TEST(FleetBlockage, ABlockedNozzleIsNamedAndAHealthyMinuteIsQuiet) {
   BlockageOptions options;
   options.healthy_s = 60.0;
