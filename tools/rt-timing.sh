@@ -3,19 +3,23 @@
 # starts spraying, optionally loads the machine with stress-ng, and prints the daemon's timing
 # report (per loop: p50/p99/p99.9/max lateness in microseconds, misses beyond
 # alarms.timing_tolerance_ms, overruns) plus the alarms raised. Run as root for SCHED_FIFO.
-#   tools/rt-timing.sh [--seconds N] [--stress] [--no-qos] [--build DIR]
+#   tools/rt-timing.sh [--seconds N] [--stress] [--no-qos] [--reference] [--build DIR]
 # --stress: stress-ng --cpu 2 --io 1 --vm 1 for the whole run (Debian's stress-ng)
 # --no-qos: daemon.cpu_wakeup_latency_us = -1 (no PM QoS request), to see what it fixes
+# --reference: cyclictest (Debian's rt-tests) beside the daemon, one thread per CPU at 1 kHz,
+#   SCHED_FIFO 79 (just under the valve thread's 80): the kernel's own wake-up latency under the
+#   same load, so a late wake of the daemon can be told from a late wake of any thread
 set -euo pipefail
 cd "$(dirname "$0")/.."
-seconds=60 stress=0 qos=1 build=build/default
+seconds=60 stress=0 qos=1 reference=0 build=build/default
 while (($#)); do
   case "$1" in
     --seconds) seconds="$2"; shift ;;
     --stress) stress=1 ;;
     --no-qos) qos=0 ;;
+    --reference) reference=1 ;;
     --build) build="$2"; shift ;;
-    *) sed -n '2,9p' "$0"; exit 2 ;;
+    *) sed -n '2,12p' "$0"; exit 2 ;;
   esac
   shift
 done
@@ -38,8 +42,22 @@ for _ in $(seq 100); do
   "$build/daemon/sprayctl" --user start >/dev/null 2>&1 && break
   sleep 0.1
 done
+if [ "$reference" = 1 ]; then
+  command -v cyclictest >/dev/null || { echo "rt-timing: cyclictest missing (apt-get install rt-tests)" >&2; exit 1; }
+  cyclictest -m -q -p 79 -t "$(nproc)" -a -i 1000 -D "$seconds" >"$tmp/cyclictest.txt" 2>&1 &
+  cyclictest_pid=$!
+fi
 wait "$daemon" || { cat "$tmp/daemon.log" >&2; exit 1; }
+reference_json=null
+if [ "$reference" = 1 ]; then
+  wait "$cyclictest_pid" || true
+  # "T: 0 ( 123) P:79 I:1000 C: 60000 Min: 3 Act: 20 Avg: 30 Max: 2592" per CPU
+  reference_json=$(awk '/^T:/{for(i=1;i<=NF;i++){if($i=="Avg:")a=$(i+1);if($i=="Max:")m=$(i+1);if($i=="C:")c=$(i+1)}
+    printf "%s{\"cpu\": %d, \"wakes\": %d, \"avg_us\": %d, \"max_us\": %d}", n++?", ":"", $2, c, a, m}' \
+    "$tmp/cyclictest.txt")
+  reference_json="[$reference_json]"
+fi
 alarms=$( (grep -o 'alarm raised: [a-z_]*' "$tmp/daemon.log" || true) | sort | uniq -c | tr -s ' ' | paste -sd, -)
-printf '{"stress": %s, "pm_qos": %s, "alarms": "%s", "timing": %s}\n' \
+printf '{"stress": %s, "pm_qos": %s, "alarms": "%s", "cyclictest": %s, "timing": %s}\n' \
   "$([ "$stress" = 1 ] && echo true || echo false)" "$([ "$qos" = 1 ] && echo true || echo false)" \
-  "${alarms# }" "$(cat "$tmp/timing.json")"
+  "${alarms# }" "$reference_json" "$(cat "$tmp/timing.json")"
