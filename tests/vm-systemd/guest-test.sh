@@ -15,7 +15,8 @@
 # checks assert on status codes themselves.
 set -uo pipefail
 
-exec >/dev/ttyS0 2>&1 # the serial console, line by line (not through the journal)
+# The serial console, line by line (not through the journal): ttyS0 on x86, ttyAMA0 on arm64.
+exec >"/dev/$(sed -n 's/.*console=\([^ ,]*\).*/\1/p' /proc/cmdline)" 2>&1
 export SYSTEMD_PAGER='' SYSTEMD_COLORS=0 LC_ALL=C.UTF-8
 
 checks=0
@@ -277,8 +278,17 @@ echo "    ---- end of journal ----"
 # Error lines, except the one the hardware makes honestly: iio_dummy's ADC reads a fixed
 # 73 x 0.001333 mV, far below a 4 mA loop, so a pressure sensor fault is raised (pump off,
 # valves closed). Anything else at priority err or worse fails.
+expected_errors=('^alarm raised: pressure_sensor_fault \(fault: valves closed, pump off\)$')
+# The arm64 guest runs under aarch64 TCG, 3-5x slower than the x86 guest: the loops miss their
+# periods by up to 0.5 s there and the cross-watch reports the valve thread stalled (and makes
+# the outputs safe, as it must). The host says so on the kernel command line; the lines are
+# counted below. Any other error line still fails.
+if grep -q 'weedspray.tcg_stalls_expected=1' /proc/cmdline; then
+  expected_errors+=('^valve thread stalled: pump off and return valve open until it runs again$')
+  info "cross-watch stall lines (emulation, tolerated): $(journalctl -u weedsprayd -b --no-pager -q -p err -o cat | grep -c '^valve thread stalled: ')"
+fi
 errors="$(journalctl -u weedsprayd -b --no-pager -q -p err -o cat |
-  grep -v '^alarm raised: pressure_sensor_fault (fault: valves closed, pump off)$' || true)"
+  grep -vE "$(IFS='|'; echo "${expected_errors[*]}")" || true)"
 check journal_no_errors "$([ -z "$errors" ]; echo $?)" \
   "priority err lines besides the sensor-fault alarm: ${errors:-none}"
 info "journal err lines (all): $(journalctl -u weedsprayd -b --no-pager -q -p err -o cat | tr '\n' '|')"

@@ -15,10 +15,11 @@
 # fail-safe paths do nothing stays unsafe until its restart writes them.
 #
 # Prints WEEDSPRAY-HIL-STEP name PASS|FAIL: detail, WEEDSPRAY-HIL key=value figures and, last,
-# WEEDSPRAY-HIL-RESULT PASS|FAIL steps=N failed=M on /dev/ttyS0.
+# WEEDSPRAY-HIL-RESULT PASS|FAIL steps=N failed=M on the serial console.
 set -uo pipefail
 
-exec >/dev/ttyS0 2>&1
+# The serial console, line by line (not through the journal): ttyS0 on x86, ttyAMA0 on arm64.
+exec >"/dev/$(sed -n 's/.*console=\([^ ,]*\).*/\1/p' /proc/cmdline)" 2>&1
 export SYSTEMD_PAGER='' SYSTEMD_COLORS=0 LC_ALL=C.UTF-8
 # Only when the host asked for it (run-systemd-vm-test.sh --hil): it is not in ./dev test yet.
 if ! grep -qE 'weedspray\.hil(_selftest)?=1' /proc/cmdline; then

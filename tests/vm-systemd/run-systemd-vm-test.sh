@@ -3,13 +3,19 @@
 # its own .deb, and checks the shipped weedsprayd.service in hardware mode against real kernel
 # drivers: gpio-sim, interrupt-cnt, vivid and the IIO dummy (ADC + DAC). See README.md.
 #
-#   run-systemd-vm-test.sh --source DIR [--cache DIR] [--log FILE] [--timeout SECONDS]
-#                          [--hil] [--selftest-no-failsafe]
+#   run-systemd-vm-test.sh --source DIR [--arch amd64|arm64] [--cache DIR] [--log FILE]
+#                          [--timeout SECONDS] [--hil] [--selftest-no-failsafe]
 #
 # --source: the weedspray checkout. The package is built the way the README says a user
 # builds it: a Release tree configured with -DCMAKE_INSTALL_PREFIX=/usr (tests off), then
 # `cpack -G DEB`; the tree is $WEEDSPRAY_BUILD_DIR/vm-systemd/pkg-build (or
 # $WEEDSPRAY_VM_SYSTEMD_PKG_BUILD) and is rebuilt incrementally.
+# --arch arm64: the board's package instead, `cpack -G DEB` of the arm64 preset's tree
+# $WEEDSPRAY_BUILD_DIR (built already, e.g. build/arm64: the .deb `cpack --preset arm64` makes),
+# in an arm64 guest: qemu-system-aarch64 -M virt, Debian's arm64 kernel and the modules
+# cross-built as in tests/vm. Its rootfs is provisioned on the host without binfmt_misc:
+# debootstrap --foreign, then the second stage and dpkg -i run under proot + qemu-user
+# (run-arm64-in-root.py).
 # The rootfs (debootstrap --variant=minbase bookworm + the .deb's Depends + test tools) is
 # cached in the vm cache keyed by its package list, the kernel and modules as in tests/vm.
 # Needs root (debootstrap, chroot dpkg -i). Exits 0 only when the guest reports every check
@@ -33,6 +39,7 @@ log_file=""
 boot_timeout_s=""
 selftest=""
 hil=""
+vm_arch=amd64
 
 die() {
   echo "run-systemd-vm-test: error: $*" >&2
@@ -44,18 +51,25 @@ trap 'echo "run-systemd-vm-test: error: command failed at line $LINENO: $BASH_CO
 while (($#)); do
   case "$1" in
     --source) source_dir="${2:?--source needs a directory}"; shift 2 ;;
+    --arch) vm_arch="${2:?--arch needs amd64 or arm64}"; shift 2 ;;
     --cache) cache_dir="${2:?--cache needs a directory}"; shift 2 ;;
     --log) log_file="${2:?--log needs a file}"; shift 2 ;;
     --timeout) boot_timeout_s="${2:?--timeout needs seconds}"; shift 2 ;;
     --hil) hil=1; shift ;;
     --selftest-no-failsafe) selftest=1; hil=1; shift ;;
-    -h | --help) sed -n '2,23p' "$0"; exit 0 ;;
+    -h | --help) sed -n '2,29p' "$0"; exit 0 ;;
     *) die "unknown argument '$1' (see --help)" ;;
   esac
 done
 [ -n "$source_dir" ] || die "--source is required (see --help)"
-# The HIL scenario restarts the daemon five times under emulation.
+case "$vm_arch" in
+  amd64) ;;
+  arm64) [ -z "$selftest" ] || die "--selftest-no-failsafe switches the x86 package tree: amd64 only" ;;
+  *) die "unknown --arch '$vm_arch' (amd64 or arm64)" ;;
+esac
+# The HIL scenario restarts the daemon five times under emulation; aarch64 TCG is slower.
 [ -n "$boot_timeout_s" ] || boot_timeout_s=$([ -n "$hil" ] && echo 900 || echo 480)
+[ "$vm_arch" = amd64 ] || boot_timeout_s=$((boot_timeout_s * 2))
 [ -f "$source_dir/CMakeLists.txt" ] || die "'$source_dir' is not the weedspray checkout"
 source_dir="$(cd "$source_dir" && pwd)"
 pkg_build="${WEEDSPRAY_VM_SYSTEMD_PKG_BUILD:-$build_root/vm-systemd/pkg-build}"
@@ -71,7 +85,15 @@ require_tool() { # TOOL DEBIAN_PACKAGE
   command -v "$1" >/dev/null 2>&1 ||
     die "'$1' not found: install the Debian package '$2' (./dev deps installs it)"
 }
-require_tool qemu-system-x86_64 qemu-system-x86
+if [ "$vm_arch" = arm64 ]; then
+  require_tool qemu-system-aarch64 qemu-system-arm
+  require_tool qemu-aarch64-static qemu-user-static
+  require_tool proot proot
+  /usr/bin/python3 -c 'import seccomp' 2>/dev/null ||
+    die "python3's seccomp module not found: install the Debian package 'python3-seccomp'"
+else
+  require_tool qemu-system-x86_64 qemu-system-x86
+fi
 require_tool debootstrap debootstrap
 require_tool mkfs.ext4 e2fsprogs
 require_tool cpio cpio
@@ -81,9 +103,11 @@ require_tool ninja ninja-build
 require_tool dpkg-shlibdeps dpkg-dev # CPack's SHLIBDEPS
 require_tool chroot coreutils
 require_tool flock util-linux
-[ -x /bin/busybox ] || die "/bin/busybox not found: install the Debian package 'busybox-static'"
-if ldd /bin/busybox >/dev/null 2>&1; then
-  die "/bin/busybox is dynamically linked: install 'busybox-static' (not 'busybox')"
+if [ "$vm_arch" = amd64 ]; then # arm64: Debian's arm64 busybox-static (vm_arm64_guest_tools)
+  [ -x /bin/busybox ] || die "/bin/busybox not found: install the Debian package 'busybox-static'"
+  if ldd /bin/busybox >/dev/null 2>&1; then
+    die "/bin/busybox is dynamically linked: install 'busybox-static' (not 'busybox')"
+  fi
 fi
 # shellcheck source=tests/vm/vm-kernel.sh
 source "$source_dir/tests/vm/vm-kernel.sh"
@@ -120,6 +144,23 @@ build_package() { # -> $deb
   note "package $(basename "$deb") built in $((SECONDS - started)) s"
 }
 
+# arm64: the arm64 preset's tree is built already (ctest runs after the build); its package is
+# what `cpack --preset arm64` writes there. -> $deb
+package_arm64_tree() {
+  local started=$SECONDS debs
+  grep -q '^CMAKE_INSTALL_PREFIX:PATH=/usr$' "$build_root/CMakeCache.txt" 2>/dev/null ||
+    die "$build_root is not the arm64 preset's tree (CMAKE_INSTALL_PREFIX=/usr): set WEEDSPRAY_BUILD_DIR"
+  rm -f "$build_root"/weedspray_*_arm64.deb
+  (cd "$build_root" && cpack -G DEB) >"$build_root/vm-systemd-cpack.log" 2>&1 || {
+    cat "$build_root/vm-systemd-cpack.log" >&2
+    die "cpack -G DEB in $build_root failed"
+  }
+  debs=("$build_root"/weedspray_*_arm64.deb)
+  [ -f "${debs[0]}" ] || die "cpack made no weedspray_*_arm64.deb in $build_root (not the arm64 tree?)"
+  deb="${debs[0]}"
+  note "package $(basename "$deb") made in $((SECONDS - started)) s"
+}
+
 # --- the rootfs, cached by package list --------------------------------------------------
 # systemd as PID 1 with udev and the system bus; gpiod and v4l-utils for the fixtures.
 base_packages=(systemd systemd-sysv dbus udev kmod gpiod v4l-utils)
@@ -131,30 +172,49 @@ package_depends() { # DEB -> the package names of its Depends (first alternative
   dpkg-deb -f "$1" Depends | tr ',' '\n' | sed -e 's/|.*//' -e 's/(.*)//' -e 's/ //g' |
     sed '/^$/d' | while read -r name; do
     # debootstrap cannot resolve a virtual package (libspdlog1.10-fmt9): name its provider.
-    if [ -n "$(apt-cache show --no-all-versions "$name" 2>/dev/null)" ]; then
+    if [ -n "$(vm_apt_cache show --no-all-versions "$name" 2>/dev/null)" ]; then
       echo "$name"
       continue
     fi
-    provider="$(apt-cache showpkg "$name" 2>/dev/null |
+    provider="$(vm_apt_cache showpkg "$name" 2>/dev/null |
       sed -n '/^Reverse Provides:/,$ { /^Reverse Provides:/d; s/ .*//p }' | head -n1)"
     [ -n "$provider" ] || die "the package depends on '$name', which the package index lacks"
     echo "$provider"
   done
 }
 
+# ROOT PROGRAM [ARG...]: runs an arm64 program of ROOT as if chrooted there (see the script).
+in_arm64_root() { /usr/bin/python3 "$script_dir/run-arm64-in-root.py" "$@"; }
+
 prepare_rootfs() { # -> $rootfs_dir (read-only cache; each run copies it)
-  local packages key started=$SECONDS
+  local packages key started=$SECONDS name=systemd-rootfs stale=('!' -name 'systemd-rootfs-arm64-*')
   packages="$( (printf '%s\n' "${base_packages[@]}"; package_depends "$deb") | sort -u | paste -sd, -)"
   key="$(echo "$debian_suite $debian_mirror $packages" | sha256sum | cut -c1-16)"
-  rootfs_dir="$cache_dir/systemd-rootfs-$key"
+  # amd64 keeps its old name (systemd-rootfs-KEY); each architecture removes only its own.
+  [ "$vm_arch" = amd64 ] || { name="systemd-rootfs-$vm_arch" && stale=(); }
+  rootfs_dir="$cache_dir/$name-$key"
   [ -f "$rootfs_dir.ready" ] && return 0
-  find "$cache_dir" -mindepth 1 -maxdepth 1 -name 'systemd-rootfs-*' -exec rm -rf {} +
-  note "debootstrap --variant=minbase $debian_suite with $packages (about 2.5 min)"
-  debootstrap --variant=minbase --include="$packages" "$debian_suite" "$rootfs_dir" \
-    "$debian_mirror" >"$rootfs_dir.log" 2>&1 || {
-    tail -n 30 "$rootfs_dir.log" >&2
-    die "debootstrap failed (network? log: $rootfs_dir.log)"
-  }
+  find "$cache_dir" -mindepth 1 -maxdepth 1 -name "$name-*" "${stale[@]}" -exec rm -rf {} +
+  if [ "$vm_arch" = amd64 ]; then
+    note "debootstrap --variant=minbase $debian_suite with $packages (about 2.5 min)"
+    debootstrap --variant=minbase --include="$packages" "$debian_suite" "$rootfs_dir" \
+      "$debian_mirror" >"$rootfs_dir.log" 2>&1 || {
+      tail -n 30 "$rootfs_dir.log" >&2
+      die "debootstrap failed (network? log: $rootfs_dir.log)"
+    }
+  else
+    note "debootstrap --foreign --arch=$vm_arch --variant=minbase $debian_suite with $packages"
+    debootstrap --foreign --arch="$vm_arch" --variant=minbase --include="$packages" \
+      "$debian_suite" "$rootfs_dir" "$debian_mirror" >"$rootfs_dir.log" 2>&1 || {
+      tail -n 30 "$rootfs_dir.log" >&2
+      die "debootstrap --foreign failed (network? log: $rootfs_dir.log)"
+    }
+    note "its second stage under proot + qemu-aarch64-static (downloaded in $((SECONDS - started)) s)"
+    in_arm64_root "$rootfs_dir" /debootstrap/debootstrap --second-stage >>"$rootfs_dir.log" 2>&1 || {
+      tail -n 30 "$rootfs_dir.log" >&2
+      die "debootstrap --second-stage under proot failed (log: $rootfs_dir.log)"
+    }
+  fi
   rm -f "$rootfs_dir"/var/cache/apt/archives/*.deb # 180 MB nobody reads in the guest
   touch "$rootfs_dir.ready"
   note "rootfs prepared in $((SECONDS - started)) s ($(du -sh "$rootfs_dir" | cut -f1))"
@@ -167,7 +227,14 @@ build_disk() { # -> $work_dir/rootfs.ext4
   # Installed the way a user installs it; the postinst runs systemd-sysusers and
   # systemd-tmpfiles in the chroot (systemctl and udevadm find no running system there).
   cp "$deb" "$root/tmp/weedspray.deb"
-  chroot "$root" dpkg -i /tmp/weedspray.deb >"$work_dir/dpkg.log" 2>&1 || {
+  local status=0 started=$SECONDS
+  if [ "$vm_arch" = amd64 ]; then
+    chroot "$root" dpkg -i /tmp/weedspray.deb >"$work_dir/dpkg.log" 2>&1 || status=$?
+  else
+    in_arm64_root "$root" /usr/bin/dpkg -i /tmp/weedspray.deb >"$work_dir/dpkg.log" 2>&1 || status=$?
+    note "dpkg -i under proot + qemu-aarch64-static took $((SECONDS - started)) s"
+  fi
+  [ "$status" -eq 0 ] || {
     cat "$work_dir/dpkg.log" >&2
     die "dpkg -i $(basename "$deb") in the guest rootfs failed"
   }
@@ -180,15 +247,18 @@ build_disk() { # -> $work_dir/rootfs.ext4
   install -D -m 755 "$script_dir/guest-test.sh" "$root/usr/local/lib/weedspray-vm-test/guest-test.sh"
   install -m 644 "$script_dir/../vm/gpio-sim-chip.sh" "$root/usr/local/lib/weedspray-vm-test/"
   install -m 755 "$script_dir/hil-scenario.sh" "$root/usr/local/lib/weedspray-vm-test/"
-  # The simulated machine: built in the package tree, never part of the package.
-  [ -x "$pkg_build/tools/hil/weedspray-hil" ] || die "no weedspray-hil in $pkg_build/tools/hil"
-  install -m 755 "$pkg_build/tools/hil/weedspray-hil" "$root/usr/local/bin/weedspray-hil"
+  # The simulated machine: built in the package tree (arm64: the arm64 tree), never part of
+  # the package.
+  local hil_tree="$pkg_build"
+  [ "$vm_arch" = amd64 ] || hil_tree="$build_root"
+  [ -x "$hil_tree/tools/hil/weedspray-hil" ] || die "no weedspray-hil in $hil_tree/tools/hil"
+  install -m 755 "$hil_tree/tools/hil/weedspray-hil" "$root/usr/local/bin/weedspray-hil"
   unit_dir="$root/etc/systemd/system"
   install -D -m 644 "$script_dir/weedspray-vm-test.service" "$unit_dir/weedspray-vm-test.service"
   mkdir -p "$unit_dir/multi-user.target.wants"
   ln -sf ../weedspray-vm-test.service "$unit_dir/multi-user.target.wants/"
   # No login prompt on the console the markers use; no first-boot questions.
-  ln -sf /dev/null "$unit_dir/serial-getty@ttyS0.service"
+  ln -sf /dev/null "$unit_dir/serial-getty@$console.service"
   ln -sf /dev/null "$unit_dir/getty@tty1.service"
   echo weedspray-vm >"$root/etc/hostname"
   echo 0123456789abcdef0123456789abcdef >"$root/etc/machine-id"
@@ -201,9 +271,11 @@ build_disk() { # -> $work_dir/rootfs.ext4
 build_stage1() { # -> $work_dir/stage1.cpio: busybox, the root disk's modules, /init
   local root="$work_dir/stage1" path
   mkdir -p "$root"/{bin,dev,proc,sys,newroot}
-  cp /bin/busybox "$root/bin/busybox"
+  if [ "$vm_arch" = amd64 ]; then cp /bin/busybox "$root/bin/busybox"; else
+    cp "$arm64_tools/root/bin/busybox" "$root/bin/busybox"
+  fi
   # ext4's soft dependency crc32c-intel needs SSE4.2, which the emulated qemu64 CPU lacks
-  # (insmod: No such device); crc32c_generic serves ext4 instead.
+  # (insmod: No such device); crc32c_generic serves ext4 instead. (arm64 has no -intel.)
   vm_module_load_list virtio_pci virtio_blk ext4 crc32c_generic |
     grep -v '/crc32c-intel\.ko$' >"$root/modules.load"
   while read -r path; do
@@ -215,21 +287,30 @@ build_stage1() { # -> $work_dir/stage1.cpio: busybox, the root disk's modules, /
 }
 
 run_guest() { # returns QEMU's status
-  local status=0
-  timeout --foreground "$boot_timeout_s" qemu-system-x86_64 -accel tcg -cpu qemu64 -smp 2 \
+  local status=0 machine=(qemu-system-x86_64 -cpu qemu64)
+  # arm64: the virt board's PL011 is ttyAMA0; the guest powers off through PSCI. aarch64 TCG
+  # is slow enough for the daemon's cross-watch to see its valve thread stall (guest-test.sh).
+  local slow=""
+  [ "$vm_arch" = amd64 ] || { machine=(qemu-system-aarch64 -M virt -cpu cortex-a72) && slow=1; }
+  timeout --foreground "$boot_timeout_s" "${machine[@]}" -accel tcg -smp 2 \
     -m 1536 -nographic -no-reboot -nodefaults -serial stdio \
     -kernel "$vmlinux" -initrd "$work_dir/stage1.cpio" \
     -drive "file=$work_dir/rootfs.ext4,format=raw,if=virtio" -snapshot \
-    -append "console=ttyS0 quiet loglevel=3 panic=-1 oops=panic systemd.show_status=0 systemd.firstboot=off${hil:+ weedspray.hil=1}${selftest:+ weedspray.hil_selftest=1}" \
+    -append "console=$console quiet loglevel=3 panic=-1 oops=panic systemd.show_status=0 systemd.firstboot=off${slow:+ weedspray.tcg_stalls_expected=1}${hil:+ weedspray.hil=1}${selftest:+ weedspray.hil_selftest=1}" \
     </dev/null >"$guest_log" 2>&1 || status=$?
   return "$status"
 }
 
 started_all=$SECONDS
-build_package
+console=ttyS0 # the serial console: the markers' way out (guest-test.sh reads it from console=)
+if [ "$vm_arch" = amd64 ]; then build_package; else
+  console=ttyAMA0
+  package_arm64_tree
+fi
 exec 9>"$cache_dir/.lock"
 flock 9 # shares the kernel cache with tests/vm
 prepare_kernel
+[ "$vm_arch" = amd64 ] || vm_arm64_guest_tools # the stage-1's busybox
 prepare_rootfs
 work_dir="$(mktemp -d "$cache_dir/systemd-run.XXXXXX")"
 [ -n "${WEEDSPRAY_VM_KEEP_WORK:-}" ] || trap 'rm -rf "$work_dir"' EXIT

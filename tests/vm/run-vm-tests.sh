@@ -90,7 +90,7 @@ require_tool make make
 require_tool gcc gcc
 require_tool ldd libc-bin
 guest_tools=(gpiodetect gpioinfo gpioget gpioset gpiomon v4l2-ctl)
-if [ "$vm_arch" = amd64 ]; then # arm64: downloaded below (arm64_guest_tools)
+if [ "$vm_arch" = amd64 ]; then # arm64: downloaded by vm_arm64_guest_tools (vm-kernel.sh)
   for tool in "${guest_tools[@]:0:5}"; do require_tool "$tool" gpiod; done
   require_tool v4l2-ctl v4l-utils
   [ -x /bin/busybox ] || die "/bin/busybox not found: install the Debian package 'busybox-static'"
@@ -141,29 +141,6 @@ shared_libraries_arm64() {
     # The loader's own line reads "/lib/ld-linux-aarch64.so.1 => $sysroot/lib/...".
     echo "$list" | awk '/^\t\// { print $1; next } /=> \// { print $3 }'
   done | sort -u
-}
-
-# arm64: Debian's arm64 busybox-static, gpiod and v4l-utils unpacked in the cache (the host's
-# are amd64) -> $arm64_tools (a root holding bin/busybox and usr/bin/...).
-arm64_guest_tools() {
-  local packages=(busybox-static gpiod v4l-utils) versions key deb
-  versions="$(vm_apt_cache show --no-all-versions "${packages[@]}" 2>/dev/null |
-    sed -n 's/^Version: //p' | tr '\n' ' ')"
-  [ "$(echo "$versions" | wc -w)" -eq "${#packages[@]}" ] ||
-    die "the arm64 package index lacks one of ${packages[*]}"
-  key="$(echo "${packages[*]} $versions" | sha256sum | cut -c1-12)"
-  arm64_tools="$cache_dir/arm64-guest-tools-$key"
-  [ -f "$arm64_tools/ready" ] && return 0
-  find "$cache_dir" -mindepth 1 -maxdepth 1 -type d -name 'arm64-guest-tools-*' -exec rm -rf {} +
-  mkdir -p "$arm64_tools/debs"
-  note "downloading the arm64 ${packages[*]}"
-  (cd "$arm64_tools/debs" && vm_apt_get download -q "${packages[@]}") >"$arm64_tools/download.log" 2>&1 || {
-    cat "$arm64_tools/download.log" >&2
-    die "apt-get download of the arm64 ${packages[*]} failed"
-  }
-  for deb in "$arm64_tools"/debs/*.deb; do dpkg-deb -x "$deb" "$arm64_tools/root"; done
-  rm -rf "$arm64_tools/debs"
-  touch "$arm64_tools/ready"
 }
 
 write_cpio() { # DIR ARCHIVE
@@ -251,7 +228,7 @@ run_guest() { # -> $guest_log; returns QEMU's status
 exec 9>"$cache_dir/.lock"
 flock 9 # two builds sharing a cache must not prepare the kernel at once
 prepare_kernel
-[ "$vm_arch" = amd64 ] || arm64_guest_tools
+[ "$vm_arch" = amd64 ] || vm_arm64_guest_tools
 work_dir="$(mktemp -d "$cache_dir/run.XXXXXX")"
 [ -n "${WEEDSPRAY_VM_KEEP_WORK:-}" ] || trap 'rm -rf "$work_dir"' EXIT # keep: for debugging
 guest_log="${log_file:-$work_dir/guest.log}"

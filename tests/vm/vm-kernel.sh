@@ -14,6 +14,7 @@
 #   prepare_kernel      downloads + builds once per kernel and module set (cached in kernel_dir;
 #                       hold the cache lock)
 #   vm_module_load_list MODULE...   insmod paths (/lib/modules/...), dependencies first
+#   vm_arm64_guest_tools            arm64: Debian's arm64 busybox-static, gpiod, v4l-utils
 #
 # module_root is a self-contained lib/modules/$kernel_release tree (depmod has run) holding
 # only the modules some guest loads (vm_staged_modules), so a guest can copy it whole and use
@@ -84,6 +85,30 @@ vm_apt_cache() {
 }
 vm_apt_get() {
   if [ "$vm_arch" = arm64 ]; then APT_CONFIG="$(vm_arm64_apt_dir)/apt.conf" apt-get "$@"; else apt-get "$@"; fi
+}
+
+# arm64: Debian's arm64 busybox-static, gpiod and v4l-utils unpacked in the cache (the host's
+# are amd64) -> $arm64_tools (a root holding bin/busybox and usr/bin/...). The io guest's
+# initramfs and the systemd guest's stage 1 take their busybox from here. Hold the cache lock.
+vm_arm64_guest_tools() {
+  local packages=(busybox-static gpiod v4l-utils) versions key deb
+  versions="$(vm_apt_cache show --no-all-versions "${packages[@]}" 2>/dev/null |
+    sed -n 's/^Version: //p' | tr '\n' ' ')"
+  [ "$(echo "$versions" | wc -w)" -eq "${#packages[@]}" ] ||
+    die "the arm64 package index lacks one of ${packages[*]}"
+  key="$(echo "${packages[*]} $versions" | sha256sum | cut -c1-12)"
+  arm64_tools="$cache_dir/arm64-guest-tools-$key"
+  [ -f "$arm64_tools/ready" ] && return 0
+  find "$cache_dir" -mindepth 1 -maxdepth 1 -type d -name 'arm64-guest-tools-*' -exec rm -rf {} +
+  mkdir -p "$arm64_tools/debs"
+  note "downloading the arm64 ${packages[*]}"
+  (cd "$arm64_tools/debs" && vm_apt_get download -q "${packages[@]}") >"$arm64_tools/download.log" 2>&1 || {
+    cat "$arm64_tools/download.log" >&2
+    die "apt-get download of the arm64 ${packages[*]} failed"
+  }
+  for deb in "$arm64_tools"/debs/*.deb; do dpkg-deb -x "$deb" "$arm64_tools/root"; done
+  rm -rf "$arm64_tools/debs"
+  touch "$arm64_tools/ready"
 }
 
 # --- which kernel --------------------------------------------------------------------------
