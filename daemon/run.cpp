@@ -447,8 +447,11 @@ class Daemon final : public CommandHandler {
     CalibrationContext c;
     c.idle = state_.state() == SprayerState::kIdle;
     c.have_meter = backends_.flow != nullptr;
-    c.now_s = seconds(backends_.clock->now() - start_time_);
-    c.pulses = sprayer_ ? sprayer_->control().flow_pulses : 0;
+    // The pulse count with the control loop's own time of it: under load the main loop's tick
+    // comes late, and its clock would stretch or shrink a counted window.
+    const ControlStatus control = sprayer_ ? sprayer_->control() : ControlStatus{};
+    c.now_s = seconds((control.cycles > 0 ? control.time : backends_.clock->now()) - start_time_);
+    c.pulses = control.flow_pulses;
     c.setpoint_mpa = setpoint_mpa_;
     return c;
   }

@@ -58,7 +58,8 @@ decision_threshold = 0.005
 [calibration]
 duties_pct = [20.0, 50.0, 80.0]
 settle_s = 0.2
-measure_s = 0.5
+measure_s = 0.7
+min_r_squared = 0.95  # 0.7 s of one nozzle at 20 % is ~30 pulses: a coarse point
 [sim]
 speed_profile = "constant"
 speed_max_m_per_s = 1.0
@@ -112,7 +113,7 @@ rows = [f[1 + 4 * i: 5 + 4 * i] for i in range(3)]
 flow = []
 for source, a, b, r2 in rows:
     assert source == "calibration", rows
-    assert float(r2) >= 0.98, rows
+    assert float(r2) >= 0.95, rows
     flow.append(float(a) * 50 + float(b))  # L/min at 50 % duty
 healthy = (flow[0] + flow[2]) / 2
 assert abs(flow[0] / flow[2] - 1) < 0.08, flow
