@@ -15,6 +15,7 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <thread>
@@ -28,6 +29,7 @@
 #include "daemon/records/as_applied_log.hpp"
 #include "daemon/records/map_geometry.hpp"
 #include "daemon/records/totals.hpp"
+#include "daemon/sprayer/calibrations.hpp"
 #include "daemon/sprayer/live_view.hpp"
 #include "daemon/sprayer/sprayer.hpp"
 #include "daemon/supervision/alarms.hpp"
@@ -125,6 +127,13 @@ class Daemon final : public CommandHandler {
       base_totals_ = load_totals(totals_file_, &totals_error);
     }
     if (!totals_error.empty()) spdlog::warn("totals not restored: {}", totals_error);
+    std::function<double()> sim_delivered_l;
+    if (backends_.plant_truth) {
+      sim_delivered_l = [truth = backends_.plant_truth] {
+        return std::strtod(truth().c_str() + std::strlen("sprayed_l="), nullptr);
+      };
+    }
+    calibrations_.emplace(config_, config_.daemon.state_dir, std::move(sim_delivered_l));
     log_ = std::make_unique<AsAppliedLog>(
         config_.as_applied_dir(), static_cast<std::uintmax_t>(config_.log.rotate_bytes),
         config_.log.keep_files,
@@ -204,6 +213,8 @@ class Daemon final : public CommandHandler {
 
   // --- D-Bus commands (main thread) ---
   CommandResult start() override {
+    if (calibrations_ && calibrations_->running())
+      return {kErrorNotPermitted, "Start refused: a calibration runs (Stop cancels it)"};
     // The bus name appears before the loops have run a cycle: a Start then is kept, not refused.
     if (state_.state() == SprayerState::kStarting) {
       start_when_ready_ = true;
@@ -213,6 +224,10 @@ class Daemon final : public CommandHandler {
     return request(StateEvent::kStart, "Start");
   }
   CommandResult stop() override {
+    if (calibrations_ && calibrations_->cancel("Stop")) {
+      publish_params();
+      return {};
+    }
     if (state_.state() == SprayerState::kStarting && start_when_ready_) {
       start_when_ready_ = false;
       return {};
@@ -254,6 +269,7 @@ class Daemon final : public CommandHandler {
           "[daemon] levels take effect after a restart");
     }
     config_ = with_live_sections_of(config_, fresh);
+    if (calibrations_) calibrations_->set_config(config_);
     setpoint_mpa_ = config_.pressure.setpoint_mpa;
     alarms_.set_thresholds(config_.alarms);
     set_log_level(config_.daemon.log_level);
@@ -337,9 +353,11 @@ class Daemon final : public CommandHandler {
   void publish_params() {
     LiveParams params = live_params_from(config_);
     params.setpoint_mpa = setpoint_mpa_;
-    params.pump_enabled = state_.pump_enabled();
+    // A calibration (in Idle) runs the pump for its own valves.
+    params.pump_enabled = state_.pump_enabled() || (calibrations_ && calibrations_->running());
     params.valves_enabled = state_.valves_enabled();
     params.trip_reset = trip_reset_;
+    if (calibrations_) calibrations_->apply(params);
     sprayer_->set_params(params);
     refresh_status();
   }
@@ -370,6 +388,7 @@ class Daemon final : public CommandHandler {
     }
     drain_latencies();
     live_view_->poll(now);
+    if (calibrations_ && calibrations_->update(calibration_context())) publish_params();
     evaluate_alarms(now, pressure, control);
     heartbeat(now, pressure, control);
 
@@ -422,6 +441,39 @@ class Daemon final : public CommandHandler {
     }
     spdlog::info("wheel calibration {} started: {:.0f} m straight run", request, run_distance_m);
     return {};
+  }
+
+  CalibrationContext calibration_context() const {
+    CalibrationContext c;
+    c.idle = state_.state() == SprayerState::kIdle;
+    c.have_meter = backends_.flow != nullptr;
+    // The pulse count with the control loop's own time of it: under load the main loop's tick
+    // comes late, and its clock would stretch or shrink a counted window.
+    const ControlStatus control = sprayer_ ? sprayer_->control() : ControlStatus{};
+    c.now_s = seconds((control.cycles > 0 ? control.time : backends_.clock->now()) - start_time_);
+    c.pulses = control.flow_pulses;
+    c.setpoint_mpa = setpoint_mpa_;
+    return c;
+  }
+
+  // A calibration's command, and its valves to the loops when it was taken.
+  CommandResult calibration_command(const std::function<CommandResult(Calibrations&)>& command) {
+    if (!calibrations_ || !sprayer_) return {kErrorUnavailable, "the sprayer is not running yet"};
+    const CommandResult result = command(*calibrations_);
+    if (result.ok()) publish_params();
+    return result;
+  }
+
+  CommandResult start_catch_test(double seconds) override {
+    return calibration_command(
+        [&](Calibrations& c) { return c.start_catch_test(seconds, calibration_context()); });
+  }
+  CommandResult calibrate_meter(double volume_l) override {
+    return calibration_command([&](Calibrations& c) { return c.calibrate_meter(volume_l); });
+  }
+  CommandResult calibrate_nozzles() override {
+    return calibration_command(
+        [&](Calibrations& c) { return c.calibrate_nozzles(calibration_context()); });
   }
 
   CommandResult inject_sim_fault(const std::string& name) override {
@@ -778,6 +830,7 @@ class Daemon final : public CommandHandler {
     s.vision_latency_ms = control.last_latency_ms;
     s.vision_latency_p99_ms = latency_p99();
     s.control_overruns = total_overruns(pressure, control);
+    if (calibrations_) calibrations_->fill_status(s);
     return s;
   }
 
@@ -862,6 +915,7 @@ class Daemon final : public CommandHandler {
   std::jthread log_thread_;
   std::filesystem::path totals_file_;
   Totals base_totals_;
+  std::optional<Calibrations> calibrations_;  // from run() on
   double setpoint_mpa_;
   std::uint64_t trip_reset_ = 0;
   std::uint64_t key_changes_ = 0;

@@ -7,6 +7,25 @@
 #include "control/plant/hydraulic_plant.hpp"
 
 namespace weedspray::daemon {
+namespace {
+
+// "_blocked_30" -> 0.30 (a nozzle 30 % blocked: the calibration and health tests' worn tip).
+std::optional<double> partial_blockage(const std::string& suffix) {
+  constexpr std::string_view kPrefix = "_blocked_";
+  if (!suffix.starts_with(kPrefix) || suffix.size() == kPrefix.size() ||
+      suffix.size() > kPrefix.size() + 2) {
+    return std::nullopt;
+  }
+  int percent = 0;
+  for (char c : suffix.substr(kPrefix.size())) {
+    if (c < '0' || c > '9') return std::nullopt;
+    percent = percent * 10 + (c - '0');
+  }
+  if (percent < 1) return std::nullopt;
+  return percent / 100.0;
+}
+
+}  // namespace
 
 std::optional<SimFault> parse_sim_fault(const std::string& text) {
   const auto at = text.find('@');
@@ -40,9 +59,13 @@ std::optional<SimFault> parse_sim_fault(const std::string& text) {
     fault.apply = [](Plant& p) { p.set_tank_level_l(0.0); };
   } else if (fault.name.starts_with("nozzle") && fault.name.size() >= 9 && fault.name[6] >= '0' &&
              fault.name[6] <= '7' &&
-             (fault.name.substr(7) == "_blocked" || fault.name.substr(7) == "_ok")) {
+             (fault.name.substr(7) == "_blocked" || fault.name.substr(7) == "_ok" ||
+              partial_blockage(fault.name.substr(7)))) {
     const int nozzle = fault.name[6] - '0';
-    const double blockage = fault.name.ends_with("_blocked") ? 1.0 : 0.0;
+    const double blockage = fault.name.ends_with("_ok") ? 0.0
+                            : fault.name.ends_with("_blocked")
+                                ? 1.0
+                                : *partial_blockage(fault.name.substr(7));
     fault.apply = [nozzle, blockage](Plant& p) {
       if (nozzle < p.nozzle_count()) p.set_nozzle_blockage(nozzle, blockage);
     };

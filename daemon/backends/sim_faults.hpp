@@ -29,7 +29,8 @@ struct SimFault {
 // The names parse_sim_fault() knows, for help texts and the soak.
 inline constexpr const char* kSimFaultNames =
     "sensor_open, sensor_short, sensor_ok, filter_blocked, filter_ok, tank_empty, tank_refill, "
-    "nozzleN_blocked, nozzleN_ok, camera_gone, camera_back, tank_silent, tank_ok; "
+    "nozzleN_blocked, nozzleN_blocked_PP (PP % blocked, 1..99), nozzleN_ok, camera_gone, "
+    "camera_back, tank_silent, tank_ok; "
     "OUTPUT_write_fail / OUTPUT_write_ok with OUTPUT valve, pump, buzzer, led, heartbeat";
 
 // "sensor_open@5" -> the fault; nullopt for an unknown name or a malformed time.

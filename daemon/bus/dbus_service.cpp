@@ -80,6 +80,15 @@ std::vector<const char*> changed_properties(const Status& a, const Status& b) {
             a.wheel_calibration_pulses != b.wheel_calibration_pulses ||
             a.wheel_calibration_pulses_per_metre != b.wheel_calibration_pulses_per_metre,
         "WheelCalibration");
+  check(a.calibration_state != b.calibration_state ||
+            a.calibration_progress != b.calibration_progress ||
+            a.calibration_message != b.calibration_message,
+        "Calibration");
+  check(a.meter_source != b.meter_source || a.meter_pulses_per_litre != b.meter_pulses_per_litre ||
+            a.meter_configured_pulses_per_litre != b.meter_configured_pulses_per_litre ||
+            a.meter_error_pct != b.meter_error_pct,
+        "MeterCalibration");
+  check(a.nozzle_lines != b.nozzle_lines, "NozzleCalibration");
   return names;
 }
 
@@ -113,6 +122,9 @@ const sd_bus_vtable kVtable[] = {
     WS_PROPERTY("GnssTime", "s"),
     WS_PROPERTY("YawRate", "d"),
     WS_PROPERTY("WheelCalibration", "(tsdtd)"),
+    WS_PROPERTY("Calibration", "(sds)"),
+    WS_PROPERTY("MeterCalibration", "(sddd)"),
+    WS_PROPERTY("NozzleCalibration", "a(sddd)"),
     SD_BUS_METHOD("Start", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("Stop", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("SetPressureSetpoint", "d", "", DbusService::method, kMethodFlags),
@@ -121,6 +133,9 @@ const sd_bus_vtable kVtable[] = {
     SD_BUS_METHOD("InjectSimFault", "s", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("Snapshot", "u", "ay", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("CalibrateWheel", "d", "t", DbusService::method, kMethodFlags),
+    SD_BUS_METHOD("StartCatchTest", "d", "", DbusService::method, kMethodFlags),
+    SD_BUS_METHOD("CalibrateMeter", "d", "", DbusService::method, kMethodFlags),
+    SD_BUS_METHOD("CalibrateNozzles", "", "", DbusService::method, kMethodFlags),
     SD_BUS_SIGNAL("AlarmRaised", "s", 0),
     SD_BUS_SIGNAL("AlarmCleared", "s", 0),
     SD_BUS_VTABLE_END,
@@ -215,6 +230,25 @@ int DbusService::get_property(sd_bus*, const char*, const char*, const char* pro
                                  s.wheel_calibration_pulses, s.wheel_calibration_pulses_per_metre);
   }
   if (p == "GnssTime") return sd_bus_message_append(reply, "s", s.gnss_utc.c_str());
+  if (p == "Calibration") {
+    return sd_bus_message_append(reply, "(sds)", s.calibration_state.c_str(),
+                                 s.calibration_progress, s.calibration_message.c_str());
+  }
+  if (p == "MeterCalibration") {
+    return sd_bus_message_append(reply, "(sddd)", s.meter_source.c_str(), s.meter_pulses_per_litre,
+                                 s.meter_configured_pulses_per_litre, s.meter_error_pct);
+  }
+  if (p == "NozzleCalibration") {
+    int r = sd_bus_message_open_container(reply, 'a', "(sddd)");
+    for (const auto& line : s.nozzle_lines) {
+      if (r >= 0) {
+        r = sd_bus_message_append(reply, "(sddd)", line.source.c_str(),
+                                  line.slope_l_per_min_per_pct, line.intercept_l_per_min,
+                                  line.r_squared);
+      }
+    }
+    return r < 0 ? r : sd_bus_message_close_container(reply);
+  }
   return sd_bus_error_setf(error, SD_BUS_ERROR_UNKNOWN_PROPERTY, "no property %s", property);
 }
 
@@ -278,6 +312,14 @@ int dispatch(sd_bus_message* message, CommandHandler& handler, sd_bus_error* err
     std::uint64_t request = 0;
     result = handler.calibrate_wheel(distance_m, request);
     if (result.ok()) return sd_bus_reply_method_return(message, "t", request);
+  } else if (member == "StartCatchTest" || member == "CalibrateMeter") {
+    double value = 0;
+    const int r = sd_bus_message_read(message, "d", &value);
+    if (r < 0) return r;
+    result = member == "StartCatchTest" ? handler.start_catch_test(value)
+                                        : handler.calibrate_meter(value);
+  } else if (member == "CalibrateNozzles") {
+    result = handler.calibrate_nozzles();
   } else {
     return sd_bus_error_setf(error, SD_BUS_ERROR_UNKNOWN_METHOD, "no method %s",
                              std::string(member).c_str());

@@ -5,12 +5,14 @@
 //     VolumeSprayed d (L), AreaCovered d (m^2), SavingsPercent d, FrameRate d (Hz),
 //     VisionLatencyMs d, VisionLatencyP99Ms d, ControlOverruns t, Mode s, SpeedSource s,
 //     GnssFix s, Position (ddd), GnssSpeed d, Course d, GnssHdop d, GnssSatellites u,
-//     GnssTime s, YawRate d (deg/s clockwise), WheelCalibration (tsdtd) (README: D-Bus API)
+//     GnssTime s, YawRate d (deg/s clockwise), WheelCalibration (tsdtd), Calibration (sds),
+//     MeterCalibration (sddd), NozzleCalibration a(sddd) (README: D-Bus API)
 //   methods: Start(), Stop(), SetPressureSetpoint(d), ReloadConfig(), ClearAlarms(),
 //     InjectSimFault(s) (simulation only), Snapshot(u camera) -> ay PNG (live view, at most
 //     2 a second; the reply comes when the camera's next frame is processed),
 //     CalibrateWheel(d metres) -> t request (wheel pulses per metre from GNSS over a straight
-//     run; the WheelCalibration property reports it)
+//     run; the WheelCalibration property reports it), StartCatchTest(d seconds),
+//     CalibrateMeter(d litres), CalibrateNozzles() (the Calibration property follows them)
 //   signals: AlarmRaised(s), AlarmCleared(s)
 #pragma once
 

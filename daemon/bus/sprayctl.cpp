@@ -1,6 +1,8 @@
 // sprayctl: a small command-line client of weedsprayd over D-Bus (sd-bus).
 //   sprayctl [--user] [--json] status|monitor|start|stop|set-pressure
 //   MPA|alarms|clear-alarms|reload|snapshot [--camera N] OUT.png|calibrate-wheel [--distance M]
+//   sprayctl calibrate meter --seconds S | --volume L    catch test, then the collected volume
+//   sprayctl calibrate nozzles                            each nozzle's line over a duty sweep
 //   sprayctl export-map ...   runs weedspray-export-map (no bus; GDAL stays out of sprayctl)
 #include <systemd/sd-bus.h>
 #include <unistd.h>
@@ -124,6 +126,25 @@ void check(int r, const char* what) {
   if (r < 0) throw BusError{std::string(what) + ": " + std::strerror(-r)};
 }
 
+std::string meter_text(const char* source, double in_use, double configured, double error_pct) {
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(1) << in_use << " pulses/L (" << source;
+  if (std::string_view(source) == "calibration")
+    text << "; configured " << configured << ", its error " << std::setprecision(2) << error_pct
+         << " %";
+  text << ")";
+  return text.str();
+}
+
+std::string line_text(const char* source, double slope, double intercept, double r_squared) {
+  std::ostringstream text;
+  text << "q = " << std::fixed << std::setprecision(5) << slope << " s + " << std::setprecision(4)
+       << intercept << " L/min (" << source;
+  if (r_squared > 0) text << ", R^2 " << r_squared;
+  text << ")";
+  return text.str();
+}
+
 // Reads one variant (of the types the service uses) from `m`.
 Value read_variant(sd_bus_message* m) {
   char type = 0;
@@ -164,6 +185,30 @@ Value read_variant(sd_bus_message* m) {
          << " pulses";
     if (std::string_view(state) == "done") text << ", " << per_metre << " pulses/m";
     value = text.str();
+  } else if (sig == "(sds)") {  // Calibration: state, progress, message
+    const char* state = nullptr;
+    const char* message = nullptr;
+    double progress = 0;
+    check(sd_bus_message_read(m, "(sds)", &state, &progress, &message), "read (sds)");
+    std::ostringstream text;
+    text << state << " " << std::fixed << std::setprecision(0) << progress * 100
+         << " %: " << message;
+    value = text.str();
+  } else if (sig == "(sddd)") {  // MeterCalibration: source, K in use, configured K, error
+    const char* source = nullptr;
+    double in_use = 0, configured = 0, error_pct = 0;
+    check(sd_bus_message_read(m, "(sddd)", &source, &in_use, &configured, &error_pct),
+          "read (sddd)");
+    value = meter_text(source, in_use, configured, error_pct);
+  } else if (sig == "a(sddd)") {  // NozzleCalibration: each nozzle's line in use
+    check(sd_bus_message_enter_container(m, 'a', "(sddd)"), "enter a(sddd)");
+    std::vector<std::string> lines;
+    const char* source = nullptr;
+    double slope = 0, intercept = 0, r_squared = 0;
+    while (sd_bus_message_read(m, "(sddd)", &source, &slope, &intercept, &r_squared) > 0)
+      lines.push_back(line_text(source, slope, intercept, r_squared));
+    check(sd_bus_message_exit_container(m), "exit a(sddd)");
+    value = lines;
   } else if (sig == "b") {
     int b = 0;
     check(sd_bus_message_read(m, "b", &b), "read b");
@@ -279,6 +324,37 @@ class Client {
     sd_bus_message_unref(reply);
     check(read, "read WheelCalibration");
     return c;
+  }
+
+  struct Calibration {
+    std::string state;
+    double progress = 0;
+    std::string message;
+  };
+  Calibration calibration() {
+    sd_bus_error error = SD_BUS_ERROR_NULL;
+    sd_bus_message* reply = nullptr;
+    const int r = sd_bus_get_property(bus_, kBusName, kObjectPath, kInterface, "Calibration",
+                                      &error, &reply, "(sds)");
+    if (r < 0) fail(error, r);
+    Calibration c;
+    const char* state = nullptr;
+    const char* message = nullptr;
+    const int read = sd_bus_message_read(reply, "(sds)", &state, &c.progress, &message);
+    if (read >= 0) {
+      c.state = state;
+      c.message = message;
+    }
+    sd_bus_message_unref(reply);
+    check(read, "read Calibration");
+    return c;
+  }
+
+  // One property's value as `sprayctl status` shows it.
+  std::string property_text(const char* name) {
+    const Properties p = get_all();
+    const auto found = p.find(name);
+    return found == p.end() ? std::string("?") : text_value(found->second);
   }
 
   // The live view: camera `camera`'s next frame with its overlay, as PNG bytes.
@@ -402,6 +478,8 @@ void print_status(const Properties& p, bool json) {
             << get("GnssSatellites") << " satellites, HDOP " << get("GnssHdop") << ", yaw rate "
             << get("YawRate") << " deg/s\n"
             << "Overruns:      " << get("ControlOverruns") << "\n"
+            << "Calibration:   " << get("Calibration") << "\n"
+            << "Flow meter:    " << get("MeterCalibration") << "\n"
             << "Alarms:        " << get("Alarms") << "\n";
 }
 
@@ -435,6 +513,54 @@ int run_wheel_calibration(Client& client, double run_distance_m, double timeout_
             << timeout_s << " s (state " << (last_state.empty() ? "not started" : last_state)
             << ")\n";
   return 1;
+}
+
+// Follows the Calibration property until the run stops (done, cancelled or awaiting the
+// catch test's volume), printing each new step; true when it ended as `wanted`.
+bool follow_calibration(Client& client, const char* wanted, double timeout_s) {
+  std::string last_message;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  while (std::chrono::steady_clock::now() < deadline) {
+    const Client::Calibration c = client.calibration();
+    if (c.message != last_message) {
+      std::cout << "  [" << std::setw(3) << static_cast<int>(c.progress * 100) << " %] "
+                << c.message << "\n"
+                << std::flush;
+      last_message = c.message;
+    }
+    if (c.state == "done" || c.state == "cancelled" || c.state == "awaiting_volume")
+      return c.state == wanted;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  std::cerr << "sprayctl: calibrate: not finished within " << timeout_s << " s\n";
+  return false;
+}
+
+int run_meter_calibration(Client& client, double catch_test_s, double volume_l) {
+  if (volume_l > 0) {
+    client.call("CalibrateMeter", "d", volume_l);
+    std::cout << "flow meter: " << client.property_text("MeterCalibration") << "\n";
+    return 0;
+  }
+  client.call("StartCatchTest", "d", catch_test_s);
+  std::cout << "catch test: every valve open for " << catch_test_s
+            << " s; collect the liquid of every nozzle\n"
+            << std::flush;
+  if (!follow_calibration(client, "awaiting_volume", catch_test_s + 30.0)) return 1;
+  std::cout << "measure the collected litres, then: sprayctl calibrate meter --volume L\n";
+  return 0;
+}
+
+int run_nozzle_calibration(Client& client, double timeout_s) {
+  client.call("CalibrateNozzles");
+  if (!follow_calibration(client, "done", timeout_s)) return 1;
+  const Properties p = client.get_all();
+  const auto found = p.find("NozzleCalibration");
+  const auto* lines =
+      found == p.end() ? nullptr : std::get_if<std::vector<std::string>>(&found->second);
+  for (std::size_t i = 0; lines != nullptr && i < lines->size(); ++i)
+    std::cout << "nozzle " << i << ": " << (*lines)[i] << "\n";
+  return 0;
 }
 
 }  // namespace
@@ -497,6 +623,29 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   calibrate_wheel->add_option("--timeout", calibration_timeout_s, "give up after, seconds")
       ->capture_default_str();
+  auto* calibrate = app.add_subcommand(
+      "calibrate", "calibrate the flow meter or the nozzles (in Idle: pump on, not spraying)");
+  calibrate->require_subcommand(1);
+  auto* calibrate_meter = calibrate->add_subcommand(
+      "meter",
+      "catch test: --seconds S opens every valve for S s at the set-point (collect all the "
+      "liquid); then --volume L enters the litres collected. The meter's pulses per litre is "
+      "stored in the state directory and used instead of flow.pulses_per_litre");
+  double catch_test_s = 0;
+  double collected_l = 0;
+  auto* seconds_option =
+      calibrate_meter->add_option("--seconds", catch_test_s, "catch test length, s (1..600)");
+  calibrate_meter->add_option("--volume", collected_l, "litres collected in the catch test")
+      ->excludes(seconds_option);
+  auto* calibrate_nozzles = calibrate->add_subcommand(
+      "nozzles",
+      "each nozzle alone over calibration.duties_pct at the set-point and PWM frequency, its "
+      "flow from the line meter: each nozzle's line q = A s + b, stored in the state directory "
+      "and used by the rate law (the [spray] line stays for a fit below "
+      "calibration.min_r_squared)");
+  double nozzle_timeout_s = 600.0;
+  calibrate_nozzles->add_option("--timeout", nozzle_timeout_s, "give up after, seconds")
+      ->capture_default_str();
   auto* export_map = app.add_subcommand(
       "export-map",
       "the as-applied log as a map a GIS opens: export-map [--from T] [--to T] --format "
@@ -532,6 +681,12 @@ int main(int argc, char** argv) {
       client.call("ClearAlarms");
     } else if (*reload) {
       client.call("ReloadConfig");
+    } else if (*calibrate_meter) {
+      if (!(catch_test_s > 0) && !(collected_l > 0))
+        throw BusError{"calibrate meter: --seconds S (start the catch test) or --volume L"};
+      return run_meter_calibration(client, catch_test_s, collected_l);
+    } else if (*calibrate_nozzles) {
+      return run_nozzle_calibration(client, nozzle_timeout_s);
     } else if (*calibrate_wheel) {
       return run_wheel_calibration(client, run_distance_m, calibration_timeout_s);
     } else if (*snapshot) {

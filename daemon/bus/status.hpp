@@ -53,6 +53,26 @@ struct Status {
   std::uint64_t wheel_calibration_pulses = 0;
   double wheel_calibration_pulses_per_metre = 0;
 
+  // Calibrations from the daemon (daemon/sprayer/calibrations.hpp): the one running or last run
+  // (idle, catch_test, awaiting_volume, nozzles, done, cancelled), its progress 0..1 and what
+  // it says; the meter's K in use and where from (config | calibration), the configured K and
+  // the catch test's error of it (%); each nozzle's line in use and its fit's R^2.
+  std::string calibration_state = "idle";
+  double calibration_progress = 0;
+  std::string calibration_message;
+  std::string meter_source = "config";
+  double meter_pulses_per_litre = 0;
+  double meter_configured_pulses_per_litre = 0;
+  double meter_error_pct = 0;
+  struct NozzleLineStatus {
+    std::string source;  // config | calibration | config (poor fit)
+    double slope_l_per_min_per_pct = 0;
+    double intercept_l_per_min = 0;
+    double r_squared = 0;
+    bool operator==(const NozzleLineStatus&) const = default;
+  };
+  std::vector<NozzleLineStatus> nozzle_lines;
+
   bool operator==(const Status&) const = default;
 };
 
@@ -90,6 +110,12 @@ class CommandHandler {
   // Wheel calibration from GNSS over a straight run of `run_distance_m`: sets `request` to the
   // number the WheelCalibration property reports it under.
   virtual CommandResult calibrate_wheel(double run_distance_m, std::uint64_t& request) = 0;
+  // Meter catch test: every valve open for `seconds` (Idle only); then calibrate_meter with
+  // the volume collected. Nozzle sweep: each nozzle alone over calibration.duties_pct. Stop
+  // cancels either; the Calibration property follows them.
+  virtual CommandResult start_catch_test(double seconds) = 0;
+  virtual CommandResult calibrate_meter(double volume_l) = 0;
+  virtual CommandResult calibrate_nozzles() = 0;
 };
 
 }  // namespace weedspray::daemon

@@ -176,6 +176,14 @@ struct FlowSection {
   std::string counter;  // "" = GPIO edge events on gpio.flow_*; else a kernel counter device
 };
 
+// Calibrations run from the daemon (sprayctl calibrate nozzles; daemon/sprayer/calibration_run).
+struct CalibrationSection {
+  std::vector<double> duties_pct;  // the nozzle sweep's duties
+  double settle_s;                 // skipped at each point (valve, pressure, meter settling)
+  double measure_s;                // counted at each point
+  double min_r_squared;            // a nozzle's fit below this: the [spray] line stays in use
+};
+
 struct WheelSection {
   std::string source;  // pulses|fixed
   double pulses_per_metre;
@@ -277,6 +285,7 @@ struct Config {
   DacSection dac;
   AnalogModbusSection analog_modbus;
   FlowSection flow;
+  CalibrationSection calibration;
   WheelSection wheel;
   SpeedSection speed;
   GnssSection gnss;

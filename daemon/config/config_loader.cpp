@@ -379,6 +379,11 @@ class Loader {
     if (c.spray.duty_min_pct >= c.spray.duty_max_pct) {
       fail("spray.duty_max_pct", "must be above spray.duty_min_pct");
     }
+    const auto& sweep = c.calibration.duties_pct;
+    if (sweep.empty() || std::all_of(sweep.begin(), sweep.end(),
+                                     [&](double duty) { return duty == sweep.front(); })) {
+      fail("calibration.duties_pct", "needs at least 2 different duties (a line through them)");
+    }
     if (c.pressure.sensor_min_mpa >= c.pressure.sensor_max_mpa) {
       fail("pressure.sensor_max_mpa", "must be above pressure.sensor_min_mpa");
     }

@@ -323,6 +323,18 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "the meter's GPIO in the device tree) instead of GPIO edge events: counterN, its path, or "
      "its name. For meters pulsing faster than ~10 kHz, where edge events can be lost. Empty = "
      "gpio.flow_offset / gpio.flow_name"},
+    // [calibration]
+    {WS_KEY(calibration, duties_pct), std::vector<double>{20.0, 40.0, 60.0, 80.0}, 1, 99, "%",
+     "sprayctl calibrate nozzles: each nozzle alone at each of these duties (at least 2 "
+     "different; the line q = A s + b is fitted between the lowest and the highest)"},
+    {WS_KEY(calibration, settle_s), 2.0, 0, 60, "s",
+     "time skipped at each point of the sweep while valve, pressure and meter settle"},
+    {WS_KEY(calibration, measure_s), 5.0, 0.2, 600, "s",
+     "time the meter is counted at each point (the pulses per point: measure_s x K x flow; "
+     "5 s of one nozzle at 20 % gives ~200 pulses at 8500 pulses/L)"},
+    {WS_KEY(calibration, min_r_squared), 0.98, 0, 1, "",
+     "a nozzle whose fitted line has R^2 below this keeps the [spray] line (a sticking valve, a "
+     "meter too coarse for one nozzle)"},
     // [wheel]
     {WS_KEY(wheel, source), std::string("pulses"), 0, 0, "",
      "speed from the Hall wheel sensor, or a fixed speed", {"pulses", "fixed"}},

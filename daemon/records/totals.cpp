@@ -1,12 +1,11 @@
 #include "daemon/records/totals.hpp"
 
 #include <toml++/toml.h>
-#include <unistd.h>
-#include <cstdio>
-#include <fstream>
-#include <stdexcept>
+#include <sstream>
 #include <string>
 #include <system_error>
+
+#include "daemon/records/atomic_file.hpp"
 
 namespace weedspray::daemon {
 
@@ -35,25 +34,12 @@ Totals load_totals(const std::filesystem::path& file, std::string* error) {
 }
 
 void save_totals(const std::filesystem::path& file, const Totals& totals) {
-  const auto temp = std::filesystem::path(file.string() + ".tmp");
-  {
-    std::ofstream out(temp, std::ios::trunc);
-    if (!out) throw std::runtime_error(temp.string() + ": cannot be written");
-    toml::table table{{"area_m2", totals.area_m2},
-                      {"volume_l", totals.volume_l},
-                      {"uniform_volume_l", totals.uniform_volume_l}};
-    out << table << "\n";
-    out.flush();
-    if (!out) throw std::runtime_error(temp.string() + ": write failed");
-  }
-  // fsync the data before the rename so a power cut leaves either the old or the new file.
-  if (FILE* f = std::fopen(temp.c_str(), "r")) {
-    ::fsync(fileno(f));
-    std::fclose(f);
-  }
-  std::error_code ec;
-  std::filesystem::rename(temp, file, ec);
-  if (ec) throw std::runtime_error(file.string() + ": " + ec.message());
+  const toml::table table{{"area_m2", totals.area_m2},
+                          {"volume_l", totals.volume_l},
+                          {"uniform_volume_l", totals.uniform_volume_l}};
+  std::ostringstream text;
+  text << table << "\n";
+  write_file_atomically(file, text.str());
 }
 
 }  // namespace weedspray::daemon

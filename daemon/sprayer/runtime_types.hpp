@@ -24,7 +24,14 @@ struct LiveParams {
   bool valves_enabled = false;   // Spraying
   std::uint64_t trip_reset = 0;  // incremented by ClearAlarms: re-arms the over-pressure trip
   control::SprayLawConfig law{};
-  control::NozzleLine line{};
+  // Each nozzle's valve line: its own calibration, else the configured [spray] line.
+  std::array<control::NozzleLine, io::kMaxValves> lines{};
+  // The flow meter's K in use: the catch test's, else flow.pulses_per_litre.
+  double flow_pulses_per_litre = 8500.0;
+  // A calibration (daemon/sprayer/calibration_run.hpp) holds the valves at these duties while
+  // the pump runs, in place of the rate law (no trim); false otherwise.
+  bool calibration_valves = false;
+  std::array<double, io::kMaxValves> calibration_duty_pct{};
   bool pressure_compensation = true;
   double over_pressure_mpa = 1.0;
   double stale_timeout_s = 0.5;
@@ -85,6 +92,7 @@ struct ControlStatus {
   double distance_m = 0;
   double speed_m_per_s = 0;
   double flow_l_per_min = 0;
+  std::uint64_t flow_pulses = 0;  // the meter's raw count (calibrations difference it)
   std::uint32_t nozzles = 0;
   std::array<double, io::kMaxValves> duty_pct{};
   std::array<double, io::kMaxValves> density{};       // pinned density under each nozzle now

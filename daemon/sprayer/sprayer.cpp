@@ -78,14 +78,17 @@ LiveParams live_params_from(const Config& config) {
   p.law.low_duty_policy = config.spray.low_duty_policy == "close"
                               ? control::LowDutyPolicy::kClose
                               : control::LowDutyPolicy::kRaiseToMin;
-  p.line.slope_l_per_min_per_pct = config.spray.calibration_slope_l_per_min_per_pct;
-  p.line.intercept_l_per_min = config.spray.calibration_offset_l_per_min;
-  p.line.calibration_pressure_mpa = config.spray.calibration_pressure_mpa;
+  control::NozzleLine line;
+  line.slope_l_per_min_per_pct = config.spray.calibration_slope_l_per_min_per_pct;
+  line.intercept_l_per_min = config.spray.calibration_offset_l_per_min;
+  line.calibration_pressure_mpa = config.spray.calibration_pressure_mpa;
+  p.lines.fill(line);
+  p.flow_pulses_per_litre = config.flow.pulses_per_litre;
   p.pressure_compensation = config.spray.pressure_compensation;
   p.over_pressure_mpa = config.alarms.over_pressure_mpa;
   p.stale_timeout_s = config.daemon.input_stale_timeout_s;
   control::validate(p.law);
-  control::validate(p.line);
+  control::validate(line);
   return p;
 }
 
@@ -373,7 +376,6 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   io::PeriodicLoop loop(*io_.clock, kPeriod, io_.clock->now(), &timing_.control_loop,
                         from_seconds(config_.alarms.timing_tolerance_ms / 1e3));
   const std::size_t nozzles = nozzle_owner_.size();
-  const double flow_ppl = config_.flow.pulses_per_litre;
   const Nanos record_period = from_seconds(1.0 / config_.pwm.frequency_hz);
   LiveParams params = params_.read();
   std::uint64_t params_version = params_.version();
@@ -471,12 +473,15 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       const io::PulseSnapshot flow = io_.flow->snapshot();
       // The volume is the meter's pulses themselves, counted in every state: integrating the
       // windowed flow below would lag it and lose part of each start and stop.
-      status.volume_l += static_cast<double>(flow.count - volume_count) / flow_ppl;
+      status.volume_l +=
+          static_cast<double>(flow.count - volume_count) / params.flow_pulses_per_litre;
       volume_count = flow.count;
+      status.flow_pulses = flow.count;
       // Measured flow over a sliding window.
       if (now - flow_window_start >= kFlowWindow) {
-        status.flow_l_per_min = static_cast<double>(flow.count - flow_count_start) / flow_ppl /
-                                seconds(now - flow_window_start) * 60.0;
+        status.flow_l_per_min = static_cast<double>(flow.count - flow_count_start) /
+                                params.flow_pulses_per_litre / seconds(now - flow_window_start) *
+                                60.0;
         flow_count_start = flow.count;
         flow_window_start = now;
       }
@@ -524,6 +529,10 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
                                 seconds(now - pressure.time) > params.stale_timeout_s;
     status.inputs_stale = pressure_stale;
     const bool spray = params.valves_enabled && !pressure_stale;
+    // A calibration moves liquid only with the pump on (the daemon runs it for the
+    // calibration in Idle) and the pressure sensor fresh.
+    const bool calibrating = params.calibration_valves && params.pump_enabled &&
+                             !params.valves_enabled && !pressure_stale;
     const double compensation_pressure = params.pressure_compensation ? pressure.pressure_mpa : 0.0;
 
     io::ValveCommand command;
@@ -538,8 +547,8 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
         // The plan holds densities: the rate law says which of them open the valve, so ground
         // that needs no spray closes the valve with the closing lead.
         const auto sprays = [&](double planned_density) {
-          return control::spray_decision(params.law, params.line, planned_density, nozzle_speed[n],
-                                         compensation_pressure)
+          return control::spray_decision(params.law, params.lines[n], planned_density,
+                                         nozzle_speed[n], compensation_pressure)
                      .duty_pct > 0.0;
         };
         const std::size_t local = n - static_cast<std::size_t>(worker.first_nozzle);
@@ -552,9 +561,11 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       // A camera whose weed model fails closes its own nozzles until it processes frames again.
       const bool blind = owner >= 0 && cameras_[static_cast<std::size_t>(owner)].vision_failed;
       double duty = 0;
-      if (spray && !blind) {
+      if (calibrating) {
+        duty = params.calibration_duty_pct[n];
+      } else if (spray && !blind) {
         const control::SprayDecision decision = control::spray_decision(
-            params.law, params.line, density, nozzle_speed[n], compensation_pressure);
+            params.law, params.lines[n], density, nozzle_speed[n], compensation_pressure);
         duty = decision.duty_pct;
         if (!quantisers_.empty()) {
           duty = control::clamp_duty_for_flow_pct(
@@ -562,7 +573,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
               decision.target_flow_l_per_min);
         }
         requested_l_per_min +=
-            control::flow_for_duty_l_per_min(params.line, duty, compensation_pressure);
+            control::flow_for_duty_l_per_min(params.lines[n], duty, compensation_pressure);
       } else if (!quantisers_.empty()) {
         quantisers_[n].reset();
       }
@@ -581,10 +592,10 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
         // longer keep their ratio.
         const double d = command.duty_pct[n];
         if (d > 0 && d < 100) {
-          const double flow =
-              control::flow_for_duty_l_per_min(params.line, d, compensation_pressure);
+          const control::NozzleLine& line = params.lines[n];
+          const double flow = control::flow_for_duty_l_per_min(line, d, compensation_pressure);
           const double trimmed =
-              control::raw_duty_for_flow_pct(params.line, flow * correction, compensation_pressure);
+              control::raw_duty_for_flow_pct(line, flow * correction, compensation_pressure);
           command.duty_pct[n] =
               std::clamp(trimmed, params.law.min_duty_pct, params.law.max_duty_pct);
         }
@@ -619,7 +630,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
         record.crop_density[n] = static_cast<float>(status.crop_density[n]);
         record.nozzle_speed_m_per_s[n] = static_cast<float>(nozzle_speed[n]);
         record.nozzle_flow_l_per_min[n] = static_cast<float>(control::flow_for_duty_l_per_min(
-            params.line, status.duty_pct[n], pressure.pressure_mpa));
+            params.lines[n], status.duty_pct[n], pressure.pressure_mpa));
       }
       if (io_.gnss != nullptr) {
         record.fix = gnss.value;

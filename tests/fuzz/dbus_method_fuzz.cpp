@@ -37,6 +37,17 @@ class Handler final : public weedspray::daemon::CommandHandler {
     request = 1;
     return {};
   }
+  CommandResult start_catch_test(double seconds) override {
+    if (!(seconds >= 1.0 && seconds <= 600.0))
+      return {weedspray::daemon::kErrorInvalidArgument, "out of range"};
+    return {};
+  }
+  CommandResult calibrate_meter(double volume_l) override {
+    if (!(volume_l > 0.0 && volume_l < 1000.0))
+      return {weedspray::daemon::kErrorInvalidArgument, "out of range"};
+    return {};
+  }
+  CommandResult calibrate_nozzles() override { return {}; }
   // One camera; its reply at once (the daemon's comes from a later main-loop tick).
   CommandResult snapshot(std::uint32_t camera, weedspray::daemon::SnapshotReply reply) override {
     if (camera != 0) return {weedspray::daemon::kErrorInvalidArgument, "no such camera"};
@@ -46,9 +57,19 @@ class Handler final : public weedspray::daemon::CommandHandler {
   }
 };
 
-constexpr const char* kMembers[] = {
-    "Start",          "Stop", "SetPressureSetpoint", "ReloadConfig", "ClearAlarms",
-    "InjectSimFault", "Get",  "SetPressure",         "Snapshot",     "CalibrateWheel"};
+constexpr const char* kMembers[] = {"Start",
+                                    "Stop",
+                                    "SetPressureSetpoint",
+                                    "ReloadConfig",
+                                    "ClearAlarms",
+                                    "InjectSimFault",
+                                    "Get",
+                                    "SetPressure",
+                                    "Snapshot",
+                                    "CalibrateWheel",
+                                    "StartCatchTest",
+                                    "CalibrateMeter",
+                                    "CalibrateNozzles"};
 
 }  // namespace
 

@@ -38,6 +38,21 @@ class RecordingHandler final : public CommandHandler {
     request = 7;
     return {};
   }
+  CommandResult start_catch_test(double seconds) override {
+    catch_test_s = seconds;
+    return {};
+  }
+  CommandResult calibrate_meter(double volume_l) override {
+    meter_volume_l = volume_l;
+    return {};
+  }
+  CommandResult calibrate_nozzles() override {
+    ++nozzle_calibrations;
+    return {kErrorNotPermitted, "spraying"};
+  }
+  double catch_test_s = -1;
+  double meter_volume_l = -1;
+  int nozzle_calibrations = 0;
   std::int64_t snapshot_camera = -1;
   SnapshotReply snapshot_reply;
   int starts = 0;
@@ -76,6 +91,18 @@ TEST_F(DbusMethodTest, CallsTheHandlerWithItsArgument) {
   EXPECT_DOUBLE_EQ(handler_.setpoint, 0.35);
   call("InjectSimFault", "s", "sensor_open");
   EXPECT_EQ(handler_.fault, "sensor_open");
+}
+
+TEST_F(DbusMethodTest, TheCalibrationMethodsReachTheirCommands) {
+  EXPECT_GE(call("StartCatchTest", "d", 30.0), 0);
+  EXPECT_DOUBLE_EQ(handler_.catch_test_s, 30.0);
+  EXPECT_GE(call("CalibrateMeter", "d", 2.5), 0);
+  EXPECT_DOUBLE_EQ(handler_.meter_volume_l, 2.5);
+  EXPECT_DOUBLE_EQ(handler_.catch_test_s, 30.0) << "CalibrateMeter started a catch test";
+  EXPECT_LT(call("CalibrateNozzles"), 0);
+  EXPECT_EQ(handler_.nozzle_calibrations, 1);
+  EXPECT_EQ(error_name(), kErrorNotPermitted);
+  EXPECT_LT(call("CalibrateMeter"), 0) << "no volume given";
 }
 
 TEST_F(DbusMethodTest, ARefusalBecomesTheNamedError) {

@@ -1,0 +1,187 @@
+#include "daemon/sprayer/calibration_run.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <utility>
+
+namespace weedspray::daemon {
+
+const char* to_string(CalibrationState state) noexcept {
+  switch (state) {
+    case CalibrationState::kCatchTest:
+      return "catch_test";
+    case CalibrationState::kAwaitingVolume:
+      return "awaiting_volume";
+    case CalibrationState::kNozzles:
+      return "nozzles";
+    case CalibrationState::kDone:
+      return "done";
+    case CalibrationState::kCancelled:
+      return "cancelled";
+    case CalibrationState::kIdle:
+      break;
+  }
+  return "idle";
+}
+
+CalibrationRun::CalibrationRun(std::size_t nozzles) : nozzles_(std::min(nozzles, io::kMaxValves)) {}
+
+std::string CalibrationRun::start_catch_test(double duration_s, double now_s,
+                                             std::uint64_t pulses) {
+  if (running()) return std::string("a calibration is running (") + to_string(state_) + ")";
+  if (!(duration_s >= 1.0 && duration_s <= 600.0)) return "the catch test must last 1..600 s";
+  state_ = CalibrationState::kCatchTest;
+  started_s_ = now_s;
+  duration_s_ = duration_s;
+  start_pulses_ = pulses;
+  catch_pulses_ = 0;
+  progress_ = 0.0;
+  duties_.fill(0.0);
+  std::fill_n(duties_.begin(), nozzles_, 100.0);
+  message_ = "catch test: every nozzle open, collect the liquid";
+  return {};
+}
+
+std::string CalibrationRun::start_nozzle_sweep(const NozzleSweepPlan& plan, double now_s,
+                                               std::uint64_t pulses) {
+  if (running()) return std::string("a calibration is running (") + to_string(state_) + ")";
+  if (plan.duties_pct.size() < 2) return "the sweep needs at least 2 duties";
+  if (!(plan.settle_s >= 0 && plan.measure_s > 0 && plan.pulses_per_litre > 0 &&
+        plan.pressure_mpa > 0)) {
+    return "the sweep needs settle_s >= 0, measure_s > 0, a meter K and a pressure";
+  }
+  plan_ = plan;
+  state_ = CalibrationState::kNozzles;
+  nozzle_ = 0;
+  point_ = 0;
+  points_.clear();
+  fits_.assign(nozzles_, std::nullopt);
+  progress_ = 0.0;
+  measuring_ = false;
+  phase_start_s_ = now_s + kPumpLeadInS;  // the first settle lasts the lead-in longer
+  phase_pulses_ = pulses;
+  set_point_duty();
+  return {};
+}
+
+std::optional<control::FlowMeterCalibration> CalibrationRun::enter_volume(
+    double volume_l, double configured_pulses_per_litre, std::string& error) {
+  if (state_ != CalibrationState::kAwaitingVolume) {
+    error = std::string("no catch test awaits its volume (calibration ") + to_string(state_) +
+            "): run `sprayctl calibrate meter --seconds S` first";
+    return std::nullopt;
+  }
+  if (!(volume_l > 0.0 && volume_l < 1000.0)) {
+    error = "the collected volume must be > 0 and < 1000 L";
+    return std::nullopt;
+  }
+  if (catch_pulses_ == 0) {
+    error = "the meter counted no pulses during the catch test: is it wired?";
+    return std::nullopt;
+  }
+  const control::FlowMeterCalibration result =
+      control::calibrate_flow_meter(catch_pulses_, volume_l, configured_pulses_per_litre);
+  state_ = CalibrationState::kDone;
+  progress_ = 1.0;
+  char text[160];
+  std::snprintf(text, sizeof text, "meter: %.1f pulses/L (configured %.1f, its error %+.2f %%)",
+                result.pulses_per_litre, result.configured_pulses_per_litre, result.error_pct);
+  message_ = text;
+  return result;
+}
+
+void CalibrationRun::cancel(std::string_view why) {
+  if (!running() && state_ != CalibrationState::kAwaitingVolume) return;
+  message_ = std::string(to_string(state_)) + " cancelled: " + std::string(why);
+  state_ = CalibrationState::kCancelled;
+  duties_.fill(0.0);
+  fits_.clear();
+}
+
+void CalibrationRun::update(double now_s, std::uint64_t pulses) {
+  if (state_ == CalibrationState::kCatchTest) {
+    const double elapsed = now_s - started_s_;
+    progress_ = std::clamp(elapsed / (duration_s_ + kDrainS), 0.0, 0.999);
+    if (elapsed >= duration_s_) duties_.fill(0.0);
+    if (elapsed < duration_s_ + kDrainS) return;
+    catch_pulses_ = pulses - start_pulses_;
+    state_ = CalibrationState::kAwaitingVolume;
+    message_ = "catch test done: " + std::to_string(catch_pulses_) +
+               " pulses; enter the collected volume (sprayctl calibrate meter --volume L)";
+    return;
+  }
+  if (state_ != CalibrationState::kNozzles) return;
+  const double points = static_cast<double>(plan_.duties_pct.size());
+  const double steps = points * static_cast<double>(nozzles_);
+  const double step_s = plan_.settle_s + plan_.measure_s;
+  const double in_step =
+      std::clamp((now_s - phase_start_s_ + (measuring_ ? plan_.settle_s : 0)) / step_s, 0.0, 1.0);
+  progress_ = std::min(
+      0.999,
+      (static_cast<double>(nozzle_) * points + static_cast<double>(point_) + in_step) / steps);
+  if (!measuring_) {
+    if (now_s - phase_start_s_ < plan_.settle_s) return;
+    measuring_ = true;
+    phase_start_s_ = now_s;
+    phase_pulses_ = pulses;
+    return;
+  }
+  const double measured_s = now_s - phase_start_s_;
+  if (measured_s < plan_.measure_s) return;
+  // The window's true length (the main loop's ticks are not exact): flow over what was counted.
+  const double litres = static_cast<double>(pulses - phase_pulses_) / plan_.pulses_per_litre;
+  points_.push_back({plan_.duties_pct[point_], litres / (measured_s / 60.0)});
+  measuring_ = false;
+  phase_start_s_ = now_s;
+  if (++point_ < plan_.duties_pct.size()) {
+    set_point_duty();
+    return;
+  }
+  finish_nozzle();
+}
+
+void CalibrationRun::set_point_duty() {
+  duties_.fill(0.0);
+  duties_[nozzle_] = plan_.duties_pct[point_];
+  char text[120];
+  std::snprintf(text, sizeof text, "nozzle %zu of %zu at %.0f %% duty", nozzle_ + 1, nozzles_,
+                plan_.duties_pct[point_]);
+  message_ = text;
+}
+
+void CalibrationRun::finish_nozzle() {
+  const auto [lo, hi] = std::minmax_element(plan_.duties_pct.begin(), plan_.duties_pct.end());
+  try {
+    fits_[nozzle_] = control::fit_nozzle_line(points_, plan_.pressure_mpa, *lo, *hi);
+  } catch (const std::invalid_argument&) {
+    fits_[nozzle_] = std::nullopt;  // reported as "no line" below; the configured line stays
+  }
+  points_.clear();
+  point_ = 0;
+  if (++nozzle_ < nozzles_) {
+    set_point_duty();
+    return;
+  }
+  duties_.fill(0.0);
+  state_ = CalibrationState::kDone;
+  progress_ = 1.0;
+  double lowest_r2 = 1.0;
+  std::size_t fitted = 0;
+  for (const auto& fit : fits_) {
+    if (!fit) continue;
+    ++fitted;
+    lowest_r2 = std::min(lowest_r2, fit->r_squared);
+  }
+  char text[160];
+  std::snprintf(text, sizeof text, "nozzles: %zu of %zu lines fitted, lowest R^2 %.4f", fitted,
+                nozzles_, lowest_r2);
+  message_ = text;
+}
+
+std::vector<std::optional<control::NozzleLineFit>> CalibrationRun::take_fits() {
+  return std::exchange(fits_, {});
+}
+
+}  // namespace weedspray::daemon

@@ -1,0 +1,185 @@
+// The calibrations run from the daemon: the run's steps against a made-up boom and meter, and
+// the stored results and which of them the rate law uses.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <array>
+#include <filesystem>
+#include <fstream>
+
+#include "daemon/records/calibration_store.hpp"
+#include "daemon/sprayer/calibration_run.hpp"
+
+namespace weedspray::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A boom of nozzles with their own true lines q = A s + b [L/min] while the valve's duty is s,
+// and a meter of `k` pulses per litre counting their total: the run's duties in, pulses out.
+struct MadeUpBoom {
+  std::array<double, 3> slope{0.0080, 0.0056, 0.0088};
+  std::array<double, 3> intercept{0.10, 0.07, 0.12};
+  double k = 8670.0;
+  double litres = 0.0;
+
+  std::uint64_t advance(const std::array<double, io::kMaxValves>& duties, double dt_s) {
+    for (std::size_t i = 0; i < slope.size(); ++i) {
+      const double s = duties[i];
+      if (s <= 0) continue;
+      const double q = s >= 100 ? slope[i] * 100 + intercept[i] : slope[i] * s + intercept[i];
+      litres += q / 60.0 * dt_s;
+    }
+    return static_cast<std::uint64_t>(litres * k);
+  }
+};
+
+// Ticks the run at the daemon's 20 Hz until it stops commanding the valves (or `limit_s`).
+double run_until_idle(CalibrationRun& run, MadeUpBoom& boom, double t, double limit_s,
+                      double* last_progress = nullptr) {
+  constexpr double kTick = 0.05;
+  std::uint64_t pulses = static_cast<std::uint64_t>(boom.litres * boom.k);
+  while (run.running() && t < limit_s) {
+    pulses = boom.advance(run.duties(), kTick);
+    t += kTick;
+    run.update(t, pulses);
+    if (last_progress != nullptr) {
+      EXPECT_GE(run.progress(), *last_progress) << "progress went back at t " << t;
+      *last_progress = run.progress();
+    }
+  }
+  return t;
+}
+
+TEST(CalibrationRun, CatchTestOpensEveryValveThenTakesTheCollectedVolume) {
+  CalibrationRun run(3);
+  MadeUpBoom boom;
+  ASSERT_EQ(run.start_catch_test(10.0, 0.0, 0), "");
+  EXPECT_TRUE(run.running());
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ(run.duties()[i], 100.0);
+  EXPECT_EQ(run.duties()[3], 0.0) << "a valve beyond the boom was opened";
+  EXPECT_NE(run.start_nozzle_sweep({}, 0.0, 0), "") << "a second calibration started";
+  std::string error;
+  EXPECT_FALSE(run.enter_volume(1.0, 8500.0, error)) << "a volume taken mid-run";
+  const double end = run_until_idle(run, boom, 0.0, 30.0);
+  EXPECT_NEAR(end, 10.0 + CalibrationRun::kDrainS, 0.06);
+  EXPECT_EQ(run.state(), CalibrationState::kAwaitingVolume);
+  for (double d : run.duties()) EXPECT_EQ(d, 0.0);
+  // What the user collected: the boom's true litres over the run.
+  const auto result = run.enter_volume(boom.litres, 8500.0, error);
+  ASSERT_TRUE(result) << error;
+  EXPECT_NEAR(result->pulses_per_litre, 8670.0, 8670.0 * 1e-3);
+  EXPECT_NEAR(result->error_pct, (8500.0 - 8670.0) / 8670.0 * 100.0, 0.1);
+  EXPECT_EQ(run.state(), CalibrationState::kDone);
+  EXPECT_EQ(run.progress(), 1.0);
+}
+
+TEST(CalibrationRun, TheSweepRecoversEachNozzlesOwnLine) {
+  CalibrationRun run(3);
+  MadeUpBoom boom;
+  NozzleSweepPlan plan;
+  plan.duties_pct = {20, 40, 60, 80};
+  plan.settle_s = 0.5;
+  plan.measure_s = 3.0;
+  plan.pressure_mpa = 0.3;
+  plan.pulses_per_litre = boom.k;
+  ASSERT_EQ(run.start_nozzle_sweep(plan, 0.0, 0), "");
+  EXPECT_EQ(run.duties()[0], 20.0);
+  EXPECT_EQ(run.duties()[1], 0.0) << "more than one nozzle open";
+  double progress = 0;
+  const double end = run_until_idle(run, boom, 0.0, 200.0, &progress);
+  EXPECT_NEAR(end, 3 * 4 * 3.5 + CalibrationRun::kPumpLeadInS, 3 * 4 * 0.1) << "the sweep's length";
+  EXPECT_EQ(run.state(), CalibrationState::kDone);
+  EXPECT_EQ(progress, 1.0);
+  for (double d : run.duties()) EXPECT_EQ(d, 0.0) << "a valve left open";
+  const auto fits = run.take_fits();
+  ASSERT_EQ(fits.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    ASSERT_TRUE(fits[i]) << "nozzle " << i;
+    EXPECT_NEAR(fits[i]->line.slope_l_per_min_per_pct, boom.slope[i], boom.slope[i] * 0.03)
+        << "nozzle " << i;
+    EXPECT_NEAR(fits[i]->line.intercept_l_per_min, boom.intercept[i], 0.01) << "nozzle " << i;
+    EXPECT_DOUBLE_EQ(fits[i]->line.calibration_pressure_mpa, 0.3);
+    EXPECT_GT(fits[i]->r_squared, 0.999);
+  }
+}
+
+TEST(CalibrationRun, CancelClosesTheValvesAndKeepsNoResult) {
+  CalibrationRun run(3);
+  MadeUpBoom boom;
+  NozzleSweepPlan plan;
+  plan.pulses_per_litre = boom.k;
+  ASSERT_EQ(run.start_nozzle_sweep(plan, 0.0, 0), "");
+  run_until_idle(run, boom, 0.0, 5.0);
+  ASSERT_TRUE(run.running());
+  run.cancel("Stop");
+  EXPECT_FALSE(run.running());
+  EXPECT_EQ(run.state(), CalibrationState::kCancelled);
+  for (double d : run.duties()) EXPECT_EQ(d, 0.0);
+  EXPECT_TRUE(run.take_fits().empty());
+  EXPECT_EQ(run.start_catch_test(0.5, 5.0, 0), "the catch test must last 1..600 s");
+}
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("weedspray-" + name + "-" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+TEST(CalibrationStore, SavedResultsComeBackAndTheRightOnesAreUsed) {
+  const fs::path file = temp_dir("calibration") / "calibration.toml";
+  EXPECT_FALSE(load_calibration(file).meter) << "a missing file gave a meter";
+  StoredCalibration stored;
+  stored.meter = control::calibrate_flow_meter(8670, 1.0, 8500.0);
+  stored.nozzles.resize(3);
+  control::NozzleLineFit good;
+  good.line = {0.0056, 0.07, 0.3, 0.0};
+  good.r_squared = 0.995;
+  good.points_used = 4;
+  control::NozzleLineFit poor = good;
+  poor.line.slope_l_per_min_per_pct = 0.009;
+  poor.r_squared = 0.90;
+  stored.nozzles[0] = good;
+  stored.nozzles[2] = poor;  // nozzle 1: never calibrated
+  save_calibration(file, stored);
+  EXPECT_FALSE(fs::exists(file.string() + ".tmp")) << "the temporary file was left";
+
+  const StoredCalibration back = load_calibration(file);
+  ASSERT_TRUE(back.meter);
+  EXPECT_DOUBLE_EQ(back.meter->pulses_per_litre, 8670.0);
+  EXPECT_DOUBLE_EQ(back.meter->configured_pulses_per_litre, 8500.0);
+  EXPECT_DOUBLE_EQ(meter_pulses_per_litre(8500.0, back), 8670.0);
+  EXPECT_DOUBLE_EQ(meter_pulses_per_litre(8500.0, StoredCalibration{}), 8500.0);
+
+  const control::NozzleLine configured{0.00393, 0.217, 0.4, 0.0};
+  std::array<NozzleLineChoice, 4> lines;
+  choose_nozzle_lines(configured, back, 0.98, lines);
+  EXPECT_EQ(lines[0].source, LineSource::kCalibration);
+  EXPECT_DOUBLE_EQ(lines[0].line.slope_l_per_min_per_pct, 0.0056);
+  EXPECT_DOUBLE_EQ(lines[0].line.intercept_l_per_min, 0.07);
+  EXPECT_DOUBLE_EQ(lines[0].line.calibration_pressure_mpa, 0.3);
+  EXPECT_EQ(lines[1].source, LineSource::kConfig);
+  EXPECT_DOUBLE_EQ(lines[1].line.slope_l_per_min_per_pct, 0.00393);
+  EXPECT_EQ(lines[2].source, LineSource::kPoorFit) << "an R^2 of 0.90 was used";
+  EXPECT_DOUBLE_EQ(lines[2].line.slope_l_per_min_per_pct, 0.00393);
+  EXPECT_EQ(lines[3].source, LineSource::kConfig);
+  // The bar is the configured one: at 0.85 the poor fit is good enough.
+  choose_nozzle_lines(configured, back, 0.85, lines);
+  EXPECT_EQ(lines[2].source, LineSource::kCalibration);
+  EXPECT_DOUBLE_EQ(lines[2].line.slope_l_per_min_per_pct, 0.009);
+}
+
+TEST(CalibrationStore, ACorruptFileIsNamedAndNothingIsUsed) {
+  const fs::path file = temp_dir("calibration-corrupt") / "calibration.toml";
+  std::ofstream(file) << "[meter\npulses_per_litre = 1\n";
+  std::string error;
+  const StoredCalibration back = load_calibration(file, &error);
+  EXPECT_FALSE(back.meter);
+  EXPECT_TRUE(back.nozzles.empty());
+  EXPECT_NE(error.find("calibration.toml:"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace weedspray::daemon
