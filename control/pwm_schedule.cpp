@@ -73,6 +73,7 @@ void PwmSchedule::start(nanoseconds t0) noexcept {
     // A virtual closed period precedes the first one, so period_start is never a future time.
     valve.period_start = t0 + valve.offset - period_;
     valve.next_period_start = t0 + valve.offset;
+    valve.grid_origin = t0 + valve.offset;
     valve.on_time = nanoseconds(0);
     valve.latched_duty_pct = 0.0;
     valve.closed_at = t0 - min_off_;  // outputs were forced safe before a (re)start
@@ -130,15 +131,27 @@ std::uint32_t PwmSchedule::force_closed() noexcept {
 }
 
 nanoseconds PwmSchedule::on_time_for(double duty_pct) const noexcept {
+  return on_time_for(duty_pct, period_);
+}
+
+nanoseconds PwmSchedule::on_time_for(double duty_pct, nanoseconds length) const noexcept {
   if (!(duty_pct > 0.0)) return nanoseconds(0);
-  if (duty_pct >= 100.0) return period_;
-  auto on = nanoseconds(std::llround(duty_pct / 100.0 * static_cast<double>(period_.count())));
+  if (duty_pct >= 100.0) return length;
+  auto on = nanoseconds(std::llround(duty_pct / 100.0 * static_cast<double>(length.count())));
   if (on > nanoseconds(0) && on < min_on_) on = (on * 2 < min_on_) ? nanoseconds(0) : min_on_;
-  const nanoseconds off = period_ - on;
+  const nanoseconds off = length - on;
   if (off > nanoseconds(0) && off < min_off_) {
-    on = (off * 2 < min_off_) ? period_ : period_ - min_off_;
+    on = (off * 2 < min_off_) ? length : length - min_off_;
   }
   return on;
+}
+
+nanoseconds PwmSchedule::period_end_on_grid(const Valve& valve, nanoseconds t) const noexcept {
+  const nanoseconds shortest = std::max(period_ / 2, min_on_ + min_off_);
+  const nanoseconds ahead = t + shortest - valve.grid_origin;
+  const nanoseconds::rep periods =
+      ahead.count() <= 0 ? 0 : (ahead.count() + period_.count() - 1) / period_.count();
+  return valve.grid_origin + period_ * periods;
 }
 
 double PwmSchedule::effective_duty_pct(double duty_pct) const noexcept {
@@ -164,8 +177,14 @@ PwmValveState PwmSchedule::valve_state_at(std::size_t valve, nanoseconds t) cons
     const bool open = v.started && v.on_time > nanoseconds(0) && from < v.period_start + v.on_time;
     return PwmValveState{open, v.latched_duty_pct, v.period_start, v.on_time};
   }
-  const nanoseconds periods_ahead = (t - v.next_period_start) / period_ * period_;
-  const nanoseconds start = v.next_period_start + periods_ahead;
+  // The next period (an immediate start's may be off the grid: it ends on it), then whole ones.
+  const nanoseconds first_end = period_end_on_grid(v, v.next_period_start);
+  if (t < first_end) {
+    const nanoseconds on = on_time_for(v.requested_duty_pct, first_end - v.next_period_start);
+    return PwmValveState{t < v.next_period_start + on, v.requested_duty_pct, v.next_period_start,
+                         on};
+  }
+  const nanoseconds start = first_end + (t - first_end) / period_ * period_;
   const nanoseconds on = on_time_for(v.requested_duty_pct);
   return PwmValveState{t < start + on, v.requested_duty_pct, start, on};
 }
@@ -203,8 +222,9 @@ PwmEdge PwmSchedule::peek_edge() const noexcept {
     const std::uint32_t bit = 1u << v;
     if (close_time(v) == t) mask &= ~bit;
     if (valves_[v].next_period_start == t) {
-      mask = on_time_for(valves_[v].requested_duty_pct) > nanoseconds(0) ? (mask | bit)
-                                                                         : (mask & ~bit);
+      const nanoseconds length = period_end_on_grid(valves_[v], t) - t;
+      mask = on_time_for(valves_[v].requested_duty_pct, length) > nanoseconds(0) ? (mask | bit)
+                                                                                 : (mask & ~bit);
     }
   }
   return PwmEdge{t, mask};
@@ -220,9 +240,9 @@ PwmEdge PwmSchedule::next_edge() noexcept {
     if (valve.next_period_start == t) {
       valve.started = true;
       valve.period_start = t;
-      valve.next_period_start = t + period_;
+      valve.next_period_start = period_end_on_grid(valve, t);
       valve.latched_duty_pct = valve.requested_duty_pct;
-      valve.on_time = on_time_for(valve.latched_duty_pct);
+      valve.on_time = on_time_for(valve.latched_duty_pct, valve.next_period_start - t);
       mask_ = valve.on_time > nanoseconds(0) ? (mask_ | bit) : (mask_ & ~bit);
     }
     if (was_open && (mask_ & bit) == 0) valve.closed_at = t;

@@ -9,8 +9,11 @@
 // Immediate mode (PwmConfig.immediate_start_stop, used by the daemon so spray lands on the imaged
 // ground): set_duty(valve, duty, now) on a CLOSED valve (closed for its whole current period)
 // with duty > 0 starts a new period at once — at now, or later only as far as min_off_time since
-// the valve closed requires; its later periods follow on from that start, so its stagger slot is
-// given up. A duty of 0 on an OPEN valve closes it at once (at now, or at period start +
+// the valve closed requires. That first period is stretched or shortened (to between T/2 and
+// 3T/2, its on-time duty x its length) so that it ends on the valve's own stagger grid: the
+// periods after it keep their slot. (Without this, valves started together — at Start, after a
+// weed-free stretch — stayed in phase for good, and the daemon's PWM was synchronous.) A duty
+// of 0 on an OPEN valve closes it at once (at now, or at period start +
 // min_on_time if later). Other duty changes are still latched at the next period start.
 // Minimum on/off time: a pulse whose on part would be shorter than min_on_time is rounded to
 // the NEARER of 0 (closed all period) and min_on_time; an off part shorter than min_off_time
@@ -109,8 +112,11 @@ class PwmSchedule {
   PwmValveState valve_state_at(std::size_t valve, std::chrono::nanoseconds t) const noexcept;
   std::uint32_t mask_at(std::chrono::nanoseconds t) const noexcept;
 
-  // Pulse on-time for a duty after the min-on/min-off rounding (pure helper).
+  // Pulse on-time for a duty after the min-on/min-off rounding (pure helper), in a period of the
+  // schedule's length or of `length` (an immediate start's first period).
   std::chrono::nanoseconds on_time_for(double duty_pct) const noexcept;
+  std::chrono::nanoseconds on_time_for(double duty_pct,
+                                       std::chrono::nanoseconds length) const noexcept;
   // Effective duty after rounding, in percent.
   double effective_duty_pct(double duty_pct) const noexcept;
 
@@ -121,6 +127,7 @@ class PwmSchedule {
  private:
   struct Valve {
     std::chrono::nanoseconds offset{0};
+    std::chrono::nanoseconds grid_origin{0};        // start() time + offset: its slot's grid
     std::chrono::nanoseconds period_start{0};       // start of the current period
     std::chrono::nanoseconds next_period_start{0};  // start of the next period
     std::chrono::nanoseconds on_time{0};            // of the current period
@@ -136,6 +143,10 @@ class PwmSchedule {
   std::chrono::nanoseconds min_on_;
   std::chrono::nanoseconds min_off_;
   std::chrono::nanoseconds close_time(std::size_t valve) const noexcept;
+  // The first point of the valve's slot grid at or after `t` + max(T/2, min_on + min_off): where
+  // a period starting at `t` ends (t + T when t is on the grid).
+  std::chrono::nanoseconds period_end_on_grid(const Valve& valve,
+                                              std::chrono::nanoseconds t) const noexcept;
   std::chrono::nanoseconds next_event_time() const noexcept;
 
   bool immediate_;

@@ -10,6 +10,7 @@
 #include "daemon/backends/backends.hpp"
 #include "daemon/sprayer/sprayer.hpp"
 #include "tests/sim/daemon/run_until.hpp"
+#include "tests/sim/daemon/spraying_machine.hpp"
 
 namespace weedspray::daemon {
 namespace {
@@ -30,19 +31,13 @@ class HangableAdc final : public io::AnalogInput {
 };
 
 TEST(ConverterFault, HungPressureAdcStopsThePumpAndClosesTheValvesThenRecovers) {
-  Config config = default_config();
-  config.sim.speed_profile = "constant";
-  Options options;
-  options.sim = true;
-  Backends backends = make_sim_backends(config, options);
-  HangableAdc adc(*backends.pressure_adc);
-  backends.pressure_adc = &adc;
-  Sprayer sprayer(config, backends);
-  LiveParams params = live_params_from(config);
-  params.pump_enabled = true;
-  params.valves_enabled = true;
-  sprayer.set_params(params);
-  sprayer.start();
+  SprayingMachine m;
+  HangableAdc adc(*m.backends.pressure_adc);
+  m.backends.pressure_adc = &adc;
+  m.start();
+  Backends& backends = m.backends;
+  Sprayer& sprayer = *m.sprayer;
+  const Config& config = m.config;
 
   const auto at_setpoint = [&] {
     const PressureStatus p = sprayer.pressure();

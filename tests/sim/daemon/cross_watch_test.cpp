@@ -14,6 +14,7 @@
 #include "daemon/backends/backends.hpp"
 #include "daemon/sprayer/sprayer.hpp"
 #include "tests/sim/daemon/run_until.hpp"
+#include "tests/sim/daemon/spraying_machine.hpp"
 
 namespace weedspray::daemon {
 namespace {
@@ -54,28 +55,6 @@ class StallingBank final : public io::DigitalOutputBank {
   }
   io::DigitalOutputBank& inner_;
   const char* stalled_thread_;
-};
-
-struct SprayingMachine {
-  SprayingMachine() {
-    config.sim.speed_profile = "constant";
-    Options options;
-    options.sim = true;
-    backends = make_sim_backends(config, options);
-  }
-  void start() {
-    sprayer.emplace(config, backends);
-    params = live_params_from(config);
-    params.pump_enabled = true;
-    params.valves_enabled = true;
-    sprayer->set_params(params);
-    sprayer->start();
-  }
-  bool pump_on() const { return backends.describe_outputs().find("pump=1") != std::string::npos; }
-  Config config = default_config();
-  Backends backends;
-  std::optional<Sprayer> sprayer;
-  LiveParams params;
 };
 
 TEST(CrossWatch, AStalledPressureLoopHasItsPumpSwitchedOffByTheValveThread) {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <vector>
 
@@ -276,12 +277,39 @@ TEST(PwmSchedule, ImmediateModeStartsAClosedValveAtOnce) {
   EXPECT_EQ(opened.time, 360ms);
   EXPECT_EQ(opened.valve_mask, 1u << 2);
   EXPECT_EQ(pwm.next_edge().time, 360ms);
+  // The first period ends on the valve's own grid, at least T/2 on: 550 ms (190 ms long).
   const PwmEdge closed = next_change(pwm, 2);
-  EXPECT_EQ(closed.time, 460ms) << "a full 50 % pulse from the new period start";
+  EXPECT_EQ(closed.time, 455ms) << "50 % of the stretched first period";
   EXPECT_EQ(closed.valve_mask, 0u);
   const PwmEdge next_period = next_change(pwm, 2);
-  EXPECT_EQ(next_period.time, 560ms) << "later periods follow on from the immediate start";
+  EXPECT_EQ(next_period.time, 550ms) << "later periods keep the valve's stagger slot";
   EXPECT_EQ(next_period.valve_mask, 1u << 2);
+  EXPECT_EQ(next_change(pwm, 2).time, 650ms);
+}
+
+// Valves started at the same instant (Start, or the end of a weed-free stretch) must not stay in
+// phase: after the first period each is back in its own slot, so the four open at four times.
+TEST(PwmSchedule, ImmediateStartsTogetherFallBackIntoTheirStaggerSlots) {
+  PwmSchedule pwm(immediate_four_valves());
+  pwm.start(0ns);
+  advance_to(pwm, 1010ms);
+  const std::vector<double> half(4, 50.0);
+  pwm.set_duties(half, 1010ms);
+  const PwmEdge first = pwm.next_edge();
+  EXPECT_EQ(first.time, 1010ms);
+  EXPECT_EQ(first.valve_mask, 0b1111u) << "all open at once, on the ground";
+  std::vector<nanoseconds> opened;
+  for (PwmEdge edge = pwm.next_edge(), before = edge; edge.time < 1600ms;
+       before = edge, edge = pwm.next_edge()) {
+    for (std::size_t v = 0; v < 4; ++v)
+      if (edge.time >= 1300ms && !(before.valve_mask >> v & 1u) && (edge.valve_mask >> v & 1u))
+        opened.push_back(edge.time % 200ms);
+  }
+  std::sort(opened.begin(), opened.end());
+  opened.erase(std::unique(opened.begin(), opened.end()), opened.end());
+  EXPECT_EQ(opened, (std::vector<nanoseconds>{0ms, 50ms, 100ms, 150ms}));
+  // Mean duty over the stretched/shortened first periods stays the requested 50 %.
+  for (std::size_t v = 0; v < 4; ++v) EXPECT_EQ(pwm.valve_state(v).latched_duty_pct, 50.0);
 }
 
 TEST(PwmSchedule, ImmediateModeClosesAnOpenValveAtOnceButKeepsMinOnTime) {
@@ -301,10 +329,10 @@ TEST(PwmSchedule, ImmediateModeClosesAnOpenValveAtOnceButKeepsMinOnTime) {
   edge = pwm.next_edge();
   EXPECT_EQ(edge.time, 300ms);
   EXPECT_EQ(edge.valve_mask, 1u);
-  advance_to(pwm, 370ms);
-  pwm.set_duty(0, 0.0, 370ms);
+  advance_to(pwm, 345ms);  // open until 350 ms (the first period ends on the grid at 400 ms)
+  pwm.set_duty(0, 0.0, 345ms);
   edge = pwm.next_edge();
-  EXPECT_EQ(edge.time, 370ms);
+  EXPECT_EQ(edge.time, 345ms);
   EXPECT_EQ(edge.valve_mask & 1u, 0u);
   EXPECT_EQ(pwm.mask_at(450ms), 0u) << "stays closed";
 }
