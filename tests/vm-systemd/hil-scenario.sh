@@ -220,8 +220,10 @@ setpoint="$(bus_value PressureSetpoint)"
 sleep 10 # the pressure loop settles (about 2 s on the plant; the emulated CPU is slower)
 samples=()
 daemon_samples=()
+dac_samples=()
 for _ in $(seq 10); do
   samples+=("$(hil pressure_mpa)")
+  dac_samples+=("$(hil dac_volts)")
   daemon_samples+=("$(bus_value Pressure)")
   sleep 0.2
 done
@@ -231,6 +233,7 @@ spread="$(printf '%s\n' "${samples[@]}" | awk -v sp="$setpoint" '{ d = $1 - sp; 
 figure pressure_mpa "$pressure"
 figure setpoint_mpa "$setpoint"
 ok="$(awk -v p="$pressure" -v s="$setpoint" 'BEGIN { d = p - s; if (d < 0) d = -d; print (s > 0 && d <= 0.02) ? 0 : 1 }')"
+info "pressure reads (plant | daemon | return-valve DAC V): ${samples[*]} | ${daemon_samples[*]} | ${dac_samples[*]}"
 step pressure_at_setpoint "$ok" "plant's line pressure mean of 10 reads over 2 s $pressure MPa, set-point $setpoint, worst read off by $spread; the daemon's Pressure, same reads: mean $daemon_mean"
 
 # Measured duty per line over a window vs the daemon's NozzleDuty (read at both ends: it must
@@ -247,10 +250,15 @@ trace_duty() { # -> "d0 d1 d2 d3" in percent over the traced span
       if (l < 0 || l > 3) next
       if (first < 0) { first = ts; for (k = 0; k < 4; k++) since[k] = ts }
       if (state[l] == 1) open[l] += ts - since[l]
+      # Where a difference comes from: each pulse (rise to fall) and period (rise to rise).
+      if (state[l] == 0 && v == 1) { if (rose[l] > 0) { p = ts - rose[l]; periods[l]++; psum[l] += p; if (p > pmax[l]) pmax[l] = p; if (pmin[l] == 0 || p < pmin[l]) pmin[l] = p }; rose[l] = ts }
+      if (state[l] == 1 && v == 0 && rose[l] > 0) { o = ts - rose[l]; pulses[l]++; osum[l] += o; if (o > omax[l]) omax[l] = o; if (omin[l] == 0 || o < omin[l]) omin[l] = o }
       state[l] = v; since[l] = ts; last = ts
     }
     END {
       for (k = 0; k < 4; k++) { if (state[k] == 1) open[k] += last - since[k]; printf "%.2f ", (last > first) ? open[k] / (last - first) * 100 : -1 }
+      for (k = 0; k < 4; k++) if (pulses[k] > 0 && periods[k] > 0)
+        printf "valve%d: %d pulses %.1f ms (%.1f-%.1f), %d periods %.1f ms (%.1f-%.1f); ", k, pulses[k], osum[k] / pulses[k] * 1000, omin[k] * 1000, omax[k] * 1000, periods[k], psum[k] / periods[k] * 1000, pmin[k] * 1000, pmax[k] * 1000 > "/run/weedspray-duty-edges"
     }' "$tracing/trace"
   echo 1 >"$tracing/tracing_on"
 }
@@ -273,6 +281,7 @@ info "spraying: Speed $(bus_value Speed) m/s, ZoneDensity $(bus_value ZoneDensit
 traced_error="$(awk -v m="$traced" -v d="$duty_after" 'BEGIN { split(m, mm, " "); n = split(d, dd, " "); e = 0;
   for (i = 2; i <= n; i++) { x = mm[i - 1] - dd[i]; if (x < 0) x = -x; if (x > e) e = x }; printf "%.2f", e }')"
 figure duty_error_traced_pct_max "$traced_error"
+info "traced valve edges: $(cat /run/weedspray-duty-edges 2>/dev/null)"
 step duty_matches "$ok" "traced edges: ${traced}% (max error $traced_error); sampled on the lines (${measured}%) vs NozzleDuty ($duty_before at the start, $duty_after at the end) over $(awk -v a="$t1" -v b="$t2" 'BEGIN { printf "%.1f", b - a }') s: max error $duty_error points; sampled at $(hil sample_hz) Hz, longest gap $(hil max_gap_ms) ms"
 
 # --- pulses: sent by the plant vs counted ---------------------------------------------------------
