@@ -3,7 +3,7 @@
 // whose other end only the daemon holds. Once its outputs are open the daemon sends over it
 // its fatal-exit writes with copies of their descriptors (emergency_write_handoff.hpp).
 // Two signs of the daemon's end, whichever comes first:
-// - PF_EXITING in /proc/PID/stat (supervision/process_exit_probe.hpp), polled every few ms:
+// - PF_EXITING in /proc/PID/stat (supervision/process_exit_probe.hpp), polled every 10 ms:
 //   set when the kernel starts to tear the daemon down (kill -9 included), long before it
 //   closes the daemon's files; the watcher then writes every handed-over output safe through
 //   its copies at once;
