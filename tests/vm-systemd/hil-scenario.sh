@@ -205,6 +205,13 @@ wait_for() { # SECONDS COMMAND...: until COMMAND succeeds
 state_is() { [ "$(bus_state)" = "$1" ]; }
 active_with_new_pid() { [ "$(systemctl is-active weedsprayd)" = active ] && [ "$(main_pid)" != "$1" ] && [ "$(main_pid)" != 0 ]; }
 start_spraying() { # -> 0 when Spraying with the pump on
+  # Each fault step needs a spraying daemon: one latched in Fault by an earlier step (that step
+  # has failed already and says why) is restarted first, so the next step still measures.
+  if state_is Fault; then
+    info "State=Fault (Alarms $(bus_value Alarms); $(journalctl -u weedsprayd -b -p err -o cat | tail -n 3 | tr '\n' '|')): systemctl restart weedsprayd"
+    timeout 90 systemctl restart weedsprayd
+    wait_for 30 state_is Idle
+  fi
   sprayctl start >/dev/null 2>&1
   wait_for 30 state_is Spraying && sleep 2 && wait_for 10 sh -c "grep -qx pump=1 $run_dir/status"
 }
