@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "daemon/backends/backends.hpp"
+#include "daemon/backends/emergency_write_handoff.hpp"
 #include "daemon/backends/sim_faults.hpp"
 #include "daemon/bus/dbus_service.hpp"
 #include "daemon/bus/status.hpp"
@@ -112,11 +113,24 @@ class Daemon final : public CommandHandler {
     if (event_ != nullptr) sd_event_unref(event_);
   }
 
+  // The exit watcher's socket (supervision/exit_watcher.hpp): run() hands it the outputs.
+  void set_exit_watcher_socket(int fd) noexcept { exit_watcher_socket_ = fd; }
+
   int run() {
     backends_ = options_.sim ? make_sim_backends(config_, options_) : make_hw_backends(config_);
     spdlog::info("backends: {}", backends_.mode);
     const std::size_t emergency = backends_.register_emergency_writes();
     if (!options_.sim) spdlog::info("fatal-exit safe writes armed for {} outputs", emergency);
+    if (exit_watcher_socket_ >= 0) {
+      const int handed = hand_emergency_writes(exit_watcher_socket_);
+      if (handed < 0)
+        spdlog::warn(
+            "exit watcher: outputs not handed over ({}): it writes them only after "
+            "this process is gone",
+            std::strerror(-handed));
+      else
+        spdlog::info("exit watcher holds the safe writes of {} outputs", handed);
+    }
     totals_file_ = std::filesystem::path(config_.daemon.state_dir) / "totals.toml";
     std::filesystem::create_directories(config_.daemon.state_dir);
     std::string totals_error;
@@ -954,6 +968,7 @@ class Daemon final : public CommandHandler {
   std::array<std::uint64_t, kOutputRoleCount> failed_writes_seen_{};
   std::array<bool, kOutputRoleCount> rewrite_safe_{};  // refused a write: write it safe in Fault
   bool start_when_ready_ = false;                      // Start arrived while Starting
+  int exit_watcher_socket_ = -1;
 };
 
 }  // namespace
@@ -993,6 +1008,7 @@ int run_daemon(const Options& options) {
 #ifndef WEEDSPRAY_SELFTEST_NO_FAILSAFE
   // Hardware mode: before any line is requested, a watcher process that writes the outputs
   // safe when this one ends in any way (kill -9 included); ExecStopPost is the second layer.
+  int exit_watcher_socket = -1;
   if (!options.sim) {
     std::string error;
     const ExitWatcher watcher =
@@ -1004,9 +1020,11 @@ int run_daemon(const Options& options) {
           error);
     else
       spdlog::info("exit watcher started (pid {})", watcher.pid);
+    exit_watcher_socket = watcher.socket_fd;
   }
 #endif
   Daemon daemon(options, std::move(config));
+  daemon.set_exit_watcher_socket(exit_watcher_socket);
   try {
     return daemon.run();
   } catch (const std::exception& error) {

@@ -12,17 +12,23 @@
 int main(int argc, char** argv) {
   std::string config_path = weedspray::daemon::kDefaultConfigPath;
   int watch_fd = -1;
+  int daemon_pid = 0;
   CLI::App app{
       "weedspray-safe-outputs: write every output of the configuration at its safe value "
       "(valves and pump off, buzzer/LED/heartbeat low, return valve at dac.safe_value)"};
   app.add_option("--config", config_path, "main configuration file (drop-ins: conf.d/)");
   app.add_option("--when-closed", watch_fd,
-                 "first wait until this file descriptor reads end-of-file (weedsprayd holds the "
-                 "pipe's write end: its process has ended)")
+                 "first wait until this unix socket (SOCK_SEQPACKET) reads end-of-file (weedsprayd "
+                 "holds the other end: its process has ended)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--daemon-pid", daemon_pid,
+                 "with --when-closed: weedsprayd's PID (this program's parent); its outputs are "
+                 "written safe as soon as it starts to exit, through the descriptors it handed "
+                 "over on the socket")
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
   if (watch_fd >= 0)
-    return weedspray::daemon::watch_and_write_safe_outputs(watch_fd, config_path,
+    return weedspray::daemon::watch_and_write_safe_outputs(watch_fd, daemon_pid, config_path,
                                                            "weedspray-safe-outputs");
   return weedspray::daemon::write_safe_outputs(config_path, "weedspray-safe-outputs");
 }

@@ -60,6 +60,12 @@ std::size_t EmergencyOutputs::size() noexcept {
   return g_count.load();
 }
 
+bool EmergencyOutputs::get(std::size_t i, EmergencyWrite& out) noexcept {
+  if (i >= g_count.load()) return false;
+  out = g_writes[i];
+  return true;
+}
+
 int EmergencyOutputs::trigger() noexcept {
   int failed = 0;
   const std::size_t n = g_count.load();

@@ -5,8 +5,9 @@
 // line handle's SET_LINE_VALUES ioctl, a pwrite of a sysfs attribute): the handler then runs
 // only async-signal-safe calls - no allocation, no locks, no library - and re-raises the signal
 // so the process still dies of it (core dump, systemd's Restart=on-failure, the exit status).
-// kill -9 and power loss run nothing in the process: ExecStopPost (weedsprayd --safe-outputs)
-// and the optional heartbeat relay cover those.
+// kill -9 and power loss run nothing in the process: the exit watcher (the same writes on
+// copies of these descriptors, daemon/backends/emergency_write_handoff.hpp), ExecStopPost
+// (weedspray-safe-outputs) and the optional heartbeat relay cover those.
 // Hand-written because it must run inside a signal handler: fixed storage, no allocation.
 #pragma once
 
@@ -33,6 +34,8 @@ class EmergencyOutputs {
   // Forgets every write (their descriptors are about to close).
   static void clear() noexcept;
   static std::size_t size() noexcept;
+  // The i-th registered write (false past the end): what the daemon hands its exit watcher.
+  static bool get(std::size_t i, EmergencyWrite& out) noexcept;
   // Performs every write, each retried once on failure; returns how many still failed.
   // Async-signal-safe.
   static int trigger() noexcept;

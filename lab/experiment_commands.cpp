@@ -39,9 +39,11 @@ struct ExperimentOptions {
   std::string weed_source = "truth";
   std::string model;
   double decision_threshold = -1.0;  // < 0: the daemon's spray.decision_threshold default
-  double control_period_ms = 5.0;
-  double converter_lead_ms = 0.0;
-  double converter_lag_ms = 0.0;
+  // step: the pressure loop's timing; unset: 5 / 0 / 0 ms for one machine, the daemon's
+  // (10 / 2.5 / 1 ms) for --plants.
+  std::optional<double> control_period_ms;
+  std::optional<double> converter_lead_ms;
+  std::optional<double> converter_lag_ms;
 };
 
 constexpr int kBlue = 0x1f77b4, kOrange = 0xff7f0e, kGreen = 0x2ca02c, kRed = 0xd62728,
@@ -112,9 +114,15 @@ void print_gains(const char* name, const control::FuzzyPidConfig& c) {
 int run_step_fleet_command(const ExperimentOptions& o) {
   control::FuzzyPidConfig pid = ex::fair_tuned_pid_config();
   control::FuzzyPidConfig fuzzy = ex::fair_tuned_fuzzy_pid_config();
+  // Another loop than the daemon's default (e.g. a slower pressure.loop_hz over a Modbus ADC).
+  ex::StepOptions timing = ex::daemon_step_timing();
+  if (o.control_period_ms) timing.control_period_s = *o.control_period_ms / 1e3;
+  if (o.converter_lead_ms) timing.converter_lead_s = *o.converter_lead_ms / 1e3;
+  if (o.converter_lag_ms) timing.converter_lag_s = *o.converter_lag_ms / 1e3;
   if (o.tune) {
     const auto t0 = std::chrono::steady_clock::now();
-    const ex::FairTuningResult t = ex::tune_fair(ex::training_set(o.seed), o.tune_budget);
+    const ex::FairTuningResult t =
+        ex::tune_fair(ex::training_set(o.seed, 5, timing), o.tune_budget);
     const double wall =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::fprintf(stderr,
@@ -128,12 +136,14 @@ int run_step_fleet_command(const ExperimentOptions& o) {
   }
   print_gains("PID", pid);
   print_gains("fuzzy PID", fuzzy);
-  const ex::StepFleetResult r = ex::run_step_fleet({o.seed, o.plants, false}, pid, fuzzy);
+  const ex::StepFleetResult r =
+      ex::run_step_fleet({o.seed, o.plants, false}, pid, fuzzy, {0.2, 0.4}, timing);
   if (o.json) {
     std::printf(
-        "{\"plants\": %d, \"seed\": %llu, \"control_period_s\": 0.01, "
-        "\"converter_lead_s\": 0.0025, \"converter_lag_s\": 0.001, ",
-        o.plants, static_cast<unsigned long long>(o.seed));
+        "{\"plants\": %d, \"seed\": %llu, \"control_period_s\": %g, "
+        "\"converter_lead_s\": %g, \"converter_lag_s\": %g, ",
+        o.plants, static_cast<unsigned long long>(o.seed), timing.control_period_s,
+        timing.converter_lead_s, timing.converter_lag_s);
     for (const auto* c : {&r.pid, &r.fuzzy_pid}) {
       const bool is_pid = c == &r.pid;
       const auto& g = is_pid ? pid : fuzzy;
@@ -158,9 +168,11 @@ int run_step_fleet_command(const ExperimentOptions& o) {
     std::printf("}\n");
   } else {
     std::printf(
-        "start-up with 4 nozzles open on %d held-out machines (seed %llu), the daemon's loop: "
-        "100 Hz, ADC 2.5 ms before / DAC 1 ms after each tick; gains from the fair search\n",
-        o.plants, static_cast<unsigned long long>(o.seed));
+        "start-up with 4 nozzles open on %d held-out machines (seed %llu), the loop: %g Hz, "
+        "ADC %g ms before / DAC %g ms after each tick; gains from the fair search%s\n",
+        o.plants, static_cast<unsigned long long>(o.seed), 1.0 / timing.control_period_s,
+        timing.converter_lead_s * 1e3, timing.converter_lag_s * 1e3,
+        o.tune ? " (rerun with this loop)" : "");
     std::printf("%-10s %5s %17s %17s %21s %9s\n", "controller", "MPa", "overshoot% mean/max",
                 "settle_s mean/max", "ITAE mean/max", "unsettled");
     for (std::size_t i = 0; i < r.pid.rows.size(); ++i)
@@ -185,9 +197,9 @@ int run_step_command(const ExperimentOptions& o) {
   if (o.plants > 0) return run_step_fleet_command(o);
   ex::StepOptions options;
   options.seed = o.seed;
-  options.control_period_s = o.control_period_ms / 1e3;
-  options.converter_lead_s = o.converter_lead_ms / 1e3;
-  options.converter_lag_s = o.converter_lag_ms / 1e3;
+  options.control_period_s = o.control_period_ms.value_or(5.0) / 1e3;
+  options.converter_lead_s = o.converter_lead_ms.value_or(0.0) / 1e3;
+  options.converter_lag_s = o.converter_lag_ms.value_or(0.0) / 1e3;
   if (o.tune) {
     const auto t0 = std::chrono::steady_clock::now();
     const ex::TuningResult t = ex::tune_step_controllers(options);
@@ -833,7 +845,8 @@ void add_experiment_commands(CLI::App& app) {
                   "--seed); prints mean, sd and worst")
       ->check(CLI::Range(1, 1000));
   cmd->add_option("--control-period-ms", options->control_period_ms,
-                  "step: pressure loop period (the daemon's default is 10 ms)")
+                  "step: pressure loop period (one machine: 5 ms unless given; --plants: the "
+                  "daemon's 10 ms)")
       ->check(CLI::Range(0.1, 100.0));
   cmd->add_option("--converter-lead-ms", options->converter_lead_ms,
                   "step: ADC sampled this long before each tick (the daemon's converters' thread: "

@@ -86,11 +86,11 @@ StepOptions daemon_step_timing() {
   return o;
 }
 
-TuningSet training_set(std::uint64_t seed, int machines) {
+TuningSet training_set(std::uint64_t seed, int machines, const StepOptions& timing) {
   TuningSet set;
   set.machines = draw_machines(seed, machines, 1000);
   set.points = {{0.2, 4}, {0.3, 1}, {0.4, 2}, {0.5, 3}};
-  set.timing = daemon_step_timing();
+  set.timing = timing;
   return set;
 }
 
@@ -126,9 +126,10 @@ FairTuningResult tune_fair(const TuningSet& set, int budget) {
 
 StepFleetResult run_step_fleet(const FleetOptions& fleet, const FuzzyPidConfig& pid,
                                const FuzzyPidConfig& fuzzy_pid,
-                               const std::vector<double>& setpoints_mpa) {
+                               const std::vector<double>& setpoints_mpa,
+                               const StepOptions& timing) {
   const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
-  const TuningSet points = training_set(fleet.seed, 0);
+  const TuningSet points = training_set(fleet.seed, 0, timing);
   auto judge = [&](PressureControlMode mode, const FuzzyPidConfig& config) {
     StepFleetController out;
     for (double sp : setpoints_mpa) {

@@ -37,7 +37,8 @@ struct TuningSet {
 StepOptions daemon_step_timing();
 // Training set: machines 1000.. of fleet `seed` (never the held-out 0..N-1) at 0.2-0.5 MPa with
 // 1-4 nozzles open.
-TuningSet training_set(std::uint64_t seed, int machines = 5);
+TuningSet training_set(std::uint64_t seed, int machines = 5,
+                       const StepOptions& timing = daemon_step_timing());
 
 struct StepScore {
   double itae = 0.0;
@@ -79,7 +80,8 @@ struct StepFleetResult {
 };
 StepFleetResult run_step_fleet(const FleetOptions& fleet, const FuzzyPidConfig& pid,
                                const FuzzyPidConfig& fuzzy_pid,
-                               const std::vector<double>& setpoints_mpa = {0.2, 0.4});
+                               const std::vector<double>& setpoints_mpa = {0.2, 0.4},
+                               const StepOptions& timing = daemon_step_timing());
 
 // The result of tune_fair(training_set(1), 300), recorded (`weedspray-lab experiment step
 // --plants N --tune` reruns it). Controller output u in [0, 1] closes the return valve.

@@ -1,10 +1,17 @@
-// The exit watcher: weedspray-safe-outputs --when-closed FD, started by weedsprayd (hardware
-// mode) before it requests any line. It waits until FD, the read end of a pipe whose only write
-// end the daemon holds, reads end-of-file: the kernel closes that end when the daemon's process
-// ends, however it ends (kill -9 and crashes its handlers could not run in included). It then
-// writes every output safe within milliseconds, retrying while the dying daemon's line requests
-// are still being released (EBUSY). The unit's ExecStopPost stays as the second layer; it runs
-// only after systemd saw the whole service end (seconds on a slow board).
+// The exit watcher: weedspray-safe-outputs --when-closed FD --daemon-pid PID, started by
+// weedsprayd (hardware mode) before it requests any line. FD is one end of a unix socket pair
+// whose other end only the daemon holds. Once its outputs are open the daemon sends over it
+// its fatal-exit writes with copies of their descriptors (emergency_write_handoff.hpp).
+// Two signs of the daemon's end, whichever comes first:
+// - PF_EXITING in /proc/PID/stat (supervision/process_exit_probe.hpp), polled every 10 ms:
+//   set when the kernel starts to tear the daemon down (kill -9 included), long before it
+//   closes the daemon's files; the watcher then writes every handed-over output safe through
+//   its copies at once;
+// - FD reading end-of-file (the kernel closed the daemon's end): the fallback.
+// After end-of-file it closes its copies and requests every output at its safe value, retrying
+// while the dying daemon's line requests are still being released (EBUSY). The unit's
+// ExecStopPost stays as the second layer; it runs only after systemd saw the whole service end
+// (seconds on a slow board).
 #pragma once
 
 #include <filesystem>
@@ -14,7 +21,8 @@ namespace weedspray::daemon {
 // Loads the configuration first (so nothing is left to read after the daemon is gone), ignores
 // SIGTERM/SIGINT/SIGHUP (a stop signals the whole service: the watcher must outlive the
 // daemon), waits, writes. Returns the exit status.
-int watch_and_write_safe_outputs(int fd, const std::filesystem::path& config_path,
+// daemon_pid <= 0: only end-of-file is watched.
+int watch_and_write_safe_outputs(int fd, int daemon_pid, const std::filesystem::path& config_path,
                                  const char* program);
 
 }  // namespace weedspray::daemon

@@ -1,7 +1,7 @@
 #include "daemon/supervision/exit_watcher.hpp"
 
-#include <fcntl.h>
 #include <spawn.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -22,12 +22,14 @@ std::filesystem::path default_exit_watcher_program() {
 ExitWatcher start_exit_watcher(const std::filesystem::path& config_path,
                                const std::filesystem::path& program, std::string& error) {
   ExitWatcher watcher;
+  // A socket pair rather than a pipe: the daemon hands the watcher its outputs' descriptors
+  // over it later (backends/emergency_write_handoff.hpp). Datagrams keep each write whole.
   int fds[2];
-  if (pipe2(fds, O_CLOEXEC) != 0) {
-    error = std::string("pipe: ") + std::strerror(errno);
+  if (socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, fds) != 0) {
+    error = std::string("socketpair: ") + std::strerror(errno);
     return watcher;
   }
-  // The read end becomes the child's fd 3 (dup2 clears close-on-exec there); the write end,
+  // One end becomes the child's fd 3 (dup2 clears close-on-exec there); the other,
   // close-on-exec, stays only here.
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
@@ -35,7 +37,13 @@ ExitWatcher start_exit_watcher(const std::filesystem::path& config_path,
   std::error_code absolute_error;
   const std::string config = std::filesystem::absolute(config_path, absolute_error).string();
   const std::string program_text = program.string();
-  std::vector<std::string> args = {program_text, "--config", config, "--when-closed", "3"};
+  std::vector<std::string> args = {program_text,
+                                   "--config",
+                                   config,
+                                   "--when-closed",
+                                   "3",
+                                   "--daemon-pid",
+                                   std::to_string(getpid())};
   std::vector<char*> argv;
   for (auto& arg : args) argv.push_back(arg.data());
   argv.push_back(nullptr);
@@ -49,7 +57,7 @@ ExitWatcher start_exit_watcher(const std::filesystem::path& config_path,
     return watcher;
   }
   watcher.pid = pid;
-  watcher.pipe_write_fd = fds[1];
+  watcher.socket_fd = fds[1];
   return watcher;
 }
 

@@ -10,7 +10,8 @@ namespace weedspray::daemon {
 
 struct ExitWatcher {
   int pid = -1;
-  int pipe_write_fd = -1;  // held open (close-on-exec) until the process ends; never written
+  // Held open (close-on-exec) until the process ends; carries only the handed-over outputs.
+  int socket_fd = -1;
 };
 
 // `program` is the watcher's executable (default: weedspray-safe-outputs in this program's

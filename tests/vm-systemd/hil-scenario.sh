@@ -133,8 +133,22 @@ pulses_per_litre = 2000
 # samples inside their freshness limit (3 periods; at 50 Hz they went stale and raised
 # pressure_sensor_fault). The valve thread's cross-watch waits 3 periods too (daemon/sprayer/sprayer.cpp;
 # a fixed 50 ms took the 20 Hz loop for stalled and stopped the pump every few hundred ms).
+# The default gains are tuned for the default 100 Hz loop; at 20 Hz with a Modbus ADC read
+# ahead of each tick and the DAC written by a transaction after it they never settle (held-out
+# machines unsettled after 3 s: 10 of 20 at 0.4 MPa, 19 of 20 at 0.2; the guest's loop held
+# 0.35-0.37 MPa for 0.4). These are the same fair search rerun with this loop:
+#   weedspray-lab experiment step --plants 20 --tune --control-period-ms 50
+#     --converter-lead-ms 25 --converter-lag-ms 15   (one command line)
+# (lead: the worker's clamp, half a period; lag: 1 ms + a 10-20 ms transaction). On the 20
+# held-out machines: all settle, 0.4 MPa overshoot 1.3 % mean / 2.9 % max, settle 1.4 / 1.9 s.
 [pressure]
 loop_hz = 20
+kp = 5.623
+ki = 31.62
+kd = 0.3278
+cp = 0.3163
+ci = 6.423
+cd = 0.0
 
 # The plant's wheel: 20 magnets a metre, so the wheel's edges are 40 ms apart at 0.6 m/s (the
 # kernel's threaded edge handler merges edges closer than it gets the emulated CPU).
@@ -192,6 +206,13 @@ wait_for() { # SECONDS COMMAND...: until COMMAND succeeds
 state_is() { [ "$(bus_state)" = "$1" ]; }
 active_with_new_pid() { [ "$(systemctl is-active weedsprayd)" = active ] && [ "$(main_pid)" != "$1" ] && [ "$(main_pid)" != 0 ]; }
 start_spraying() { # -> 0 when Spraying with the pump on
+  # Each fault step needs a spraying daemon: one latched in Fault by an earlier step (that step
+  # has failed already and says why) is restarted first, so the next step still measures.
+  if state_is Fault; then
+    info "State=Fault (Alarms $(bus_value Alarms); $(journalctl -u weedsprayd -b -p err -o cat | tail -n 3 | tr '\n' '|')): systemctl restart weedsprayd"
+    timeout 90 systemctl restart weedsprayd
+    wait_for 30 state_is Idle
+  fi
   sprayctl start >/dev/null 2>&1
   wait_for 30 state_is Spraying && sleep 2 && wait_for 10 sh -c "grep -qx pump=1 $run_dir/status"
 }
@@ -216,13 +237,18 @@ step idle_live_readings "$ok" "State=$state Pressure=$pressure MPa TankLevel=$ta
 hil_command speed 0.6
 sleep 1
 start_spraying
-step start_spraying "$?" "sprayctl start: State=$(bus_state), pump line $(hil pump), Alarms $(bus_value Alarms)"
+started_ok=$?
+step start_spraying "$started_ok" "sprayctl start: State=$(bus_state), pump line $(hil pump), Alarms $(bus_value Alarms)"
+# That step has failed (and says why); the pressure and duty below still need a spraying daemon.
+[ "$started_ok" -eq 0 ] || { sleep 1; start_spraying || info "still not spraying: State=$(bus_state)"; }
 setpoint="$(bus_value PressureSetpoint)"
 sleep 10 # the pressure loop settles (about 2 s on the plant; the emulated CPU is slower)
 samples=()
 daemon_samples=()
+dac_samples=()
 for _ in $(seq 10); do
   samples+=("$(hil pressure_mpa)")
+  dac_samples+=("$(hil dac_volts)")
   daemon_samples+=("$(bus_value Pressure)")
   sleep 0.2
 done
@@ -232,6 +258,7 @@ spread="$(printf '%s\n' "${samples[@]}" | awk -v sp="$setpoint" '{ d = $1 - sp; 
 figure pressure_mpa "$pressure"
 figure setpoint_mpa "$setpoint"
 ok="$(awk -v p="$pressure" -v s="$setpoint" 'BEGIN { d = p - s; if (d < 0) d = -d; print (s > 0 && d <= 0.02) ? 0 : 1 }')"
+info "pressure reads (plant | daemon | return-valve DAC V): ${samples[*]} | ${daemon_samples[*]} | ${dac_samples[*]}"
 step pressure_at_setpoint "$ok" "plant's line pressure mean of 10 reads over 2 s $pressure MPa, set-point $setpoint, worst read off by $spread; the daemon's Pressure, same reads: mean $daemon_mean"
 
 # Measured duty per line over a window vs the daemon's NozzleDuty (read at both ends: it must
@@ -248,10 +275,16 @@ trace_duty() { # -> "d0 d1 d2 d3" in percent over the traced span
       if (l < 0 || l > 3) next
       if (first < 0) { first = ts; for (k = 0; k < 4; k++) since[k] = ts }
       if (state[l] == 1) open[l] += ts - since[l]
+      # Where a difference comes from: each pulse (rise to fall) and period (rise to rise).
+      if (state[l] == 0 && v == 1) { if (rose[l] > 0) { p = ts - rose[l]; periods[l]++; psum[l] += p; if (p > pmax[l]) pmax[l] = p; if (pmin[l] == 0 || p < pmin[l]) pmin[l] = p }; rose[l] = ts }
+      if (state[l] == 1 && v == 0 && rose[l] > 0) { o = ts - rose[l]; pulses[l]++; osum[l] += o; if (o > omax[l]) omax[l] = o; if (omin[l] == 0 || o < omin[l]) omin[l] = o }
       state[l] = v; since[l] = ts; last = ts
     }
     END {
       for (k = 0; k < 4; k++) { if (state[k] == 1) open[k] += last - since[k]; printf "%.2f ", (last > first) ? open[k] / (last - first) * 100 : -1 }
+      printf "%.6f %.6f\n", first, last > "/run/weedspray-duty-span"
+      for (k = 0; k < 4; k++) if (pulses[k] > 0 && periods[k] > 0)
+        printf "valve%d: %d pulses %.1f ms (%.1f-%.1f), %d periods %.1f ms (%.1f-%.1f); ", k, pulses[k], osum[k] / pulses[k] * 1000, omin[k] * 1000, omax[k] * 1000, periods[k], psum[k] / periods[k] * 1000, pmin[k] * 1000, pmax[k] * 1000 > "/run/weedspray-duty-edges"
     }' "$tracing/trace"
   echo 1 >"$tracing/tracing_on"
 }
@@ -263,18 +296,36 @@ t2="$(hil sampled_s)"; open2=(); for i in 0 1 2 3; do open2+=("$(hil "valve${i}_
 duty_after="$(bus_value NozzleDuty)"
 traced="$(trace_duty)"
 measured="$(for i in 0 1 2 3; do awk -v a="${open1[$i]}" -v b="${open2[$i]}" -v t1="$t1" -v t2="$t2" 'BEGIN { printf "%.2f ", (b - a) / (t2 - t1) * 100 }'; done)"
-# NozzleDuty prints as: 4 d1 d2 d3 d4
-duty_error="$(awk -v m="$measured" -v d="$duty_after" 'BEGIN { split(m, mm, " "); n = split(d, dd, " "); e = 0;
-  for (i = 2; i <= n; i++) { x = mm[i - 1] - dd[i]; if (x < 0) x = -x; if (x > e) e = x }; printf "%.2f", e }')"
+# What the daemon commanded over the same span: NozzleDuty moves with the speed estimate (the
+# wheel's 20 pulses/m), by tens of points within a window on the emulated CPU, so two reads of it
+# say little. The as-applied log has the commanded duty of every PWM period, stamped on
+# CLOCK_MONOTONIC like the trace (trace_clock mono): its mean over the traced span, as
+# "4 d1 d2 d3 d4" like NozzleDuty. (The log is fdatasync'd every second.)
+sleep 1.5
+read -r span_first span_last </run/weedspray-duty-span
+applied_log="$(ls -t /var/lib/weedspray/as-applied/*.csv 2>/dev/null | head -n1)"
+commanded="$(awk -F, -v a="$span_first" -v b="$span_last" '
+  NR == 1 { for (i = 1; i <= NF; i++) if ($i ~ /^duty_pct_[0-3]$/) col[substr($i, 10) + 0] = i; next }
+  $1 + 0 >= a && $1 + 0 <= b { rows++; for (k = 0; k < 4; k++) sum[k] += $(col[k]) }
+  END { printf "4"; for (k = 0; k < 4; k++) printf " %.4f", rows ? sum[k] / rows : -1; printf "\n"; print rows > "/run/weedspray-duty-rows" }' "$applied_log")"
+commanded_rows="$(cat /run/weedspray-duty-rows)"
+# NozzleDuty prints as: 4 d1 d2 d3 d4. The figure is the kernel's record (every edge's exact
+# time) against the log's commanded mean; the plant's sampling (below 2 kHz on the emulated
+# CPU, with gaps) is a cross-check.
+max_error() { # "m0 m1 m2 m3" "4 d1 d2 d3 d4" -> max |m - d|
+  awk -v m="$1" -v d="$2" 'BEGIN { split(m, mm, " "); n = split(d, dd, " "); e = 0;
+    for (i = 2; i <= n; i++) { x = mm[i - 1] - dd[i]; if (x < 0) x = -x; if (x > e) e = x }; printf "%.2f", e }'
+}
+duty_error="$(max_error "$traced" "$commanded")"
+sampled_error="$(max_error "$measured" "$commanded")"
 figure duty_error_pct_max "$duty_error"
+figure duty_error_sampled_pct_max "$sampled_error"
 figure sample_hz "$(hil sample_hz)"
-ok="$(awk -v e="$duty_error" -v b="$duty_before" -v a="$duty_after" -v hz="$(hil sample_hz)" \
-  'BEGIN { split(a, d, " "); print (a == b && d[2] > 0 && e <= 2 && hz >= 2000) ? 0 : 1 }')"
+ok="$(awk -v e="$duty_error" -v c="$commanded" -v r="$commanded_rows" \
+  'BEGIN { split(c, d, " "); print (r >= 10 && d[2] > 0 && e <= 2) ? 0 : 1 }')"
 info "spraying: Speed $(bus_value Speed) m/s, ZoneDensity $(bus_value ZoneDensity), FrameRate $(bus_value FrameRate), Flow $(bus_value Flow) L/min (plant $(hil nozzle_flow_l_per_min)), Alarms $(bus_value Alarms)"
-traced_error="$(awk -v m="$traced" -v d="$duty_after" 'BEGIN { split(m, mm, " "); n = split(d, dd, " "); e = 0;
-  for (i = 2; i <= n; i++) { x = mm[i - 1] - dd[i]; if (x < 0) x = -x; if (x > e) e = x }; printf "%.2f", e }')"
-figure duty_error_traced_pct_max "$traced_error"
-step duty_matches "$ok" "traced edges: ${traced}% (max error $traced_error); sampled on the lines (${measured}%) vs NozzleDuty ($duty_before at the start, $duty_after at the end) over $(awk -v a="$t1" -v b="$t2" 'BEGIN { printf "%.1f", b - a }') s: max error $duty_error points; sampled at $(hil sample_hz) Hz, longest gap $(hil max_gap_ms) ms"
+info "traced valve edges: $(cat /run/weedspray-duty-edges 2>/dev/null)"
+step duty_matches "$ok" "traced edges: ${traced}% vs commanded (as-applied log, mean of $commanded_rows PWM periods in the traced span $span_first-$span_last s): ${commanded#4 }%: max error $duty_error points (NozzleDuty $duty_before at the start, $duty_after at the end); sampled on the lines over $(awk -v a="$t1" -v b="$t2" 'BEGIN { printf "%.1f", b - a }') s: ${measured}% (max error $sampled_error) at $(hil sample_hz) Hz, longest gap $(hil max_gap_ms) ms"
 
 # --- pulses: sent by the plant vs counted ---------------------------------------------------------
 # The wheel stops (so do the valves and the flow): then both counts are final.
