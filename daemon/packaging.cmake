@@ -11,7 +11,8 @@ set(CPACK_DEBIAN_PACKAGE_SECTION "misc")
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 # Library dependencies from the binaries (dpkg-shlibdeps), plus the D-Bus daemon.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
-set(CPACK_DEBIAN_PACKAGE_DEPENDS "dbus, systemd")
+# procps: /bin/kill, the unit's ExecReload (a minimal Debian has no /bin/kill without it).
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "dbus, systemd, procps")
 # [gnss] reads the receiver through gpsd (optional: off by default).
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS "gpsd")
 # The configuration file is a conffile: upgrades keep the user's edits.

@@ -365,11 +365,15 @@ step non_member_refused "$([ "$status" -ne 0 ] && [ "$state" = "$state_before" ]
 
 # --- a broken configuration on reload --------------------------------------------------------------
 pid_before="$(main_pid)"
+refused_before="$(journalctl -u weedsprayd -b -q -o cat | grep -c '^reload refused, running configuration kept' || true)"
 echo 'pressure = "not a table"' >/etc/weedspray/conf.d/90-broken.toml
 systemctl reload weedsprayd
 sleep 3
 active="$(systemctl is-active weedsprayd)"
-step broken_reload_keeps_old "$([ "$active" = active ] && [ "$(main_pid)" = "$pid_before" ] && [ "$(bus_value PressureSetpoint)" = "$setpoint" ]; echo $?)" \
+refused_after="$(journalctl -u weedsprayd -b -q -o cat | grep -c '^reload refused, running configuration kept' || true)"
+# The daemon must have been asked (ExecReload's SIGHUP) and refused: without the refusal line
+# the step would pass for a reload that never reached it.
+step broken_reload_keeps_old "$([ "$active" = active ] && [ "$(main_pid)" = "$pid_before" ] && [ "$(bus_value PressureSetpoint)" = "$setpoint" ] && [ "$refused_after" -gt "$refused_before" ]; echo $?)" \
   "after systemctl reload with a broken conf.d file: $active, MainPID $pid_before -> $(main_pid), set-point $(bus_value PressureSetpoint); journal: $(journalctl -u weedsprayd -b -q -o cat | grep -i reload | tail -n1)"
 rm -f /etc/weedspray/conf.d/90-broken.toml
 
