@@ -129,6 +129,15 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
     odometry_.emplace(odometry);
   }
   const auto nozzles = static_cast<std::size_t>(config.boom.nozzles);
+  if (config.nozzle_health.enabled) {
+    control::NozzleHealthConfig health;
+    health.nozzles = nozzles;
+    health.baseline_s = config.nozzle_health.baseline_s;
+    health.time_constant_s = config.nozzle_health.time_constant_s;
+    health.alarm_fraction = config.nozzle_health.alarm_fraction;
+    health.alarm_hold_s = config.nozzle_health.alarm_hold_s;
+    nozzle_health_.emplace(health);
+  }
   if (config.spray.quantiser_levels >= 2) {
     std::vector<double> levels{0.0};
     const int n = config.spray.quantiser_levels;
@@ -368,6 +377,55 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
   analog_io_->command_safe();
 }
 
+struct Sprayer::HealthWindows {
+  Nanos length{};            // period / nozzles: one staggered phase
+  Nanos schedule_start{-1};  // the valve schedule's run the windows are aligned to
+  std::int64_t index = -1;   // the window being accumulated (-1: none yet)
+  std::array<double, control::kMaxHealthNozzles> open_s{};
+  std::array<double, control::kMaxHealthNozzles> pending_open_s{};
+  Nanos pending_due{-1};     // when the closed window's liquid has passed the meter
+  bool pending_fed = false;  // false: the first window, only marks the meter
+  std::uint64_t meter_mark = 0;
+};
+
+// The lab's blockage experiment (control/experiments/closed_loop_rig.cpp) with its meter lag:
+// the valves' opening and closing delays (15-25 ms) put the metered flow behind the commands.
+void Sprayer::feed_nozzle_health(HealthWindows& w, Nanos now, double dt, bool spraying,
+                                 std::uint64_t pulses, double pulses_per_litre) noexcept {
+  constexpr Nanos kMeterLag = std::chrono::milliseconds(30);
+  io::ValvePwmStats pwm;
+  if (!pwm_driver_->try_stats(pwm)) return;  // the slot was busy: this cycle not counted
+  const bool feeding = spraying && !pwm.expired;
+  if (!feeding || pwm.schedule_start != w.schedule_start) {
+    w.schedule_start = pwm.schedule_start;
+    w.index = -1;
+    w.pending_due = Nanos{-1};
+    w.pending_fed = false;
+  }
+  if (!feeding) return;
+  const std::int64_t index = (now - pwm.schedule_start) / w.length;
+  if (w.index < 0) {
+    w.index = index;
+    w.open_s.fill(0.0);
+  } else if (index != w.index) {
+    w.pending_open_s = w.open_s;
+    w.pending_due = pwm.schedule_start + (w.index + 1) * w.length + kMeterLag;
+    w.open_s.fill(0.0);
+    w.index = index;
+  }
+  for (std::size_t i = 0; i < control::kMaxHealthNozzles; ++i)
+    if (pwm.last_mask & (1U << i)) w.open_s[i] += dt;
+  if (w.pending_due.count() >= 0 && now >= w.pending_due) {
+    w.pending_due = Nanos{-1};
+    if (w.pending_fed) {
+      const double litres = static_cast<double>(pulses - w.meter_mark) / pulses_per_litre;
+      nozzle_health_->add_window(w.pending_open_s, litres, seconds(w.length));
+    }
+    w.pending_fed = true;
+    w.meter_mark = pulses;
+  }
+}
+
 void Sprayer::control_loop(std::stop_token stop) noexcept {
   // 500 Hz: a frame waits at most 2 ms to be scheduled, and at 2.5 m/s the vehicle moves
   // 5 mm per cycle.
@@ -411,6 +469,10 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   std::array<double, io::kMaxValves> nozzle_speed{};
   std::array<double, io::kMaxValves> arc_extra_m{};  // nozzle's travel minus the centre line's
   std::array<double, io::kMaxValves> frame_odometer{};
+  HealthWindows health_windows;
+  health_windows.length = from_seconds(
+      1.0 / (config_.pwm.frequency_hz * static_cast<double>(std::max<std::size_t>(nozzles, 1))));
+  std::uint64_t health_reset_seen = params.trip_reset;
   while (!stop.stop_requested()) {
     loop.wait_next();
     const Nanos now = io_.clock->now();
@@ -604,6 +666,19 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
     command.issued_at = now;
     pwm_driver_->command(command);
     for (std::size_t n = 0; n < nozzles; ++n) status.duty_pct[n] = command.duty_pct[n];
+    if (nozzle_health_ && io_.flow != nullptr) {
+      // ClearAlarms after a clean: the nozzles' flows are learned afresh as the new baseline.
+      if (params.trip_reset != health_reset_seen) {
+        health_reset_seen = params.trip_reset;
+        nozzle_health_->reset();
+      }
+      status.nozzle_health_reset = health_reset_seen;
+      feed_nozzle_health(health_windows, now, dt, spray, status.flow_pulses,
+                         params.flow_pulses_per_litre);
+      for (std::size_t n = 0; n < std::min(nozzles, control::kMaxHealthNozzles); ++n)
+        status.nozzle_flow_ratio[n] = nozzle_health_->ratio(n);
+      status.nozzle_flow_fault = nozzle_health_->alarmed_nozzle();
+    }
 
     if (spray && status.speed_m_per_s > 0) {
       double nozzle_speed_sum = 0;  // the boom's swept width x speed, each nozzle on its arc

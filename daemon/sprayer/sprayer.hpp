@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "control/flow_feedback.hpp"
+#include "control/nozzle_health.hpp"
 #include "control/nozzle_scheduler.hpp"
 #include "control/odometry.hpp"
 #include "control/pressure_controller.hpp"
@@ -132,6 +133,11 @@ class Sprayer {
   void watch_pressure_loop(Nanos now) noexcept;
   void pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept;
   void control_loop(std::stop_token stop) noexcept;
+  // The control loop's share of nozzle health: each phase window's commanded open times (the
+  // valve thread's mask, sampled every cycle) and, a meter lag later, its metered volume.
+  struct HealthWindows;
+  void feed_nozzle_health(HealthWindows& w, Nanos now, double dt, bool spraying,
+                          std::uint64_t pulses, double pulses_per_litre) noexcept;
   void camera_loop(std::stop_token stop, CameraWorker& worker) noexcept;
   void tank_loop(std::stop_token stop) noexcept;
   void imu_loop(std::stop_token stop) noexcept;
@@ -159,6 +165,7 @@ class Sprayer {
   std::unique_ptr<io::ValvePwmDriver<control::PwmSchedule>> pwm_driver_;
   std::optional<control::Odometry> odometry_;
   control::FlowTrim flow_trim_;
+  std::optional<control::NozzleHealth> nozzle_health_;  // [nozzle_health] enabled; control loop
   std::vector<control::DutyQuantiser> quantisers_;
   std::array<CameraWorker, kMaxCameras> cameras_;
   InferenceGate inference_gate_;  // one weed-model inference at a time, in arrival order
