@@ -377,52 +377,19 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
   analog_io_->command_safe();
 }
 
-struct Sprayer::HealthWindows {
-  Nanos length{};            // period / nozzles: one staggered phase
-  Nanos schedule_start{-1};  // the valve schedule's run the windows are aligned to
-  std::int64_t index = -1;   // the window being accumulated (-1: none yet)
-  std::array<double, control::kMaxHealthNozzles> open_s{};
-  std::array<double, control::kMaxHealthNozzles> pending_open_s{};
-  Nanos pending_due{-1};     // when the closed window's liquid has passed the meter
-  bool pending_fed = false;  // false: the first window, only marks the meter
-  std::uint64_t meter_mark = 0;
-};
-
-// The lab's blockage experiment (control/experiments/closed_loop_rig.cpp) with its meter lag:
-// the valves' opening and closing delays (15-25 ms) put the metered flow behind the commands.
-void Sprayer::feed_nozzle_health(HealthWindows& w, Nanos now, double dt, bool spraying,
+// Nozzle health's share of the control loop: the valves' open times and the meter's pulses
+// per phase window (daemon/sprayer/phase_windows.hpp) into the detector.
+void Sprayer::feed_nozzle_health(PhaseWindows& windows, Nanos now, bool spraying,
                                  std::uint64_t pulses, double pulses_per_litre) noexcept {
-  constexpr Nanos kMeterLag = std::chrono::milliseconds(30);
   io::ValvePwmStats pwm;
-  if (!pwm_driver_->try_stats(pwm)) return;  // the slot was busy: this cycle not counted
-  const bool feeding = spraying && !pwm.expired;
-  if (!feeding || pwm.schedule_start != w.schedule_start) {
-    w.schedule_start = pwm.schedule_start;
-    w.index = -1;
-    w.pending_due = Nanos{-1};
-    w.pending_fed = false;
+  if (!pwm_driver_->try_stats(pwm)) return;  // the slot was busy: the next cycle catches up
+  if (!spraying || pwm.expired) {
+    windows.restart();
+    return;
   }
-  if (!feeding) return;
-  const std::int64_t index = (now - pwm.schedule_start) / w.length;
-  if (w.index < 0) {
-    w.index = index;
-    w.open_s.fill(0.0);
-  } else if (index != w.index) {
-    w.pending_open_s = w.open_s;
-    w.pending_due = pwm.schedule_start + (w.index + 1) * w.length + kMeterLag;
-    w.open_s.fill(0.0);
-    w.index = index;
-  }
-  for (std::size_t i = 0; i < control::kMaxHealthNozzles; ++i)
-    if (pwm.last_mask & (1U << i)) w.open_s[i] += dt;
-  if (w.pending_due.count() >= 0 && now >= w.pending_due) {
-    w.pending_due = Nanos{-1};
-    if (w.pending_fed) {
-      const double litres = static_cast<double>(pulses - w.meter_mark) / pulses_per_litre;
-      nozzle_health_->add_window(w.pending_open_s, litres, seconds(w.length));
-    }
-    w.pending_fed = true;
-    w.meter_mark = pulses;
+  if (windows.update(pwm.schedule_start, pwm.last_mask, pwm.last_mask_written_at, now, pulses,
+                     pulses_per_litre)) {
+    nozzle_health_->add_window(windows.open_s(), windows.metered_l(), windows.window_s());
   }
 }
 
@@ -469,9 +436,12 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   std::array<double, io::kMaxValves> nozzle_speed{};
   std::array<double, io::kMaxValves> arc_extra_m{};  // nozzle's travel minus the centre line's
   std::array<double, io::kMaxValves> frame_odometer{};
-  HealthWindows health_windows;
-  health_windows.length = from_seconds(
-      1.0 / (config_.pwm.frequency_hz * static_cast<double>(std::max<std::size_t>(nozzles, 1))));
+  // One staggered phase (period / nozzles); the meter lags the valves by 30 ms (the lab's
+  // blockage experiment, control/experiments/closed_loop_rig.cpp: the valves' 15-25 ms delays).
+  PhaseWindows health_windows(
+      from_seconds(1.0 / (config_.pwm.frequency_hz *
+                          static_cast<double>(std::max<std::size_t>(nozzles, 1)))),
+      30ms);
   std::uint64_t health_reset_seen = params.trip_reset;
   while (!stop.stop_requested()) {
     loop.wait_next();
@@ -673,7 +643,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
         nozzle_health_->reset();
       }
       status.nozzle_health_reset = health_reset_seen;
-      feed_nozzle_health(health_windows, now, dt, spray, status.flow_pulses,
+      feed_nozzle_health(health_windows, now, spray, status.flow_pulses,
                          params.flow_pulses_per_litre);
       for (std::size_t n = 0; n < std::min(nozzles, control::kMaxHealthNozzles); ++n)
         status.nozzle_flow_ratio[n] = nozzle_health_->ratio(n);

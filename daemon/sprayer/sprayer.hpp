@@ -28,6 +28,7 @@
 #include "daemon/config/config.hpp"
 #include "daemon/sprayer/ground_speed.hpp"
 #include "daemon/sprayer/inference_gate.hpp"
+#include "daemon/sprayer/phase_windows.hpp"
 #include "daemon/sprayer/runtime_types.hpp"
 #include "daemon/sprayer/snapshot_handoff.hpp"
 #include "daemon/supervision/loop_timing.hpp"
@@ -133,11 +134,8 @@ class Sprayer {
   void watch_pressure_loop(Nanos now) noexcept;
   void pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept;
   void control_loop(std::stop_token stop) noexcept;
-  // The control loop's share of nozzle health: each phase window's commanded open times (the
-  // valve thread's mask, sampled every cycle) and, a meter lag later, its metered volume.
-  struct HealthWindows;
-  void feed_nozzle_health(HealthWindows& w, Nanos now, double dt, bool spraying,
-                          std::uint64_t pulses, double pulses_per_litre) noexcept;
+  void feed_nozzle_health(PhaseWindows& windows, Nanos now, bool spraying, std::uint64_t pulses,
+                          double pulses_per_litre) noexcept;
   void camera_loop(std::stop_token stop, CameraWorker& worker) noexcept;
   void tank_loop(std::stop_token stop) noexcept;
   void imu_loop(std::stop_token stop) noexcept;

@@ -59,7 +59,7 @@ done
 prop Alarms | grep -q nozzle_flow_fault && fail "nozzle_flow_fault on a healthy machine: $(prop NozzleHealth)"
 $PY - "$T/healthy.txt" <<'PY'
 import sys
-judged = [[float(x) for x in line.split()[3:7]] for line in open(sys.argv[1])]
+judged = [[float(x) for x in line.split()[4:8]] for line in open(sys.argv[1])]
 judged = [r for r in judged if r != [1.0] * 4]  # the baseline learned
 dev = max((abs(x - 1) for r in judged for x in r), default=float("nan"))
 print(f"healthy: {len(judged)} s judged, largest |ratio - 1| seen {dev:.3f} (alarm above 0.12)")
