@@ -44,6 +44,15 @@ struct StaggeredBoom {
     while (w > start && mask(w) == mask(w - 1ms)) w -= 1ms;
     return w;
   }
+  // The meter's whole pulses at `now`: the flow through the open valves 30 ms before, added up
+  // in 100 us steps from `until` (the caller's running total and time).
+  std::uint64_t meter_pulses(double& litres, Nanos& until, Nanos now) const {
+    for (; until + 30ms < now; until += 100us) {
+      for (std::size_t k = 0; k < 4; ++k)
+        if (open(k, until)) litres += flow_l_per_s[k] * 100e-6;
+    }
+    return static_cast<std::uint64_t>(litres * pulses_per_litre);
+  }
   // Exact open time of valve k in [a, b) (1 us steps) and litres through all of them.
   double open_s(std::size_t k, Nanos a, Nanos b) const {
     std::int64_t us = 0;
@@ -60,11 +69,7 @@ TEST(PhaseWindows, EachWindowHoldsTheTrueOpenTimesAndTheVolumeAMeterLagLater) {
   int windows_seen = 0;
   for (Nanos now = boom.start + 7ms; now < boom.start + 2s; now += 2ms) {
     if ((now / 2ms) % 17 == 0) continue;  // the stats slot was busy this cycle
-    for (; metered_until + 30ms < now; metered_until += 100us) {
-      for (std::size_t k = 0; k < 4; ++k)
-        if (boom.open(k, metered_until)) metered_l += boom.flow_l_per_s[k] * 100e-6;
-    }
-    const auto pulses = static_cast<std::uint64_t>(metered_l * boom.pulses_per_litre);
+    const std::uint64_t pulses = boom.meter_pulses(metered_l, metered_until, now);
     if (!windows.update(boom.start, boom.mask(now), boom.last_write(now), now, pulses,
                         boom.pulses_per_litre)) {
       continue;
@@ -97,11 +102,7 @@ TEST(PhaseWindows, TheDetectorFedThemLearnsEachNozzlesFlow) {
   Nanos metered_until = boom.start;
   for (Nanos now = boom.start + 1ms; now < boom.start + 12s; now += 2ms) {
     if (now == boom.start + 8001ms) boom.flow_l_per_s[2] *= 0.7;  // nozzle 2 30 % blocked
-    for (; metered_until + 30ms < now; metered_until += 100us) {
-      for (std::size_t k = 0; k < 4; ++k)
-        if (boom.open(k, metered_until)) metered_l += boom.flow_l_per_s[k] * 100e-6;
-    }
-    const auto pulses = static_cast<std::uint64_t>(metered_l * boom.pulses_per_litre);
+    const std::uint64_t pulses = boom.meter_pulses(metered_l, metered_until, now);
     if (windows.update(boom.start, boom.mask(now), boom.last_write(now), now, pulses,
                        boom.pulses_per_litre)) {
       health.add_window(windows.open_s(), windows.metered_l(), windows.window_s());
