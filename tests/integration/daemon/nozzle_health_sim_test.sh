@@ -92,6 +92,9 @@ import sys
 ratios = [float(x) for x in sys.argv[1].split()[1:]]
 assert ratios[2] < 0.88 and ratios[2] == min(ratios), ratios  # alarm_fraction 0.12
 PY
+"$BUILD/daemon/sprayctl" --user status >"$T/status.txt"
+grep -q "^Nozzle health: [0-9.]* [0-9.]* 0\.[0-8]" "$T/status.txt" ||
+  fail "sprayctl status: $(grep -i health "$T/status.txt")"
 [ "$(prop State)" = '"Spraying"' ] || fail "State $(prop State) after a nozzle_flow_fault (a warning)"
 echo "ok: nozzle_flow_fault named nozzle 2 after $($PY -c "import sys; print(f'{float(sys.argv[2]) - float(sys.argv[1]):.1f}')" "$start" "$named") s: NozzleHealth $blocked"
 
