@@ -587,6 +587,9 @@ class Daemon final : public CommandHandler {
     const std::string output_failures = check_outputs();
     in.output_write_failed = !output_failures.empty();
     in.gnss_fix_lost = backends_.gnss != nullptr && gnss_lost_fix_->lost(sprayer_->gnss(), now);
+    // Not from a status older than the last ClearAlarms (the detector restarts on it).
+    in.nozzle_flow_fault =
+        control.nozzle_flow_fault >= 0 && control.nozzle_health_reset == trip_reset_;
 
     const AlarmMask raised = alarms_.evaluate(in);
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
@@ -612,6 +615,11 @@ class Daemon final : public CommandHandler {
                      sprayer_->gnss_link().connected ? "connected: the receiver has no fix"
                                                      : "not reachable",
                      to_string(select_ground_speed(without_fix).used));
+      } else if (id == AlarmId::kNozzleFlowFault) {
+        const int n = control.nozzle_flow_fault;
+        const double ratio = n >= 0 ? control.nozzle_flow_ratio[static_cast<std::size_t>(n)] : 1.0;
+        spdlog::warn("alarm raised: {} (nozzle {}: {}, its flow {:.2f} of its baseline)", name, n,
+                     ratio < 1.0 ? "blocked" : "over (worn or valve stuck open)", ratio);
       } else if (id == AlarmId::kVisionModelFailed) {
         spdlog::error(
             "alarm raised: {} ({}; that camera's nozzles stay closed until its frames "
@@ -845,6 +853,11 @@ class Daemon final : public CommandHandler {
     s.vision_latency_p99_ms = latency_p99();
     s.control_overruns = total_overruns(pressure, control);
     if (calibrations_) calibrations_->fill_status(s);
+    if (config_.nozzle_health.enabled) {
+      const std::size_t n = std::min<std::size_t>(control.nozzles, control::kMaxHealthNozzles);
+      s.nozzle_flow_ratio.assign(control.nozzle_flow_ratio.begin(),
+                                 control.nozzle_flow_ratio.begin() + n);
+    }
     return s;
   }
 

@@ -75,8 +75,9 @@ struct ValvePwmStats {
   std::uint64_t deadman_expiries = 0;
   std::chrono::nanoseconds max_lateness{0};
   std::uint32_t last_mask = 0;
-  std::chrono::nanoseconds schedule_start{0};  // t0 of the schedule's current run
-  bool expired = true;                         // valves held closed: no fresh command
+  std::chrono::nanoseconds last_mask_written_at{0};  // clock time just after the write
+  std::chrono::nanoseconds schedule_start{0};        // t0 of the schedule's current run
+  bool expired = true;                               // valves held closed: no fresh command
 };
 
 template <class Schedule>
@@ -160,6 +161,7 @@ class ValvePwmDriver {
       }
       write_mask(edge.valve_mask);
       now = clock_.now();
+      stats_.last_mask_written_at = now;
       const std::chrono::nanoseconds lateness = now - edge.time;
       if (lateness > stats_.max_lateness) stats_.max_lateness = lateness;
       if (lateness > config_.late_threshold) ++stats_.late_edges;

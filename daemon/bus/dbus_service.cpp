@@ -89,6 +89,7 @@ std::vector<const char*> changed_properties(const Status& a, const Status& b) {
             a.meter_error_pct != b.meter_error_pct,
         "MeterCalibration");
   check(a.nozzle_lines != b.nozzle_lines, "NozzleCalibration");
+  check(a.nozzle_flow_ratio != b.nozzle_flow_ratio, "NozzleHealth");
   return names;
 }
 
@@ -125,6 +126,7 @@ const sd_bus_vtable kVtable[] = {
     WS_PROPERTY("Calibration", "(sds)"),
     WS_PROPERTY("MeterCalibration", "(sddd)"),
     WS_PROPERTY("NozzleCalibration", "a(sddd)"),
+    WS_PROPERTY("NozzleHealth", "ad"),
     SD_BUS_METHOD("Start", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("Stop", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("SetPressureSetpoint", "d", "", DbusService::method, kMethodFlags),
@@ -202,6 +204,7 @@ int DbusService::get_property(sd_bus*, const char*, const char*, const char* pro
   if (p == "Speed") return sd_bus_message_append(reply, "d", s.speed_m_per_s);
   if (p == "Distance") return sd_bus_message_append(reply, "d", s.distance_m);
   if (p == "NozzleDuty") return append_doubles(reply, s.nozzle_duty_pct);
+  if (p == "NozzleHealth") return append_doubles(reply, s.nozzle_flow_ratio);
   if (p == "ZoneDensity") return append_doubles(reply, s.zone_density);
   if (p == "Alarms") return append_strings(reply, s.alarms);
   if (p == "VolumeSprayed") return sd_bus_message_append(reply, "d", s.volume_sprayed_l);

@@ -469,6 +469,7 @@ void print_status(const Properties& p, bool json) {
             << get("Distance") << " m\n"
             << "Nozzle duty:   " << get("NozzleDuty") << " %\n"
             << "Zone density:  " << get("ZoneDensity") << "\n"
+            << "Nozzle health: " << get("NozzleHealth") << " (flow / baseline; none: off)\n"
             << "Sprayed:       " << get("VolumeSprayed") << " L over " << get("AreaCovered")
             << " m^2, saving " << get("SavingsPercent") << " %\n"
             << "Vision:        " << get("FrameRate") << " fps, latency " << get("VisionLatencyMs")

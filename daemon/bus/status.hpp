@@ -72,6 +72,8 @@ struct Status {
     bool operator==(const NozzleLineStatus&) const = default;
   };
   std::vector<NozzleLineStatus> nozzle_lines;
+  // [nozzle_health] enabled: each nozzle's flow over its baseline (1 until learned); else empty.
+  std::vector<double> nozzle_flow_ratio;
 
   bool operator==(const Status&) const = default;
 };

@@ -184,6 +184,15 @@ struct CalibrationSection {
   double min_r_squared;            // a nozzle's fit below this: the [spray] line stays in use
 };
 
+// Per-nozzle health from the line meter while spraying (control/nozzle_health.hpp).
+struct NozzleHealthSection {
+  bool enabled;
+  double baseline_s;
+  double time_constant_s;
+  double alarm_fraction;
+  double alarm_hold_s;
+};
+
 struct WheelSection {
   std::string source;  // pulses|fixed
   double pulses_per_metre;
@@ -286,6 +295,7 @@ struct Config {
   AnalogModbusSection analog_modbus;
   FlowSection flow;
   CalibrationSection calibration;
+  NozzleHealthSection nozzle_health;
   WheelSection wheel;
   SpeedSection speed;
   GnssSection gnss;

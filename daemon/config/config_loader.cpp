@@ -379,6 +379,21 @@ class Loader {
     if (c.spray.duty_min_pct >= c.spray.duty_max_pct) {
       fail("spray.duty_max_pct", "must be above spray.duty_min_pct");
     }
+    if (c.nozzle_health.enabled) {
+      if (!c.pwm.staggered) {
+        fail("nozzle_health.enabled",
+             "needs pwm.staggered = true (synchronous phases make the nozzles inseparable)",
+             "pwm.staggered");
+      }
+      if (c.boom.nozzles > 8)
+        fail("nozzle_health.enabled", "judges at most 8 nozzles", "boom.nozzles");
+      // A phase window (period / nozzles) must outlast the meter's lag behind the commands.
+      if (1.0 / (c.pwm.frequency_hz * c.boom.nozzles) < 0.04) {
+        fail("nozzle_health.enabled",
+             "needs a PWM phase window (1 / (pwm.frequency_hz x boom.nozzles)) of 40 ms or more",
+             "pwm.frequency_hz");
+      }
+    }
     const auto& sweep = c.calibration.duties_pct;
     if (sweep.empty() || std::all_of(sweep.begin(), sweep.end(),
                                      [&](double duty) { return duty == sweep.front(); })) {

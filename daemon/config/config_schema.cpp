@@ -335,6 +335,17 @@ const std::vector<KeySpec<Config>>& config_keys() {
     {WS_KEY(calibration, min_r_squared), 0.98, 0, 1, "",
      "a nozzle whose fitted line has R^2 below this keeps the [spray] line (a sticking valve, a "
      "meter too coarse for one nozzle)"},
+    // [nozzle_health]
+    {WS_KEY(nozzle_health, enabled), false, 0, 1, "",
+     "judge each nozzle's flow from the line meter while spraying (staggered PWM phases make "
+     "the nozzles separable) and raise nozzle_flow_fault naming a blocked or over-flowing one"},
+    {WS_KEY(nozzle_health, baseline_s), 60.0, 1, 3600, "s",
+     "spraying time over which each nozzle's flow is learned as its baseline"},
+    {WS_KEY(nozzle_health, time_constant_s), 6.0, 0.5, 600, "s",
+     "forgetting time of the running per-nozzle estimate"},
+    {WS_KEY(nozzle_health, alarm_fraction), 0.12, 0.01, 0.99, "",
+     "a nozzle whose flow / baseline is off 1 by more than this is a fault..."},
+    {WS_KEY(nozzle_health, alarm_hold_s), 1.0, 0, 600, "s", "...once it lasted this long"},
     // [wheel]
     {WS_KEY(wheel, source), std::string("pulses"), 0, 0, "",
      "speed from the Hall wheel sensor, or a fixed speed", {"pulses", "fixed"}},

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 
+#include "control/nozzle_health.hpp"
 #include "control/spray_rate_law.hpp"
 #include "control/wheel_calibration.hpp"
 #include "daemon/sprayer/ground_speed.hpp"
@@ -20,9 +21,11 @@ using Nanos = std::chrono::nanoseconds;
 // Main thread -> real-time loops, re-read when their version changes.
 struct LiveParams {
   double setpoint_mpa = 0;
-  bool pump_enabled = false;     // Idle or Spraying
-  bool valves_enabled = false;   // Spraying
-  std::uint64_t trip_reset = 0;  // incremented by ClearAlarms: re-arms the over-pressure trip
+  bool pump_enabled = false;    // Idle or Spraying
+  bool valves_enabled = false;  // Spraying
+  // Incremented by ClearAlarms: re-arms the over-pressure trip and restarts nozzle health's
+  // baseline (the nozzle was cleaned or changed).
+  std::uint64_t trip_reset = 0;
   control::SprayLawConfig law{};
   // Each nozzle's valve line: its own calibration, else the configured [spray] line.
   std::array<control::NozzleLine, io::kMaxValves> lines{};
@@ -111,6 +114,11 @@ struct ControlStatus {
   SpeedSource speed_source = SpeedSource::kFixed;  // where speed_m_per_s came from this cycle
   bool speed_fell_back = false;                    // speed.source = "gnss" without a usable fix
   double yaw_rate_deg_per_s = 0;  // turn compensation's yaw rate, clockwise (0: off or straight)
+  // Nozzle health ([nozzle_health] enabled): each nozzle's flow over its baseline (1 until the
+  // baseline is learned) and the nozzle named at fault (-1: none).
+  std::array<double, control::kMaxHealthNozzles> nozzle_flow_ratio{};
+  int nozzle_flow_fault = -1;
+  std::uint64_t nozzle_health_reset = 0;  // the LiveParams::trip_reset the detector restarted at
 };
 
 // gpsd thread -> main thread: the wheel calibration of request `request` (0: none asked).

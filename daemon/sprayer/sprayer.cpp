@@ -129,6 +129,15 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
     odometry_.emplace(odometry);
   }
   const auto nozzles = static_cast<std::size_t>(config.boom.nozzles);
+  if (config.nozzle_health.enabled) {
+    control::NozzleHealthConfig health;
+    health.nozzles = nozzles;
+    health.baseline_s = config.nozzle_health.baseline_s;
+    health.time_constant_s = config.nozzle_health.time_constant_s;
+    health.alarm_fraction = config.nozzle_health.alarm_fraction;
+    health.alarm_hold_s = config.nozzle_health.alarm_hold_s;
+    nozzle_health_.emplace(health);
+  }
   if (config.spray.quantiser_levels >= 2) {
     std::vector<double> levels{0.0};
     const int n = config.spray.quantiser_levels;
@@ -368,6 +377,22 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
   analog_io_->command_safe();
 }
 
+// Nozzle health's share of the control loop: the valves' open times and the meter's pulses
+// per phase window (daemon/sprayer/phase_windows.hpp) into the detector.
+void Sprayer::feed_nozzle_health(PhaseWindows& windows, Nanos now, bool spraying,
+                                 std::uint64_t pulses, double pulses_per_litre) noexcept {
+  io::ValvePwmStats pwm;
+  if (!pwm_driver_->try_stats(pwm)) return;  // the slot was busy: the next cycle catches up
+  if (!spraying || pwm.expired) {
+    windows.restart();
+    return;
+  }
+  if (windows.update(pwm.schedule_start, pwm.last_mask, pwm.last_mask_written_at, now, pulses,
+                     pulses_per_litre)) {
+    nozzle_health_->add_window(windows.open_s(), windows.metered_l(), windows.window_s());
+  }
+}
+
 void Sprayer::control_loop(std::stop_token stop) noexcept {
   // 500 Hz: a frame waits at most 2 ms to be scheduled, and at 2.5 m/s the vehicle moves
   // 5 mm per cycle.
@@ -411,6 +436,13 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   std::array<double, io::kMaxValves> nozzle_speed{};
   std::array<double, io::kMaxValves> arc_extra_m{};  // nozzle's travel minus the centre line's
   std::array<double, io::kMaxValves> frame_odometer{};
+  // One staggered phase (period / nozzles); the meter lags the valves by 30 ms (the lab's
+  // blockage experiment, control/experiments/closed_loop_rig.cpp: the valves' 15-25 ms delays).
+  PhaseWindows health_windows(
+      from_seconds(1.0 / (config_.pwm.frequency_hz *
+                          static_cast<double>(std::max<std::size_t>(nozzles, 1)))),
+      30ms);
+  std::uint64_t health_reset_seen = params.trip_reset;
   while (!stop.stop_requested()) {
     loop.wait_next();
     const Nanos now = io_.clock->now();
@@ -604,6 +636,19 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
     command.issued_at = now;
     pwm_driver_->command(command);
     for (std::size_t n = 0; n < nozzles; ++n) status.duty_pct[n] = command.duty_pct[n];
+    if (nozzle_health_ && io_.flow != nullptr) {
+      // ClearAlarms after a clean: the nozzles' flows are learned afresh as the new baseline.
+      if (params.trip_reset != health_reset_seen) {
+        health_reset_seen = params.trip_reset;
+        nozzle_health_->reset();
+      }
+      status.nozzle_health_reset = health_reset_seen;
+      feed_nozzle_health(health_windows, now, spray, status.flow_pulses,
+                         params.flow_pulses_per_litre);
+      for (std::size_t n = 0; n < std::min(nozzles, control::kMaxHealthNozzles); ++n)
+        status.nozzle_flow_ratio[n] = nozzle_health_->ratio(n);
+      status.nozzle_flow_fault = nozzle_health_->alarmed_nozzle();
+    }
 
     if (spray && status.speed_m_per_s > 0) {
       double nozzle_speed_sum = 0;  // the boom's swept width x speed, each nozzle on its arc

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "control/flow_feedback.hpp"
+#include "control/nozzle_health.hpp"
 #include "control/nozzle_scheduler.hpp"
 #include "control/odometry.hpp"
 #include "control/pressure_controller.hpp"
@@ -27,6 +28,7 @@
 #include "daemon/config/config.hpp"
 #include "daemon/sprayer/ground_speed.hpp"
 #include "daemon/sprayer/inference_gate.hpp"
+#include "daemon/sprayer/phase_windows.hpp"
 #include "daemon/sprayer/runtime_types.hpp"
 #include "daemon/sprayer/snapshot_handoff.hpp"
 #include "daemon/supervision/loop_timing.hpp"
@@ -132,6 +134,8 @@ class Sprayer {
   void watch_pressure_loop(Nanos now) noexcept;
   void pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept;
   void control_loop(std::stop_token stop) noexcept;
+  void feed_nozzle_health(PhaseWindows& windows, Nanos now, bool spraying, std::uint64_t pulses,
+                          double pulses_per_litre) noexcept;
   void camera_loop(std::stop_token stop, CameraWorker& worker) noexcept;
   void tank_loop(std::stop_token stop) noexcept;
   void imu_loop(std::stop_token stop) noexcept;
@@ -159,6 +163,7 @@ class Sprayer {
   std::unique_ptr<io::ValvePwmDriver<control::PwmSchedule>> pwm_driver_;
   std::optional<control::Odometry> odometry_;
   control::FlowTrim flow_trim_;
+  std::optional<control::NozzleHealth> nozzle_health_;  // [nozzle_health] enabled; control loop
   std::vector<control::DutyQuantiser> quantisers_;
   std::array<CameraWorker, kMaxCameras> cameras_;
   InferenceGate inference_gate_;  // one weed-model inference at a time, in arrival order

@@ -17,6 +17,7 @@ constexpr std::array<std::string_view, kAlarmCount> kNames = {
     "vision_model_failed",
     "output_write_failed",
     "gnss_fix_lost",
+    "nozzle_flow_fault",
 };
 
 double seconds(std::chrono::nanoseconds t) {
@@ -111,6 +112,8 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
   set(AlarmId::kOutputWriteFailed, in.output_write_failed, false);
   // A warning: the speed falls back as configured (wheel pulses, else the fixed speed).
   set(AlarmId::kGnssFixLost, in.gnss_fix_lost, false);  // its timeout is the hold
+  // A warning: the nozzle still sprays (too little or too much); the detector has its own hold.
+  set(AlarmId::kNozzleFlowFault, in.nozzle_flow_fault, false);
   set(AlarmId::kControlOverruns,
       in.overruns_last_second >= static_cast<std::uint64_t>(t.control_overrun_limit), false);
 

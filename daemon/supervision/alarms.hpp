@@ -27,8 +27,9 @@ enum class AlarmId : std::uint8_t {
   kVisionModelFailed,  // a camera's weed model fails at run time: that camera's nozzles closed
   kOutputWriteFailed,  // a valve/pump/return-valve/alarm output refused a write (line named)
   kGnssFixLost,        // GNSS enabled, no usable fix for gnss.lost_fix_timeout_s
+  kNozzleFlowFault,    // one nozzle's flow off its baseline ([nozzle_health]; nozzle named)
 };
-inline constexpr std::size_t kAlarmCount = 13;
+inline constexpr std::size_t kAlarmCount = 14;
 
 using AlarmMask = std::uint32_t;
 constexpr AlarmMask alarm_bit(AlarmId id) noexcept {
@@ -64,6 +65,7 @@ struct AlarmInputs {
   bool vision_model_failed = false;  // some camera's latest frame failed in its weed model
   bool output_write_failed = false;  // an output write failed since the last evaluation
   bool gnss_fix_lost = false;        // see gnss_fix_lost() (daemon/sprayer/ground_speed.hpp)
+  bool nozzle_flow_fault = false;    // the nozzle health detector names a nozzle
 };
 
 class AlarmEvaluator {

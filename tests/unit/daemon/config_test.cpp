@@ -239,6 +239,22 @@ TEST(ConfigErrors, CrossKeyRulesNameTheKeyAndWhereItWasSet) {
   EXPECT_EQ(not_strings.key(), "gpio.valve_names");
 }
 
+// Nozzle health needs staggered phase windows long enough to outlast the meter's lag.
+TEST(ConfigErrors, NozzleHealthNeedsSeparableWindows) {
+  const Config ok = parse("[nozzle_health]\nenabled = true\nbaseline_s = 20\n");
+  EXPECT_TRUE(ok.nozzle_health.enabled);
+  EXPECT_EQ(ok.nozzle_health.baseline_s, 20.0);
+  const auto synchronous =
+      parse_error({{"main.toml", "[pwm]\nstaggered = false\n[nozzle_health]\nenabled = true\n"}});
+  EXPECT_EQ(synchronous.key(), "nozzle_health.enabled");
+  EXPECT_EQ(synchronous.line(), 4);
+  // 20 Hz x 4 nozzles: 12.5 ms windows, shorter than the 30 ms meter lag.
+  const auto short_windows =
+      parse_error({{"main.toml", "[pwm]\nfrequency_hz = 20\n[nozzle_health]\nenabled = true\n"}});
+  EXPECT_EQ(short_windows.key(), "nozzle_health.enabled");
+  EXPECT_NO_THROW(parse("[pwm]\nstaggered = false\n"));  // off: no rule
+}
+
 TEST(ConfigSchema, GpioLinesByName) {
   Config config = parse(
       "[gpio]\nvalve_names = [\"valve0\", \"valve1\", \"valve2\", \"valve3\"]\n"
