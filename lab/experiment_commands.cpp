@@ -318,6 +318,7 @@ int run_blockage_command(const ExperimentOptions& o) {
         fleet.plants, static_cast<unsigned long long>(o.seed), options.blockage,
         options.detect_limit_s, r.named_within_limit, r.false_alarms, r.healthy_minutes);
     print_spread_json("detect_s", r.detect_s);
+    print_spread_json("healthy_worst_deviation", r.healthy_worst_deviation);
     std::printf("\"machines\": [");
     for (std::size_t i = 0; i < r.machines.size(); ++i) {
       const auto& m = r.machines[i];
@@ -336,17 +337,21 @@ int run_blockage_command(const ExperimentOptions& o) {
         fleet.plants, static_cast<unsigned long long>(o.seed), options.pressure_mpa,
         options.frequency_hz, options.health.baseline_s, options.healthy_s / 60.0,
         options.blockage * 100.0);
-    std::printf("%8s %8s %8s %10s %12s\n", "machine", "blocked", "named", "after_s", "false_alarm");
+    std::printf("%8s %8s %8s %10s %12s %16s\n", "machine", "blocked", "named", "after_s",
+                "false_alarm", "healthy_scatter");
     for (std::size_t i = 0; i < r.machines.size(); ++i) {
       const auto& m = r.machines[i];
-      std::printf("%8zu %8d %8d %10.2f %12s\n", i + 1, m.blocked_nozzle + 1, m.named_nozzle + 1,
-                  m.detect_s, m.false_alarm ? "YES" : "no");
+      std::printf("%8zu %8d %8d %10.2f %12s %16.3f\n", i + 1, m.blocked_nozzle + 1,
+                  m.named_nozzle + 1, m.detect_s, m.false_alarm ? "YES" : "no",
+                  m.healthy_worst_deviation);
     }
     std::printf(
         "named within %.0f s: %d of %d; false alarms: %d in %.0f healthy machine-minutes; "
-        "time to name: mean %.2f s, sd %.2f, worst %.2f\n",
+        "time to name: mean %.2f s, sd %.2f, worst %.2f; healthy scatter (largest |ratio - 1|): "
+        "mean %.3f, worst %.3f\n",
         options.detect_limit_s, r.named_within_limit, fleet.plants, r.false_alarms,
-        r.healthy_minutes, r.detect_s.mean, r.detect_s.sd, r.detect_s.worst);
+        r.healthy_minutes, r.detect_s.mean, r.detect_s.sd, r.detect_s.worst,
+        r.healthy_worst_deviation.mean, r.healthy_worst_deviation.worst);
   }
   return 0;
 }

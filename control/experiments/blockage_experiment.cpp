@@ -51,6 +51,10 @@ BlockageMachine blockage_once(const Machine& machine, std::uint64_t fleet_seed, 
   while (rig.time_s() < healthy_end - 1e-9) {
     rig.run_for(options.redraw_s);
     redraw();
+    if (health.baseline_ready())
+      for (int i = 0; i < rig.plant().nozzle_count(); ++i)
+        out.healthy_worst_deviation = std::max(
+            out.healthy_worst_deviation, std::abs(health.ratio(static_cast<std::size_t>(i)) - 1.0));
   }
   out.false_alarm = health.alarmed_nozzle() >= 0;
   if (out.false_alarm) return out;
@@ -79,15 +83,18 @@ BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet, const Blockage
   BlockageFleetResult r;
   const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
   std::vector<double> detect;
+  std::vector<double> scatter;
   for (std::size_t i = 0; i < machines.size(); ++i) {
     const BlockageMachine m = blockage_once(machines[i], fleet.seed, static_cast<int>(i), options);
     r.false_alarms += m.false_alarm ? 1 : 0;
+    scatter.push_back(m.healthy_worst_deviation);
     const bool right = m.named_nozzle == m.blocked_nozzle && m.detect_s >= 0.0;
     if (right) detect.push_back(m.detect_s);
     if (right && m.detect_s <= options.detect_limit_s) ++r.named_within_limit;
     r.machines.push_back(m);
   }
   r.detect_s = spread_of(detect);
+  r.healthy_worst_deviation = spread_of(scatter);
   r.healthy_minutes = static_cast<double>(machines.size()) * options.healthy_s / 60.0;
   return r;
 }

@@ -369,12 +369,16 @@ struct BlockageMachine {
   int named_nozzle = -1;     // -1: none named
   double detect_s = -1.0;    // from the blockage to the alarm; < 0: none in the record
   bool false_alarm = false;  // an alarm during the healthy part
+  // Largest |ratio - 1| of any nozzle during the healthy part (sampled every redraw): the
+  // detector's scatter on this machine, what the alarm fraction must clear.
+  double healthy_worst_deviation = 0.0;
 };
 struct BlockageFleetResult {
   std::vector<BlockageMachine> machines;
   int named_within_limit = 0;  // the blocked nozzle named within detect_limit_s
   int false_alarms = 0;
   Spread detect_s;  // over the machines that named the right nozzle
+  Spread healthy_worst_deviation;
   double healthy_minutes = 0.0;
 };
 BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet,
