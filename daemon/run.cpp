@@ -427,7 +427,7 @@ class Daemon final : public CommandHandler {
     spdlog::warn("sim: injecting fault {}", fault.name);
     if (fault.output) {
       if (backends_.fail_output_writes)
-        backends_.fail_output_writes(*fault.output, fault.output_error);
+        backends_.fail_output_writes(*fault.output, fault.output_error, fault.output_write_count);
     } else if (!fault.device.empty()) {
       if (backends_.device_fault) backends_.device_fault(fault.device);
     } else {
@@ -672,8 +672,18 @@ class Daemon final : public CommandHandler {
           spdlog::info("{} written safe again", output_role_name(static_cast<OutputRole>(i)));
       }
     }
-    for (std::size_t i = 0; i < kOutputRoleCount; ++i)
+    for (std::size_t i = 0; i < kOutputRoleCount; ++i) {
       counters.unsafe_error[i] = -unsafe_outputs_[i];
+      // Tolerated failures are no fault, but a rising count says the bus is getting worse.
+      const std::uint64_t tolerated = counters.tolerated_failures[i] - tolerated_seen_[i];
+      if (tolerated > 0)
+        spdlog::warn(
+            "{}: {} failed write(s) superseded by the next ({} total; [dac] "
+            "write_failures_tolerated = {} in a row)",
+            output_role_name(static_cast<OutputRole>(i)), tolerated, counters.tolerated_failures[i],
+            config_.dac.write_failures_tolerated);
+      tolerated_seen_[i] = counters.tolerated_failures[i];
+    }
     return output_watch_->update(counters);
   }
 
@@ -979,6 +989,7 @@ class Daemon final : public CommandHandler {
   SafeWriteErrors unsafe_outputs_{};  // -errno of safe writes that failed and still do
   std::array<std::uint64_t, kOutputRoleCount> main_thread_write_failures_{};
   std::array<std::uint64_t, kOutputRoleCount> failed_writes_seen_{};
+  std::array<std::uint64_t, kOutputRoleCount> tolerated_seen_{};
   std::array<bool, kOutputRoleCount> rewrite_safe_{};  // refused a write: write it safe in Fault
   bool start_when_ready_ = false;                      // Start arrived while Starting
   int exit_watcher_socket_ = -1;

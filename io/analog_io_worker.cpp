@@ -39,6 +39,7 @@ void AnalogIoWorker::run(std::stop_token stop, nanoseconds first_deadline) noexc
     write_pending(written, have_written);
     stats.writes = writes_;
     stats.dac_errors = dac_.error_count();
+    stats.dac_faults = dac_faults_;
 
     // The next deadline whose read slot is still ahead; slots already past are overruns.
     deadline += timing_.period;
@@ -60,14 +61,13 @@ void AnalogIoWorker::write_pending(DacCommand& written, bool& have_written) noex
       have_written && wanted.safe == written.safe && (wanted.safe || wanted.volts == written.volts);
   // Unchanged commands are not re-sent (a Modbus write costs bus time) unless the last failed.
   if (unchanged && !last_write_failed_) return;
-  const std::uint64_t errors_before = dac_.error_count();
-  if (wanted.safe) {
-    dac_.force_safe();
-  } else {
-    dac_.write(wanted.volts);
-  }
+  // force_safe() retries itself: only its final result counts.
+  const int result = wanted.safe ? dac_.force_safe() : dac_.write(wanted.volts);
   ++writes_;
-  last_write_failed_ = dac_.error_count() != errors_before;
+  last_write_failed_ = result != 0;
+  failed_in_a_row_ = last_write_failed_ ? failed_in_a_row_ + 1 : 0;
+  if (last_write_failed_ && (wanted.safe || failed_in_a_row_ > timing_.dac_failures_tolerated))
+    ++dac_faults_;
   written = wanted;
   have_written = true;
 }

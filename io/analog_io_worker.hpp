@@ -32,13 +32,20 @@ struct AnalogIoTiming {
   std::chrono::nanoseconds period{std::chrono::milliseconds(10)};  // the pressure loop's
   std::chrono::nanoseconds min_lead{std::chrono::microseconds(300)};
   std::chrono::nanoseconds lag{std::chrono::milliseconds(1)};  // after the loop's deadline
+  // Failed DAC writes in a row that count as superseded, not as an output fault: a Modbus
+  // module that misses one answer (noise on the RS-485 pair, a busy module) gets the newer
+  // command one period later anyway, and the return valve held its last value meanwhile. The
+  // next failure in the streak is a fault (dac_faults). A failed safe write never is tolerated.
+  std::uint32_t dac_failures_tolerated = 0;
 };
 
 struct AnalogIoStats {
   std::uint64_t reads = 0;
   std::uint64_t writes = 0;
   std::uint64_t dac_errors = 0;  // failed DAC writes (the device's count)
-  std::uint64_t overruns = 0;    // read slots missed because the previous I/O ran long
+  // Of those, the ones that are faults: beyond dac_failures_tolerated in a row, or safe writes.
+  std::uint64_t dac_faults = 0;
+  std::uint64_t overruns = 0;  // read slots missed because the previous I/O ran long
   std::chrono::nanoseconds lead{0};
   std::chrono::nanoseconds max_read_time{0};
 };
@@ -86,8 +93,10 @@ class AnalogIoWorker {
   LatestValue<AnalogSample> sample_;
   LatestValue<DacCommand> command_{DacCommand{}};
   LatestValue<AnalogIoStats> stats_;
-  std::uint64_t writes_ = 0;        // run()'s thread only
-  bool last_write_failed_ = false;  // run()'s thread only
+  std::uint64_t writes_ = 0;           // run()'s thread only
+  bool last_write_failed_ = false;     // run()'s thread only
+  std::uint32_t failed_in_a_row_ = 0;  // run()'s thread only
+  std::uint64_t dac_faults_ = 0;       // run()'s thread only
 };
 
 }  // namespace weedspray::io

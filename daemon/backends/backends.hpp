@@ -54,8 +54,9 @@ struct Backends {
   std::function<void(double t_s)> drive_world;
   // Sim only: "valves=0x0 pump=0" as the plant sees them (written at exit for the tests).
   std::function<std::string()> describe_outputs;
-  // Sim only: the output's writes fail with -error from now on (0: they work again).
-  std::function<void(OutputRole, int error)> fail_output_writes;
+  // Sim only: the output's writes fail with -error from now on (0: they work again); count > 0:
+  // only its next `count` writes fail (the return-valve DAC only).
+  std::function<void(OutputRole, int error, int count)> fail_output_writes;
   // Sim only: "sprayed_l=<the plant's true volume through the nozzles>" (written at exit).
   std::function<std::string()> plant_truth;
   // Sim only: a device fault by name (see SimFault::device); false for an unknown one.

@@ -101,7 +101,7 @@ Backends make_sim_backends(const Config& config, const Options& options) {
   b.with_plant = [rig](const std::function<void(control::plant::HydraulicPlant&)>& fn) {
     rig->with_plant(fn);
   };
-  b.fail_output_writes = [rig, buzzer, led, heartbeat](OutputRole role, int error) {
+  b.fail_output_writes = [rig, buzzer, led, heartbeat, dac](OutputRole role, int error, int count) {
     switch (role) {
       case OutputRole::kValves:
         rig->fail_writes(io::sim::HydraulicRig::Output::kValves, error);
@@ -119,7 +119,8 @@ Backends make_sim_backends(const Config& config, const Options& options) {
         heartbeat->fail_writes(error);
         break;
       case OutputRole::kReturnValve:
-        break;  // the DAC's failures: see analog I/O tests
+        dac->fail_writes(error, count > 0 ? count : -1);
+        break;
     }
   };
   const double nominal_ppl = config.flow.pulses_per_litre;

@@ -71,11 +71,9 @@ std::optional<SimFault> parse_sim_fault(const std::string& text) {
     };
   } else {
     constexpr std::pair<const char*, OutputRole> kOutputs[] = {
-        {"valve", OutputRole::kValves},
-        {"pump", OutputRole::kPump},
-        {"buzzer", OutputRole::kBuzzer},
-        {"led", OutputRole::kLed},
-        {"heartbeat", OutputRole::kHeartbeat}};
+        {"valve", OutputRole::kValves},        {"pump", OutputRole::kPump},
+        {"buzzer", OutputRole::kBuzzer},       {"led", OutputRole::kLed},
+        {"heartbeat", OutputRole::kHeartbeat}, {"return_valve", OutputRole::kReturnValve}};
     for (const auto& [prefix, role] : kOutputs) {
       const std::string p(prefix);
       if (fault.name == p + "_write_fail" || fault.name == p + "_write_ok") {
@@ -83,6 +81,18 @@ std::optional<SimFault> parse_sim_fault(const std::string& text) {
         fault.output_error = fault.name.ends_with("_fail") ? EIO : 0;
         return fault;
       }
+    }
+    // return_valve_write_fail_N: a Modbus module that misses N answers, then answers again.
+    const std::string counted = "return_valve_write_fail_";
+    if (fault.name.starts_with(counted)) {
+      const std::string digits = fault.name.substr(counted.size());
+      const bool numeric = !digits.empty() && digits.size() <= 2 &&
+                           digits.find_first_not_of("0123456789") == std::string::npos;
+      if (!numeric || std::stoi(digits) < 1) return std::nullopt;
+      fault.output = OutputRole::kReturnValve;
+      fault.output_error = EIO;
+      fault.output_write_count = std::stoi(digits);
+      return fault;
     }
     return std::nullopt;
   }

@@ -22,6 +22,7 @@ struct SimFault {
   // ("<output>_write_ok"): output_error is then EIO or 0.
   std::optional<OutputRole> output;
   int output_error = 0;
+  int output_write_count = 0;  // "return_valve_write_fail_N": only its next N writes fail
   // A simulated device's fault: "camera_gone", "camera_back", "tank_silent", "tank_ok".
   std::string device;
 };
@@ -31,7 +32,8 @@ inline constexpr const char* kSimFaultNames =
     "sensor_open, sensor_short, sensor_ok, filter_blocked, filter_ok, tank_empty, tank_refill, "
     "nozzleN_blocked, nozzleN_blocked_PP (PP % blocked, 1..99), nozzleN_ok, camera_gone, "
     "camera_back, tank_silent, tank_ok; "
-    "OUTPUT_write_fail / OUTPUT_write_ok with OUTPUT valve, pump, buzzer, led, heartbeat";
+    "OUTPUT_write_fail / OUTPUT_write_ok with OUTPUT valve, pump, buzzer, led, heartbeat, "
+    "return_valve; return_valve_write_fail_N (its next N writes fail, 1..99)";
 
 // "sensor_open@5" -> the fault; nullopt for an unknown name or a malformed time.
 std::optional<SimFault> parse_sim_fault(const std::string& text);

@@ -161,6 +161,7 @@ struct DacSection {
   int modbus_slave_id;
   int modbus_register;
   double modbus_volts_per_count;
+  int write_failures_tolerated;  // in a row, before output_write_failed
 };
 
 // The RS-485 bus of the Modbus analog modules (adc/dac source = "modbus").

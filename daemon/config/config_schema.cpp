@@ -303,6 +303,11 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "source = \"modbus\": the holding register written with the valve voltage (function 06)"},
     {WS_KEY(dac, modbus_volts_per_count), 0.001, 1e-9, 1, "V/count",
      "source = \"modbus\": register value = volts / this"},
+    {WS_KEY(dac, write_failures_tolerated), 2, 0, 20, "",
+     "failed DAC writes in a row that are only counted and logged, not a fault: each is "
+     "superseded by the next pressure-loop period's write and the valve holds its last value "
+     "meanwhile (2, like a pressure sample that goes stale after 3 periods); the next failure "
+     "raises output_write_failed, and a failed safe write always does"},
     // [analog_modbus]
     {WS_KEY(analog_modbus, device), std::string("/dev/ttyUSB1"), 0, 0, "path",
      "RS-485 serial device of the Modbus analog modules; not the tank sensor's [modbus] port, "

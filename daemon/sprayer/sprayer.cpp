@@ -120,6 +120,8 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
                                                                            *schedule_, driver);
   io::AnalogIoTiming analog_timing;
   analog_timing.period = pressure_period();
+  analog_timing.dac_failures_tolerated =
+      static_cast<std::uint32_t>(config.dac.write_failures_tolerated);
   analog_io_ = std::make_unique<io::AnalogIoWorker>(*io_.pressure_adc, *io_.return_valve,
                                                     *io_.clock, analog_timing);
   speed_source_ = parse_speed_source(config.speed.source).value_or(SpeedSource::kWheel);
@@ -271,7 +273,9 @@ OutputWriteCounters Sprayer::output_write_counters() const noexcept {
   counters.failed_writes[at(OutputRole::kValves)] = valves.write_errors;
   counters.failed_writes[at(OutputRole::kHeartbeat)] = valves.heartbeat_write_errors;
   counters.failed_writes[at(OutputRole::kPump)] = pressure_.read().pump_write_errors;
-  counters.failed_writes[at(OutputRole::kReturnValve)] = analog_io_->stats().dac_errors;
+  const io::AnalogIoStats analog = analog_io_->stats();
+  counters.failed_writes[at(OutputRole::kReturnValve)] = analog.dac_faults;
+  counters.tolerated_failures[at(OutputRole::kReturnValve)] = analog.dac_errors - analog.dac_faults;
   return counters;
 }
 

@@ -15,8 +15,10 @@ inline constexpr std::size_t kOutputRoleCount = 6;
 const char* output_role_name(OutputRole role) noexcept;  // "valves", "pump relay", ...
 
 struct OutputWriteCounters {
-  // Failed writes per output since start (monotonic).
+  // Failed writes per output since start (monotonic) that are faults...
   std::array<std::uint64_t, kOutputRoleCount> failed_writes{};
+  // ...and those tolerated as superseded by the next write ([dac] write_failures_tolerated).
+  std::array<std::uint64_t, kOutputRoleCount> tolerated_failures{};
   // Last errno of a safe write that still fails (0: the output is safe or was never forced).
   std::array<int, kOutputRoleCount> unsafe_error{};
 };

@@ -152,7 +152,20 @@ AnalogSample RigPressureAdc::read() noexcept {
 RigReturnValveDac::RigReturnValveDac(HydraulicRig& rig, const ValveDriveConfig& drive) noexcept
     : rig_(rig), drive_(drive) {}
 
+void RigReturnValveDac::fail_writes(int error, int count) noexcept {
+  failures_left_.store(error != 0 ? count : 0);
+  error_.store(error);
+}
+
 int RigReturnValveDac::write(double volts) noexcept {
+  if (const int error = error_.load()) {
+    const int left = failures_left_.load();
+    if (left > 0 && failures_left_.fetch_sub(1) == 1) error_.store(0);  // the last one
+    if (left != 0) {
+      errors_.fetch_add(1);
+      return -error;
+    }
+  }
   last_volts_ = std::clamp(volts, 0.0, drive_.dac_full_scale_volts);
   rig_.set_return_valve_volts(valve_volts_from_dac_volts(last_volts_, drive_));
   return 0;

@@ -139,13 +139,19 @@ class RigReturnValveDac final : public AnalogOutput {
   int write(double volts) noexcept override;
   int force_safe() noexcept override;
   double full_scale_volts() const noexcept override { return drive_.dac_full_scale_volts; }
-  std::uint64_t error_count() const noexcept override { return 0; }
+  std::uint64_t error_count() const noexcept override { return errors_.load(); }
   double last_volts() const noexcept { return last_volts_; }
+  // Fault injection (any thread): the next `count` writes fail with -error (a Modbus module that
+  // does not answer) and leave the valve as it was; count < 0: every write until error is 0.
+  void fail_writes(int error, int count) noexcept;
 
  private:
   HydraulicRig& rig_;
   ValveDriveConfig drive_;
   double last_volts_ = 0.0;
+  std::atomic<int> error_{0};
+  std::atomic<int> failures_left_{0};
+  std::atomic<std::uint64_t> errors_{0};
 };
 
 // Tank level from the plant's tank (drains as the pump delivers), with optional injected

@@ -5,7 +5,10 @@
 #     trying, and once the relay answers again the pump is off (at exit: pump=0, status 0);
 #  2. the valve bank refuses writes while spraying: output_write_failed names the valves, the
 #     pump goes off (Fault); at exit the valves' safe write still fails, the log says which
-#     output is NOT safe and the exit status is non-zero.
+#     output is NOT safe and the exit status is non-zero;
+#  3. the return-valve DAC (a Modbus module) misses two answers in a row, twice: tolerated
+#     ([dac] write_failures_tolerated = 2), logged as superseded, no alarm, still spraying;
+#  4. it stops answering: output_write_failed names the return valve, Fault stops the pump.
 # usage: output_write_fail_test.sh BUILD_DIR
 set -euo pipefail
 BUILD=$(realpath "$1")
@@ -51,3 +54,16 @@ grep -q "output NOT safe: valves (simulated valve bank): safe value not written:
 [ "$(cat "$T/valves.rc")" != 0 ] || fail "valves: exit status 0 with a valve bank left unsafe"
 grep -q "pump=0" "$T/valves.valves" || fail "valves: pump not off: $(cat "$T/valves.valves")"
 echo "ok: refused valve writes named; Fault switched the pump off; unsafe exit named, status 1"
+
+run dac_twice 6 return_valve_write_fail_2@2 return_valve_write_fail_2@3.5
+grep -q "return valve DAC: 2 failed write(s) superseded by the next" "$T/dac_twice.log" ||
+  fail "dac_twice: the tolerated failures are not logged"
+! grep -q "alarm raised" "$T/dac_twice.log" || fail "dac_twice: an alarm for tolerated failures"
+[ "$(cat "$T/dac_twice.rc")" = 0 ] || fail "dac_twice: exit status $(cat "$T/dac_twice.rc")"
+echo "ok: two missed DAC answers in a row, twice: logged, tolerated, no alarm"
+
+run dac_dead 6 return_valve_write_fail@2 return_valve_write_ok@4
+grep -q "alarm raised: output_write_failed (return valve DAC: [0-9]* failed write" \
+  "$T/dac_dead.log" || fail "dac_dead: no output_write_failed naming the return valve"
+grep -q "pump=0" "$T/dac_dead.valves" || fail "dac_dead: pump not off: $(cat "$T/dac_dead.valves")"
+echo "ok: a DAC that stops answering raises output_write_failed; Fault switched the pump off"

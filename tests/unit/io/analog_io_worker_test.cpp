@@ -49,7 +49,9 @@ class RecordingDac final : public AnalogOutput {
   explicit RecordingDac(const Clock& clock) : clock_(clock) {}
   int write(double volts) noexcept override {
     writes.push_back({clock_.now(), volts});
-    if (fail_writes) {
+    const bool fail = fail_writes || (!fail_pattern.empty() &&
+                                      fail_pattern[(writes.size() - 1) % fail_pattern.size()]);
+    if (fail) {
       ++errors_;
       return -5;
     }
@@ -57,6 +59,10 @@ class RecordingDac final : public AnalogOutput {
   }
   int force_safe() noexcept override {
     writes.push_back({clock_.now(), kSafe});
+    if (fail_safe) {
+      ++errors_;
+      return -5;
+    }
     return 0;
   }
   double full_scale_volts() const noexcept override { return 3.3; }
@@ -69,6 +75,8 @@ class RecordingDac final : public AnalogOutput {
   };
   std::vector<Write> writes;
   bool fail_writes = false;
+  std::vector<bool> fail_pattern;  // write k fails if fail_pattern[k % size]
+  bool fail_safe = false;
 
  private:
   const Clock& clock_;
@@ -167,6 +175,51 @@ TEST(AnalogIoWorker, AFailedWriteIsRetriedAtTheNextSlot) {
   EXPECT_EQ(dac.writes.size(), 4U) << "every slot retries the failed command";
   EXPECT_EQ(worker.stats().dac_errors, 4U);
   EXPECT_EQ(worker.stats().writes, 4U);
+}
+
+// A Modbus module that misses an answer now and then is no fault: the next period's write
+// supersedes it. A streak longer than tolerated is, and so is any failed safe write.
+TEST(AnalogIoWorker, OnlyFailuresBeyondTheToleratedStreakAreFaults) {
+  sim::ManualClock clock;
+  TimedAdc adc(clock, 0ns);
+  adc.stop_after = 12;
+  RecordingDac dac(clock);
+  AnalogIoTiming t = timing();
+  t.dac_failures_tolerated = 2;
+  {
+    // Two failures, then the retry gets through: tolerated.
+    dac.fail_pattern = {true, true, false};
+    AnalogIoWorker worker(adc, dac, clock, t);
+    worker.command(1.0);
+    worker.run(adc.stop.get_token(), kFirstDeadline);
+    EXPECT_EQ(dac.writes.size(), 3U);
+    EXPECT_EQ(worker.stats().dac_errors, 2U);
+    EXPECT_EQ(worker.stats().dac_faults, 0U);
+  }
+  {
+    // Every write fails: slots 1-2 tolerated, 3 and later faults.
+    dac.fail_pattern.clear();
+    dac.fail_writes = true;
+    adc.stop = {};
+    adc.started.clear();
+    adc.stop_after = 5;
+    AnalogIoWorker worker(adc, dac, clock, t);
+    worker.command(2.0);
+    worker.run(adc.stop.get_token(), clock.now() + kPeriod);
+    EXPECT_EQ(worker.stats().dac_faults, 3U);
+  }
+  {
+    // A safe write that fails is a fault at once.
+    dac.fail_writes = false;
+    dac.fail_safe = true;
+    adc.stop = {};
+    adc.started.clear();
+    adc.stop_after = 1;
+    AnalogIoWorker worker(adc, dac, clock, t);
+    worker.command_safe();
+    worker.run(adc.stop.get_token(), clock.now() + kPeriod);
+    EXPECT_EQ(worker.stats().dac_faults, 1U);
+  }
 }
 
 TEST(AnalogIoWorker, FreshnessIsJudgedOnTheSampleTime) {
