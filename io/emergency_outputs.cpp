@@ -1,8 +1,12 @@
 #include "io/emergency_outputs.hpp"
 
+#include <sched.h>
 #include <sys/ioctl.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdlib>
@@ -13,6 +17,19 @@ namespace {
 
 std::array<EmergencyWrite, EmergencyOutputs::kCapacity> g_writes{};
 std::atomic<std::size_t> g_count{0};
+std::atomic<int> g_urgent_priority{0};
+
+// The highest SCHED_FIFO priority this process may take: RLIMIT_RTPRIO's (the unit sets
+// LimitRTPRIO=90, above the valve thread's 80), or the policy's maximum where the limit is 0
+// and only CAP_SYS_NICE (root) allows it.
+int highest_permitted_fifo_priority() noexcept {
+  const int max = ::sched_get_priority_max(SCHED_FIFO);
+  rlimit limit{};
+  if (::getrlimit(RLIMIT_RTPRIO, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY ||
+      limit.rlim_cur == 0)
+    return max;
+  return static_cast<int>(std::min<rlim_t>(limit.rlim_cur, static_cast<rlim_t>(max)));
+}
 
 constexpr std::array<int, 5> kFatalSignals{SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL};
 
@@ -27,6 +44,7 @@ bool perform(const EmergencyWrite& w) noexcept {
 
 void on_fatal_signal(int signal) {
   const int saved_errno = errno;
+  EmergencyOutputs::make_calling_thread_urgent();
   EmergencyOutputs::trigger();
   static constexpr char kMessage[] = "weedsprayd: fatal signal: outputs written safe\n";
   [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, kMessage, sizeof kMessage - 1);
@@ -36,6 +54,7 @@ void on_fatal_signal(int signal) {
 }
 
 [[noreturn]] void on_terminate() {
+  EmergencyOutputs::make_calling_thread_urgent();
   EmergencyOutputs::trigger();
   static constexpr char kMessage[] = "weedsprayd: std::terminate: outputs written safe\n";
   [[maybe_unused]] const ssize_t n = ::write(STDERR_FILENO, kMessage, sizeof kMessage - 1);
@@ -75,7 +94,20 @@ int EmergencyOutputs::trigger() noexcept {
   return failed;
 }
 
+bool EmergencyOutputs::make_calling_thread_urgent() noexcept {
+  const int priority = g_urgent_priority.load();
+  if (priority <= 0) return false;
+  const sched_param param{.sched_priority = priority};
+  // The raw syscall (pid 0 = this thread), not pthread_setschedparam: no library state touched.
+  return ::syscall(SYS_sched_setscheduler, 0, SCHED_FIFO, &param) == 0;
+}
+
+int EmergencyOutputs::urgent_priority() noexcept {
+  return g_urgent_priority.load();
+}
+
 void install_fatal_exit_handlers() noexcept {
+  g_urgent_priority.store(highest_permitted_fifo_priority());
   // A stack overflow's SIGSEGV cannot run on the overflowed stack.
   static std::array<unsigned char, 64 * 1024> alternate_stack{};
   stack_t ss{};

@@ -39,6 +39,12 @@ class EmergencyOutputs {
   // Performs every write, each retried once on failure; returns how many still failed.
   // Async-signal-safe.
   static int trigger() noexcept;
+  // Puts the calling thread at SCHED_FIFO above every real-time thread of the daemon (the
+  // highest priority RLIMIT_RTPRIO allows, as of install_fatal_exit_handlers()), so the safe
+  // writes are not kept waiting by the valve or pressure threads, or by the rest of the machine.
+  // One raw syscall: async-signal-safe in practice. False where not permitted (then unchanged).
+  static bool make_calling_thread_urgent() noexcept;
+  static int urgent_priority() noexcept;  // 0 before install_fatal_exit_handlers()
 };
 
 // Installs the handlers (SA_ONSTACK on an alternate stack, so a stack overflow's SIGSEGV is

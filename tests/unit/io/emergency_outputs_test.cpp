@@ -5,7 +5,9 @@
 #include "io/emergency_outputs.hpp"
 
 #include <fcntl.h>
+#include <sched.h>
 #include <sys/mman.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -104,6 +106,47 @@ TEST(FatalExit, ARealSegfaultWritesSafe) {
   EXPECT_EQ(WTERMSIG(status), SIGSEGV);
   EXPECT_EQ(read_file(file), "SAFE\n");
   std::filesystem::remove(file);
+}
+
+// The handler first lifts its thread above the daemon's real-time threads, to the highest
+// priority RLIMIT_RTPRIO allows (in a child: the handlers are process-wide).
+TEST(FatalExit, TheHandlerThreadBecomesTheMostUrgent) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    // RLIMIT_RTPRIO 7 where it can be set (raising the hard limit needs CAP_SYS_RESOURCE);
+    // otherwise the limit as it is, 0 meaning the policy's maximum (root's CAP_SYS_NICE).
+    const rlimit seven{.rlim_cur = 7, .rlim_max = 7};
+    rlimit limit{};
+    if (::setrlimit(RLIMIT_RTPRIO, &seven) != 0 && ::getrlimit(RLIMIT_RTPRIO, &limit) != 0)
+      ::_exit(4);
+    const int expected = ::getrlimit(RLIMIT_RTPRIO, &limit) == 0 && limit.rlim_cur > 0 &&
+                                 limit.rlim_cur != RLIM_INFINITY
+                             ? static_cast<int>(limit.rlim_cur)
+                             : ::sched_get_priority_max(SCHED_FIFO);
+    install_fatal_exit_handlers();
+    int result = 5;
+    std::thread([&] {
+      if (!EmergencyOutputs::make_calling_thread_urgent()) {
+        result = ::geteuid() == 0 ? 6 : 3;  // root (CI) is always permitted
+        return;
+      }
+      sched_param param{};
+      ::sched_getparam(0, &param);
+      result = ::sched_getscheduler(0) == SCHED_FIFO && param.sched_priority == expected &&
+                       EmergencyOutputs::urgent_priority() == expected
+                   ? 0
+                   : 2;
+    }).join();
+    ::_exit(result);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  if (WEXITSTATUS(status) == 3) GTEST_SKIP() << "SCHED_FIFO not permitted for this user";
+  EXPECT_EQ(WEXITSTATUS(status), 0)
+      << "2: not SCHED_FIFO at the RLIMIT_RTPRIO priority; 6: refused as root";
+  // The main process is untouched: the handlers were installed in the child only.
+  EXPECT_EQ(::sched_getscheduler(0), SCHED_OTHER);
 }
 
 TEST(EmergencyOutputs, CapacityIsBoundedAndClearForgets) {
