@@ -1029,10 +1029,10 @@ int run_daemon(const Options& options) {
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   if (io::lock_memory() != 0) spdlog::info("memory not locked (mlockall not permitted)");
 
+  int exit_watcher_socket = -1;  // stays -1 in the self-test build: no watcher, no handoff
 #ifndef WEEDSPRAY_SELFTEST_NO_FAILSAFE
   // Hardware mode: before any line is requested, a watcher process that writes the outputs
   // safe when this one ends in any way (kill -9 included); ExecStopPost is the second layer.
-  int exit_watcher_socket = -1;
   if (!options.sim) {
     std::string error;
     const ExitWatcher watcher =
