@@ -58,9 +58,12 @@ echo "ok: refused valve writes named; Fault switched the pump off; unsafe exit n
 run dac_twice 6 return_valve_write_fail_2@2 return_valve_write_fail_2@3.5
 grep -q "return valve DAC: 2 failed write(s) superseded by the next" "$T/dac_twice.log" ||
   fail "dac_twice: the tolerated failures are not logged"
-! grep -q "alarm raised" "$T/dac_twice.log" || fail "dac_twice: an alarm for tolerated failures"
+# (Only this alarm: a loaded machine may raise the timing warning control_overruns meanwhile.)
+! grep -q "alarm raised: output_write_failed" "$T/dac_twice.log" ||
+  fail "dac_twice: output_write_failed for tolerated failures"
+! grep -q "Spraying -> Fault" "$T/dac_twice.log" || fail "dac_twice: Fault for tolerated failures"
 [ "$(cat "$T/dac_twice.rc")" = 0 ] || fail "dac_twice: exit status $(cat "$T/dac_twice.rc")"
-echo "ok: two missed DAC answers in a row, twice: logged, tolerated, no alarm"
+echo "ok: two missed DAC answers in a row, twice: logged, tolerated, no output alarm, no Fault"
 
 run dac_dead 6 return_valve_write_fail@2 return_valve_write_ok@4
 grep -q "alarm raised: output_write_failed (return valve DAC: [0-9]* failed write" \
