@@ -40,6 +40,7 @@ void AnalogIoWorker::run(std::stop_token stop, nanoseconds first_deadline) noexc
     stats.writes = writes_;
     stats.dac_errors = dac_.error_count();
     stats.dac_faults = dac_faults_;
+    stats.dac_tolerated = dac_tolerated_;
 
     // The next deadline whose read slot is still ahead; slots already past are overruns.
     deadline += timing_.period;
@@ -66,8 +67,9 @@ void AnalogIoWorker::write_pending(DacCommand& written, bool& have_written) noex
   ++writes_;
   last_write_failed_ = result != 0;
   failed_in_a_row_ = last_write_failed_ ? failed_in_a_row_ + 1 : 0;
-  if (last_write_failed_ && (wanted.safe || failed_in_a_row_ > timing_.dac_failures_tolerated))
-    ++dac_faults_;
+  if (last_write_failed_)
+    ++(wanted.safe || failed_in_a_row_ > timing_.dac_failures_tolerated ? dac_faults_
+                                                                        : dac_tolerated_);
   written = wanted;
   have_written = true;
 }

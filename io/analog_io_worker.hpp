@@ -45,6 +45,9 @@ struct AnalogIoStats {
   std::uint64_t dac_errors = 0;  // failed DAC writes (the device's count)
   // Of those, the ones that are faults: beyond dac_failures_tolerated in a row, or safe writes.
   std::uint64_t dac_faults = 0;
+  // Failed writes tolerated as superseded (counted here, not derived from dac_errors: that
+  // device count also holds force_safe()'s own retries).
+  std::uint64_t dac_tolerated = 0;
   std::uint64_t overruns = 0;  // read slots missed because the previous I/O ran long
   std::chrono::nanoseconds lead{0};
   std::chrono::nanoseconds max_read_time{0};
@@ -97,6 +100,7 @@ class AnalogIoWorker {
   bool last_write_failed_ = false;     // run()'s thread only
   std::uint32_t failed_in_a_row_ = 0;  // run()'s thread only
   std::uint64_t dac_faults_ = 0;       // run()'s thread only
+  std::uint64_t dac_tolerated_ = 0;    // run()'s thread only
 };
 
 }  // namespace weedspray::io

@@ -275,7 +275,7 @@ OutputWriteCounters Sprayer::output_write_counters() const noexcept {
   counters.failed_writes[at(OutputRole::kPump)] = pressure_.read().pump_write_errors;
   const io::AnalogIoStats analog = analog_io_->stats();
   counters.failed_writes[at(OutputRole::kReturnValve)] = analog.dac_faults;
-  counters.tolerated_failures[at(OutputRole::kReturnValve)] = analog.dac_errors - analog.dac_faults;
+  counters.tolerated_failures[at(OutputRole::kReturnValve)] = analog.dac_tolerated;
   return counters;
 }
 

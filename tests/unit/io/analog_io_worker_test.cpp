@@ -195,6 +195,7 @@ TEST(AnalogIoWorker, OnlyFailuresBeyondTheToleratedStreakAreFaults) {
     EXPECT_EQ(dac.writes.size(), 3U);
     EXPECT_EQ(worker.stats().dac_errors, 2U);
     EXPECT_EQ(worker.stats().dac_faults, 0U);
+    EXPECT_EQ(worker.stats().dac_tolerated, 2U);
   }
   {
     // Every write fails: slots 1-2 tolerated, 3 and later faults.
@@ -207,6 +208,7 @@ TEST(AnalogIoWorker, OnlyFailuresBeyondTheToleratedStreakAreFaults) {
     worker.command(2.0);
     worker.run(adc.stop.get_token(), clock.now() + kPeriod);
     EXPECT_EQ(worker.stats().dac_faults, 3U);
+    EXPECT_EQ(worker.stats().dac_tolerated, 2U);
   }
   {
     // A safe write that fails is a fault at once.
