@@ -4,6 +4,7 @@
 #include <sys/ioctl.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -18,6 +19,16 @@ namespace {
 std::array<EmergencyWrite, EmergencyOutputs::kCapacity> g_writes{};
 std::atomic<std::size_t> g_count{0};
 std::atomic<int> g_urgent_priority{0};
+// The gate (EmergencyOutputs::OrdinaryWrite). Both sides store, then load the other's flag, all
+// sequentially consistent: a writer that did not see the gate closed is counted in flight when
+// trigger() looks, so trigger() writes again after it (the Dekker pattern).
+std::atomic<bool> g_triggered{false};
+std::atomic<int> g_writes_in_flight{0};
+// The ordinary writes this thread is inside: a handler running on a thread that crashed inside a
+// write must not wait for it. Initial-exec TLS (the executable's static block) is read without
+// any call, so a signal handler may read it. Changed after the shared count going in and before
+// it coming out, so a signal between the two sees at most a write too many (a bounded wait).
+__attribute__((tls_model("initial-exec"))) thread_local int t_writes_in_flight = 0;
 
 // The highest SCHED_FIFO priority this process may take: RLIMIT_RTPRIO's (the unit sets
 // LimitRTPRIO=90, above the valve thread's 80), or the policy's maximum where the limit is 0
@@ -73,6 +84,7 @@ bool EmergencyOutputs::add(const EmergencyWrite& write) noexcept {
 
 void EmergencyOutputs::clear() noexcept {
   g_count.store(0);
+  g_triggered.store(false);
 }
 
 std::size_t EmergencyOutputs::size() noexcept {
@@ -85,13 +97,66 @@ bool EmergencyOutputs::get(std::size_t i, EmergencyWrite& out) noexcept {
   return true;
 }
 
-int EmergencyOutputs::trigger() noexcept {
+namespace {
+
+int perform_all() noexcept {
   int failed = 0;
   const std::size_t n = g_count.load();
   for (std::size_t i = 0; i < n; ++i) {
     if (!perform(g_writes[i]) && !perform(g_writes[i])) ++failed;
   }
   return failed;
+}
+
+// Waits, sleeping (not spinning: a writer at a lower priority on this CPU must get to finish),
+// until no other thread's ordinary write is in flight, or for at most kDrainLimitNs: a writer
+// stuck in the kernel must not keep the process from dying.
+void drain_ordinary_writes() noexcept {
+  // Also at least kMinNaps naps, whatever the clock says: a virtual machine's clock can jump by
+  // tens of ms while the writer has not run at all.
+  constexpr int kMinNaps = 200;
+  constexpr long kNapNs = 50'000;
+  timespec start{};
+  ::clock_gettime(CLOCK_MONOTONIC, &start);
+  for (int naps = 0; g_writes_in_flight.load() - t_writes_in_flight > 0; ++naps) {
+    timespec now{};
+    ::clock_gettime(CLOCK_MONOTONIC, &now);
+    const long elapsed = (now.tv_sec - start.tv_sec) * 1'000'000'000L + now.tv_nsec - start.tv_nsec;
+    if (elapsed >= EmergencyOutputs::kDrainLimitNs && naps >= kMinNaps) return;
+    const timespec nap{.tv_sec = 0, .tv_nsec = kNapNs};
+    ::nanosleep(&nap, nullptr);
+  }
+}
+
+}  // namespace
+
+int EmergencyOutputs::trigger() noexcept {
+  g_triggered.store(true);
+  perform_all();  // at once: the lines safe as early as possible
+  drain_ordinary_writes();
+  return perform_all();  // after any write that was already past the gate
+}
+
+bool EmergencyOutputs::triggered() noexcept {
+  return g_triggered.load();
+}
+
+EmergencyOutputs::OrdinaryWrite::OrdinaryWrite() noexcept {
+  g_writes_in_flight.fetch_add(1);
+  ++t_writes_in_flight;
+  allowed_ = !g_triggered.load();
+  // A write that found the gate closed writes the safe value: trigger() need not wait for it,
+  // so only writes let through stay counted, and their count can only fall once it is closed.
+  if (!allowed_) leave();
+}
+
+EmergencyOutputs::OrdinaryWrite::~OrdinaryWrite() {
+  if (allowed_) leave();
+}
+
+void EmergencyOutputs::OrdinaryWrite::leave() noexcept {
+  --t_writes_in_flight;
+  g_writes_in_flight.fetch_sub(1);
 }
 
 bool EmergencyOutputs::make_calling_thread_urgent() noexcept {

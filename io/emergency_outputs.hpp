@@ -31,14 +31,37 @@ class EmergencyOutputs {
   static constexpr std::size_t kCapacity = 16;
   // Start-up only (not thread-safe against trigger()). False when full.
   static bool add(const EmergencyWrite& write) noexcept;
-  // Forgets every write (their descriptors are about to close).
+  // Forgets every write (their descriptors are about to close) and opens the gate again.
   static void clear() noexcept;
   static std::size_t size() noexcept;
   // The i-th registered write (false past the end): what the daemon hands its exit watcher.
   static bool get(std::size_t i, EmergencyWrite& out) noexcept;
-  // Performs every write, each retried once on failure; returns how many still failed.
-  // Async-signal-safe.
+  // Closes the gate (below), performs every write (each retried once on failure), waits up to
+  // kDrainLimitNs for other threads' ordinary writes already past the gate to end, and performs
+  // every write again; returns how many writes failed in the last round. Async-signal-safe.
   static int trigger() noexcept;
+  static constexpr long kDrainLimitNs = 50'000'000;
+  // True once trigger() has begun (until clear()).
+  static bool triggered() noexcept;
+
+  // The gate every ordinary write of a registered output passes, held across the write. Another
+  // thread - the valve PWM thread at SCHED_FIFO on the other CPU - may be about to write a valve
+  // open while a fatal-signal handler writes the lines safe; without the gate its write could
+  // land after the safe one and open the valve until the process is gone. A writer that finds
+  // the gate closed (allowed() false) writes its safe value instead; trigger() writes again
+  // after the writes it saw in flight have ended. Lock-free: the real-time writers may hold it.
+  class OrdinaryWrite {
+   public:
+    OrdinaryWrite() noexcept;
+    ~OrdinaryWrite();
+    OrdinaryWrite(const OrdinaryWrite&) = delete;
+    OrdinaryWrite& operator=(const OrdinaryWrite&) = delete;
+    bool allowed() const noexcept { return allowed_; }
+
+   private:
+    void leave() noexcept;
+    bool allowed_;
+  };
   // Puts the calling thread at SCHED_FIFO above every real-time thread of the daemon (the
   // highest priority RLIMIT_RTPRIO allows, as of install_fatal_exit_handlers()), so the safe
   // writes are not kept waiting by the valve or pressure threads, or by the rest of the machine.

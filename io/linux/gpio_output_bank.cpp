@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "io/emergency_outputs.hpp"
 #include "io/linux/gpio_lines.hpp"
 
 namespace weedspray::io::hw {
@@ -100,7 +101,9 @@ std::size_t GpioOutputBank::size() const noexcept {
 }
 
 int GpioOutputBank::write(std::uint32_t mask) noexcept {
-  const std::uint32_t physical = mask ^ impl_->invert_mask;
+  // Once a fatal-exit handler has written the lines safe, no write may open them again.
+  const EmergencyOutputs::OrdinaryWrite gate;
+  const std::uint32_t physical = (gate.allowed() ? mask : impl_->safe_mask) ^ impl_->invert_mask;
   for (std::size_t i = 0; i < impl_->values.size(); ++i)
     impl_->values[i] = static_cast<int>((physical >> i) & 1U);
   try {

@@ -125,8 +125,10 @@ IioAnalogOutput::~IioAnalogOutput() {
 }
 
 int IioAnalogOutput::write(double volts) noexcept {
-  const double clamped =
-      std::clamp(std::isfinite(volts) ? volts : config_.safe_volts, 0.0, config_.full_scale_volts);
+  // Once a fatal-exit handler has written the safe value, no write may replace it.
+  const EmergencyOutputs::OrdinaryWrite gate;
+  const double wanted = gate.allowed() && std::isfinite(volts) ? volts : config_.safe_volts;
+  const double clamped = std::clamp(wanted, 0.0, config_.full_scale_volts);
   const long raw = std::clamp(std::lround(clamped * 1000.0 / scale_mv_), 0L, config_.max_raw);
   char buffer[32];
   const int len = std::snprintf(buffer, sizeof(buffer), "%ld\n", raw);

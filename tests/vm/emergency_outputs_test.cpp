@@ -9,8 +9,10 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <csignal>
 #include <cstdint>
+#include <thread>
 
 #include "io/emergency_outputs.hpp"
 #include "io/linux/gpio_output_bank.hpp"
@@ -89,6 +91,44 @@ TEST_F(EmergencyOutputsTest, EveryFatalSignalLeavesTheValvesClosed) {
   const int status = open_valves_and_die(valves, SIGSEGV, false);
   ASSERT_TRUE(WIFSIGNALED(status));
   for (unsigned i = 0; i < 4; ++i) EXPECT_EQ(chip_.value(i), 1) << "valve " << i;
+}
+
+// As above, but a second thread keeps writing the valves open through the bank, as the valve
+// PWM thread does on the other CPU: after the handler's safe writes, no write of that thread
+// may open a valve again before the process is gone (the bank's write passes the gate).
+int die_while_a_thread_opens_the_valves(GpioOutputBank& valves, int signal) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    EmergencyWrite write;
+    if (!(valves.emergency_write(write) && EmergencyOutputs::add(write))) ::_exit(91);
+    install_fatal_exit_handlers();
+    std::atomic<int> writes{0};
+    std::thread([&] {
+      for (;;) {
+        if (valves.write(0xF) != 0) ::_exit(90);
+        writes.fetch_add(1);
+      }
+    }).detach();
+    while (writes.load() < 50) std::this_thread::yield();
+    ::raise(signal);
+    ::_exit(92);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return status;
+}
+
+TEST_F(EmergencyOutputsTest, AThreadStillWritingCannotReopenAValve) {
+  GpioOutputBank valves(bank_config(chip_.chip_name(), 0, 4, false));
+  for (int signal : {SIGSEGV, SIGABRT}) {
+    for (int death = 0; death < 20; ++death) {
+      const int status = die_while_a_thread_opens_the_valves(valves, signal);
+      ASSERT_TRUE(WIFSIGNALED(status)) << "signal " << signal << " status " << status;
+      ASSERT_EQ(WTERMSIG(status), signal);
+      for (unsigned i = 0; i < 4; ++i)
+        ASSERT_EQ(chip_.value(i), 0) << "valve " << i << ", death " << death << " of " << signal;
+    }
+  }
 }
 
 }  // namespace

@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstring>
 #include <exception>
@@ -33,21 +35,28 @@ std::string read_file(const std::filesystem::path& path) {
 
 enum class Death { kSignal, kEscapedException, kReadOnlyStore };
 
+// In a child: writes "OPEN" to the file (the valve), registers "SAFE" as its fatal-exit write
+// when armed, installs the handlers; returns the file's descriptor.
+int open_the_valve_and_arm(const std::filesystem::path& file, bool armed) {
+  const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (fd < 0 || ::pwrite(fd, "OPEN\n", 5, 0) != 5) ::_exit(90);
+  if (armed) {
+    EmergencyWrite safe;
+    safe.kind = EmergencyWrite::Kind::kPwrite;
+    safe.fd = fd;
+    std::memcpy(safe.payload.data(), "SAFE\n", 5);
+    safe.length = 5;
+    EmergencyOutputs::add(safe);
+  }
+  install_fatal_exit_handlers();
+  return fd;
+}
+
 // Runs `die` in a child with the handlers installed; returns the child's wait status.
 int run_child(const std::filesystem::path& file, Death how, int signal, bool armed) {
   const pid_t pid = ::fork();
   if (pid == 0) {
-    const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (::pwrite(fd, "OPEN\n", 5, 0) != 5) ::_exit(90);
-    if (armed) {
-      EmergencyWrite safe;
-      safe.kind = EmergencyWrite::Kind::kPwrite;
-      safe.fd = fd;
-      std::memcpy(safe.payload.data(), "SAFE\n", 5);
-      safe.length = 5;
-      EmergencyOutputs::add(safe);
-    }
-    install_fatal_exit_handlers();
+    open_the_valve_and_arm(file, armed);
     switch (how) {
       case Death::kSignal:
         ::raise(signal);
@@ -147,6 +156,95 @@ TEST(FatalExit, TheHandlerThreadBecomesTheMostUrgent) {
       << "2: not SCHED_FIFO at the RLIMIT_RTPRIO priority; 6: refused as root";
   // The main process is untouched: the handlers were installed in the child only.
   EXPECT_EQ(::sched_getscheduler(0), SCHED_OTHER);
+}
+
+// A writer thread keeps "opening the valve" through the gate, as the valve PWM thread does on
+// the other CPU, while the main thread dies: the file must hold the safe value when the process
+// is gone. Without the gate the writer's next "OPEN" lands after the handler's "SAFE" (checked by
+// hand: the writer ignoring allowed() fails this test, and so does trigger() without its second
+// round).
+int die_while_a_thread_writes(const std::filesystem::path& file, int signal) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int fd = open_the_valve_and_arm(file, true);
+    std::atomic<int> writes{0};
+    std::thread writer([&] {
+      for (;;) {
+        const EmergencyOutputs::OrdinaryWrite gate;
+        // Every other write is held up past its gate, as a writer preempted between the gate
+        // and its ioctl is: trigger() must write again after it.
+        // (A busy wait: a sleeping writer would simply die with the process.)
+        if (writes.load() % 2 == 1) {
+          const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(30);
+          while (std::chrono::steady_clock::now() < until) {
+          }
+        }
+        [[maybe_unused]] const ssize_t n = ::pwrite(fd, gate.allowed() ? "OPEN\n" : "SAFE\n", 5, 0);
+        writes.fetch_add(1);
+      }
+    });
+    writer.detach();
+    while (writes.load() < 100) std::this_thread::yield();
+    ::raise(signal);
+    ::_exit(91);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return status;
+}
+
+TEST(FatalExit, NoOrdinaryWriteLandsAfterTheSafeWrites) {
+  const auto file = std::filesystem::temp_directory_path() / "weedspray_emergency_race";
+  for (int signal : {SIGSEGV, SIGABRT}) {
+    for (int death = 0; death < 40; ++death) {
+      const int status = die_while_a_thread_writes(file, signal);
+      ASSERT_TRUE(WIFSIGNALED(status)) << "status " << status;
+      ASSERT_EQ(WTERMSIG(status), signal);
+      ASSERT_EQ(read_file(file), "SAFE\n") << "death " << death << " of signal " << signal;
+    }
+  }
+  std::filesystem::remove(file);
+}
+
+TEST(EmergencyOutputs, TheGateClosesWhenTriggeredAndClearOpensIt) {
+  EmergencyOutputs::clear();
+  EXPECT_TRUE(EmergencyOutputs::OrdinaryWrite().allowed());
+  EXPECT_FALSE(EmergencyOutputs::triggered());
+  EXPECT_EQ(EmergencyOutputs::trigger(), 0) << "nothing registered, nothing failed";
+  EXPECT_TRUE(EmergencyOutputs::triggered());
+  EXPECT_FALSE(EmergencyOutputs::OrdinaryWrite().allowed());
+  EmergencyOutputs::clear();
+  EXPECT_TRUE(EmergencyOutputs::OrdinaryWrite().allowed());
+}
+
+// Another thread's write stuck in flight delays the dying process by at most kDrainLimitNs; the
+// handler's own thread's write (it crashed inside it) delays it not at all.
+TEST(EmergencyOutputs, TriggerWaitsForAnotherThreadsWriteOnlySoLong) {
+  EmergencyOutputs::clear();
+  std::atomic<bool> inside{false};
+  std::atomic<bool> leave{false};
+  std::thread stuck([&] {
+    const EmergencyOutputs::OrdinaryWrite write;
+    inside = true;
+    while (!leave) std::this_thread::yield();
+  });
+  while (!inside) std::this_thread::yield();
+  auto start = std::chrono::steady_clock::now();
+  EmergencyOutputs::trigger();
+  const auto waited = std::chrono::steady_clock::now() - start;
+  leave = true;
+  stuck.join();
+  EXPECT_GE(waited, std::chrono::nanoseconds(EmergencyOutputs::kDrainLimitNs));
+  EXPECT_LT(waited, std::chrono::milliseconds(1000)) << "bounded, not forever";
+
+  EmergencyOutputs::clear();
+  const EmergencyOutputs::OrdinaryWrite own;
+  start = std::chrono::steady_clock::now();
+  EmergencyOutputs::trigger();
+  EXPECT_LT(std::chrono::steady_clock::now() - start,
+            std::chrono::nanoseconds(EmergencyOutputs::kDrainLimitNs / 2))
+      << "the calling thread's own write is not waited for";
+  EmergencyOutputs::clear();
 }
 
 TEST(EmergencyOutputs, CapacityIsBoundedAndClearForgets) {
