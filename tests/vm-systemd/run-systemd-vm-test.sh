@@ -23,8 +23,7 @@
 # WEEDSPRAY_VM_KEEP_WORK=1 keeps the work dir (rootfs image, initramfs).
 # --hil: after guest-test.sh the guest runs hil-scenario.sh (hardware in the loop against
 # tools/hil/weedspray-hil); its WEEDSPRAY-HIL figures must meet the targets below. ctest
-# vm_systemd_hil (label vm-full) runs it on demand; not in ./dev test until the crash race
-# (README.md "Hardware in the loop") is fixed.
+# vm_systemd_hil (label vm, so in ./dev test) runs it; see README.md "Hardware in the loop".
 # --selftest-no-failsafe: the harness's self-test. The package tree is switched to
 # WEEDSPRAY_SELFTEST_NO_FAILSAFE=ON (a later normal run switches it back) and the guest removes
 # ExecStopPost=; the run succeeds only if
