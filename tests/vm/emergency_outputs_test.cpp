@@ -12,6 +12,7 @@
 #include <atomic>
 #include <csignal>
 #include <cstdint>
+#include <stdexcept>
 #include <thread>
 
 #include "io/emergency_outputs.hpp"
@@ -91,6 +92,25 @@ TEST_F(EmergencyOutputsTest, EveryFatalSignalLeavesTheValvesClosed) {
   const int status = open_valves_and_die(valves, SIGSEGV, false);
   ASSERT_TRUE(WIFSIGNALED(status));
   for (unsigned i = 0; i < 4; ++i) EXPECT_EQ(chip_.value(i), 1) << "valve " << i;
+}
+
+// An exception escaping a thread: std::terminate's handler writes the lines safe and aborts.
+TEST_F(EmergencyOutputsTest, AnEscapedExceptionLeavesTheValvesClosed) {
+  GpioOutputBank valves(bank_config(chip_.chip_name(), 0, 4, false));
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (valves.write(0xF) != 0) ::_exit(90);
+    EmergencyWrite write;
+    if (!(valves.emergency_write(write) && EmergencyOutputs::add(write))) ::_exit(91);
+    install_fatal_exit_handlers();
+    std::thread([] { throw std::runtime_error("escaped from a thread"); }).join();
+    ::_exit(92);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "status " << status;
+  EXPECT_EQ(WTERMSIG(status), SIGABRT);
+  for (unsigned i = 0; i < 4; ++i) EXPECT_EQ(chip_.value(i), 0) << "valve " << i;
 }
 
 // As above, but a second thread keeps writing the valves open through the bank, as the valve
