@@ -44,7 +44,11 @@ mount -t tmpfs tmpfs /run
 while read -r module; do
   parameters=""
   # One video capture node only; webcam input first (vivid's default input list).
-  case "$module" in */vivid.ko) parameters="n_devs=1 node_types=0x1" ;; esac
+  case "$module" in
+    */vivid.ko) parameters="n_devs=1 node_types=0x1" ;;
+    # A fixed node far from vivid's; capture caps only once a writer has set the format.
+    */v4l2loopback.ko) parameters="video_nr=20 card_label=weedspray-loopback exclusive_caps=1" ;;
+  esac
   # shellcheck disable=SC2086 # parameters are words
   insmod "$module" $parameters || setup_failed "insmod $module failed"
 done </modules.load
@@ -68,7 +72,10 @@ echo "interrupt-cnt: $counter_dir ($(cat "$counter_dir/signal0/name")), count0 e
 
 video_node=""
 for _ in 1 2 3 4 5 6 7 8 9 10; do
-  for node in /dev/video*; do [ -c "$node" ] && video_node="$node" && break 2; done
+  for node in /dev/video*; do
+    [ "$node" = /dev/video20 ] && continue # v4l2loopback's
+    [ -c "$node" ] && video_node="$node" && break 2
+  done
   sleep 0.2
 done
 [ -n "$video_node" ] || setup_failed "vivid created no /dev/video* node"

@@ -104,6 +104,7 @@ fi
 source "$script_dir/vm-kernel.sh"
 vm_kernel_init
 guest_modules=(configfs gpio-sim vivid interrupt-cnt) # counter comes in as a dependency
+[ "$vm_arch" = amd64 ] && guest_modules+=(v4l2loopback)
 
 # --- initramfs ----------------------------------------------------------------------------
 # Two archives the kernel unpacks one after the other: a large base (busybox, modules, tools,

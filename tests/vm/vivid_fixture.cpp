@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 
 namespace weedspray::vm_test {
@@ -33,7 +34,11 @@ std::string vivid_video_node() {
   if (std::filesystem::is_directory(classes))
     for (const auto& entry : std::filesystem::directory_iterator(classes)) {
       const std::string node = entry.path().filename();
-      if (node.rfind("video", 0) == 0) return "/dev/" + node;
+      std::ifstream name_file(entry.path() / "name");
+      std::string name;
+      std::getline(name_file, name);
+      // vivid's nodes are "vivid-000-vid-cap"; the v4l2loopback node is another camera.
+      if (node.rfind("video", 0) == 0 && name.rfind("vivid", 0) == 0) return "/dev/" + node;
     }
   throw std::runtime_error("no video node in " + classes.string() + " (is vivid loaded?)");
 }

@@ -31,6 +31,12 @@ built_modules=(gpio-sim counter interrupt-cnt industrialio-configfs industrialio
 vm_staged_modules=(configfs gpio-sim vivid interrupt-cnt
   virtio_pci virtio_blk ext4 crc32c_generic
   industrialio industrialio-configfs industrialio-sw-device iio_dummy)
+# v4l2loopback (Debian's v4l2loopback-dkms source, arch all): a capture node a test writes
+# frames into - real field images for the camera path. amd64 guests only.
+if [ "$vm_arch" = amd64 ]; then
+  built_modules+=(v4l2loopback)
+  vm_staged_modules+=(v4l2loopback)
+fi
 # Loaded by guest-init.sh after it has made the gpio-sim chips, not from modules.load.
 fixture_source="$vm_kernel_lib_dir/interrupt_counter_fixture.c"
 # Bump when the module build steps change: a new value makes a new kernel_dir (and the old
@@ -183,6 +189,7 @@ fetch_packages() { # -> $kernel_dir/debs
   local guest=("$image_package=$kernel_version" "linux-headers-$kernel_release=$kernel_version")
   local host=("linux-headers-$abi-common=$kernel_version" "linux-kbuild-$series=$kernel_version"
     "linux-source-$series=$kernel_version")
+  [[ " ${built_modules[*]} " == *" v4l2loopback "* ]] && host+=(v4l2loopback-dkms)
   note "downloading ${guest[*]} ${host[*]} from the Debian archive"
   (cd "$debs" && vm_apt_get download -q "${guest[@]}" && apt-get download -q "${host[@]}") \
     >"$kernel_dir/download.log" 2>&1 || {
@@ -254,6 +261,12 @@ gpio-sim-y := gpio-sim-main.o irq_sim.o
 counter-y := counter-core.o counter-sysfs.o counter-chrdev.o
 iio_dummy-y := iio_simple_dummy.o
 KBUILD
+  if [[ " ${built_modules[*]} " == *" v4l2loopback "* ]]; then
+    dpkg-deb --fsys-tarfile "$kernel_dir/debs/v4l2loopback-dkms_"*.deb |
+      tar -x -C "$src" --wildcards --strip-components=4 './usr/src/v4l2loopback-*/v4l2loopback*' ||
+      die "cannot extract v4l2loopback's source from v4l2loopback-dkms"
+    echo "obj-m += v4l2loopback.o" >>"$src/Kbuild"
+  fi
   # The headers' Makefile includes the -common one by absolute /usr/src path.
   sed -i "s#^include /usr/src/#include $root/usr/src/#" "$headers/Makefile"
   note "building ${built_modules[*]} and the interrupt-cnt fixture against linux-headers-$kernel_release"
