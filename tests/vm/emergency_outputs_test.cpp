@@ -63,16 +63,43 @@ TEST_F(EmergencyOutputsTest, TheRawIoctlWritesEachBanksSafeValues) {
   EXPECT_EQ(chip_.value(4), 1) << "pump relay off (high)";
 }
 
+enum class Death {
+  kSignal,
+  kEscapedException,
+  // A second thread keeps writing the valves open through the bank, as the valve PWM thread
+  // does on the other CPU, while the main thread dies of the signal.
+  kSignalWhileAThreadWrites,
+};
+
 // Forks a child that shares the bank's handle, opens every valve, arms (or not) the handlers
-// and dies of `signal`; returns the child's wait status.
-int open_valves_and_die(GpioOutputBank& valves, int signal, bool armed) {
+// and dies as told; returns the child's wait status.
+int open_valves_and_die(GpioOutputBank& valves, Death how, int signal, bool armed) {
   const pid_t pid = ::fork();
   if (pid == 0) {
     if (valves.write(0xF) != 0) ::_exit(90);
     EmergencyWrite write;
     if (armed && !(valves.emergency_write(write) && EmergencyOutputs::add(write))) ::_exit(91);
     install_fatal_exit_handlers();
-    ::raise(signal);
+    switch (how) {
+      case Death::kSignal:
+        ::raise(signal);
+        break;
+      case Death::kEscapedException:
+        std::thread([] { throw std::runtime_error("escaped from a thread"); }).join();
+        break;
+      case Death::kSignalWhileAThreadWrites: {
+        std::atomic<int> writes{0};
+        std::thread([&] {
+          for (;;) {
+            if (valves.write(0xF) != 0) ::_exit(93);
+            writes.fetch_add(1);
+          }
+        }).detach();
+        while (writes.load() < 50) std::this_thread::yield();
+        ::raise(signal);
+        break;
+      }
+    }
     ::_exit(92);
   }
   int status = 0;
@@ -83,13 +110,13 @@ int open_valves_and_die(GpioOutputBank& valves, int signal, bool armed) {
 TEST_F(EmergencyOutputsTest, EveryFatalSignalLeavesTheValvesClosed) {
   GpioOutputBank valves(bank_config(chip_.chip_name(), 0, 4, false));
   for (int signal : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL}) {
-    const int status = open_valves_and_die(valves, signal, true);
+    const int status = open_valves_and_die(valves, Death::kSignal, signal, true);
     ASSERT_TRUE(WIFSIGNALED(status)) << "signal " << signal << " status " << status;
     EXPECT_EQ(WTERMSIG(status), signal);
     for (unsigned i = 0; i < 4; ++i) EXPECT_EQ(chip_.value(i), 0) << "signal " << signal;
   }
   // Unarmed, the same death leaves them open: the check above can fail.
-  const int status = open_valves_and_die(valves, SIGSEGV, false);
+  const int status = open_valves_and_die(valves, Death::kSignal, SIGSEGV, false);
   ASSERT_TRUE(WIFSIGNALED(status));
   for (unsigned i = 0; i < 4; ++i) EXPECT_EQ(chip_.value(i), 1) << "valve " << i;
 }
@@ -97,52 +124,20 @@ TEST_F(EmergencyOutputsTest, EveryFatalSignalLeavesTheValvesClosed) {
 // An exception escaping a thread: std::terminate's handler writes the lines safe and aborts.
 TEST_F(EmergencyOutputsTest, AnEscapedExceptionLeavesTheValvesClosed) {
   GpioOutputBank valves(bank_config(chip_.chip_name(), 0, 4, false));
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    if (valves.write(0xF) != 0) ::_exit(90);
-    EmergencyWrite write;
-    if (!(valves.emergency_write(write) && EmergencyOutputs::add(write))) ::_exit(91);
-    install_fatal_exit_handlers();
-    std::thread([] { throw std::runtime_error("escaped from a thread"); }).join();
-    ::_exit(92);
-  }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
+  const int status = open_valves_and_die(valves, Death::kEscapedException, 0, true);
   ASSERT_TRUE(WIFSIGNALED(status)) << "status " << status;
   EXPECT_EQ(WTERMSIG(status), SIGABRT);
   for (unsigned i = 0; i < 4; ++i) EXPECT_EQ(chip_.value(i), 0) << "valve " << i;
 }
 
-// As above, but a second thread keeps writing the valves open through the bank, as the valve
-// PWM thread does on the other CPU: after the handler's safe writes, no write of that thread
-// may open a valve again before the process is gone (the bank's write passes the gate).
-int die_while_a_thread_opens_the_valves(GpioOutputBank& valves, int signal) {
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    EmergencyWrite write;
-    if (!(valves.emergency_write(write) && EmergencyOutputs::add(write))) ::_exit(91);
-    install_fatal_exit_handlers();
-    std::atomic<int> writes{0};
-    std::thread([&] {
-      for (;;) {
-        if (valves.write(0xF) != 0) ::_exit(90);
-        writes.fetch_add(1);
-      }
-    }).detach();
-    while (writes.load() < 50) std::this_thread::yield();
-    ::raise(signal);
-    ::_exit(92);
-  }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  return status;
-}
-
+// After the handler's safe writes, no write of a thread still running may open a valve again
+// before the process is gone (the bank's write passes the gate).
 TEST_F(EmergencyOutputsTest, AThreadStillWritingCannotReopenAValve) {
   GpioOutputBank valves(bank_config(chip_.chip_name(), 0, 4, false));
   for (int signal : {SIGSEGV, SIGABRT}) {
     for (int death = 0; death < 20; ++death) {
-      const int status = die_while_a_thread_opens_the_valves(valves, signal);
+      const int status =
+          open_valves_and_die(valves, Death::kSignalWhileAThreadWrites, signal, true);
       ASSERT_TRUE(WIFSIGNALED(status)) << "signal " << signal << " status " << status;
       ASSERT_EQ(WTERMSIG(status), signal);
       for (unsigned i = 0; i < 4; ++i)
