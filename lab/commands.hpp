@@ -3,6 +3,8 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <exception>
+#include <iostream>
 
 namespace weedspray::lab {
 
@@ -14,5 +16,21 @@ void add_experiment_commands(CLI::App& app);
 void add_io_commands(CLI::App& app);
 // soak (lab/soak_command.cpp)
 void add_soak_command(CLI::App& app);
+// hil-frames (lab/hil_frames.cpp)
+void add_hil_frames_command(CLI::App& app);
+
+// CLI11 callbacks cannot return an exit code: errors become CLI::RuntimeError after a clear
+// message naming the file or argument.
+template <typename Function>
+void run_reporting_errors(Function&& function) {
+  int code = 0;
+  try {
+    code = function();
+  } catch (const std::exception& error) {
+    std::cerr << "weedspray-lab: " << error.what() << "\n";
+    code = 1;
+  }
+  if (code != 0) throw CLI::RuntimeError(code);
+}
 
 }  // namespace weedspray::lab

@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
   weedspray::lab::add_experiment_commands(app);
   weedspray::lab::add_io_commands(app);
   weedspray::lab::add_soak_command(app);
+  weedspray::lab::add_hil_frames_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

@@ -93,20 +93,6 @@ int run_vision_eval(const EvalOptions& all) {
   return 0;
 }
 
-// CLI11 callbacks cannot return an exit code: errors become CLI::RuntimeError after a clear
-// message naming the file or argument.
-template <typename Function>
-void run_reporting_errors(Function&& function) {
-  int code = 0;
-  try {
-    code = function();
-  } catch (const std::exception& error) {
-    std::cerr << "weedspray-lab: " << error.what() << "\n";
-    code = 1;
-  }
-  if (code != 0) throw CLI::RuntimeError(code);
-}
-
 }  // namespace
 
 void add_vision_commands(CLI::App& app) {

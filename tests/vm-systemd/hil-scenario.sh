@@ -76,10 +76,24 @@ for dir in /sys/class/gpio/gpiochip*; do
 done
 [ -n "$gpio_base" ] || setup_failed "no /sys/class/gpio entry labelled weedspray (GPIO base)"
 watched="$(for l in "${valve_lines[@]}" "$pump_line"; do printf '%d ' $((gpio_base + l)); done)"
-video_node="$(ls /dev/video* | head -n1)"
-# Every zone green (vivid's "100% Green" pattern): the daemon sees weeds everywhere and sprays.
-# Without the on-screen text (osd_text_mode 2), which made the zones' densities differ and move.
-v4l2-ctl -d "$video_node" -c test_pattern=8 -c osd_text_mode=2 || setup_failed "cannot set vivid's test pattern"
+# The camera: field images through v4l2loopback when the host made them (x86: run-systemd-vm-
+# test.sh, weedspray-lab hil-frames); weedspray-hil writes them. Else vivid, every zone green
+# (its "100% Green" pattern, without the on-screen text, which made the zones' densities differ
+# and move): the daemon sees weeds everywhere and sprays.
+frames_dir=/usr/local/share/weedspray-hil/frames
+camera_args=()
+if [ -f "$frames_dir/truth.txt" ]; then
+  modprobe v4l2loopback video_nr=20 card_label=weedspray-loopback exclusive_caps=1 ||
+    setup_failed "modprobe v4l2loopback"
+  video_node=/dev/video20
+  camera_args=(--camera-device "$video_node" --camera-frames "$frames_dir" --camera-frame field
+    --camera-width 320 --camera-height 180 --camera-fps 2)
+  figure camera loopback
+else
+  video_node="$(ls /dev/video* | head -n1)"
+  v4l2-ctl -d "$video_node" -c test_pattern=8 -c osd_text_mode=2 || setup_failed "cannot set vivid's test pattern"
+  figure camera vivid
+fi
 
 tracing=/sys/kernel/tracing
 mountpoint -q "$tracing" || mount -t tracefs tracefs "$tracing" || setup_failed "no tracefs"
@@ -98,7 +112,7 @@ weedspray-hil --chip-dir "$chip_dir" --valve-lines "${valve_lines[@]}" --pump-li
   --buzzer-line 5 --lamp-line 6 --heartbeat-line 10 --wheel-line 9 \
   --flow-chip-dir "$flow_chip_dir" --flow-line 0 --run-dir "$run_dir" --rate-hz 2000 \
   --tank-capacity-l 200 --tank-level-l 150 --wheel-pulses-per-m 20 --flow-pulses-per-l 2000 \
-  --seed 11 >"$hil_log" 2>&1 &
+  --seed 11 "${camera_args[@]}" >"$hil_log" 2>&1 &
 hil_pid=$!
 for _ in $(seq 50); do [ -p "$run_dir/control" ] && [ -f "$run_dir/status" ] && break; sleep 0.1; done
 [ -f "$run_dir/status" ] || { cat "$hil_log"; setup_failed "weedspray-hil did not start"; }
@@ -155,9 +169,7 @@ cd = 0.0
 [wheel]
 pulses_per_metre = 20
 
-# A fixed threshold: no histogram fitting on the emulated CPU (the frames are one colour).
-[vision]
-threshold = "fixed"
+$([ "$video_node" = /dev/video20 ] || printf '%s\n' '# vivid: one colour, no histogram to split.' '[vision]' 'threshold = "fixed"')
 
 [adc]
 source = "modbus"
@@ -174,8 +186,10 @@ enabled = true
 device = "$run_dir/tank"
 poll_period_s = 0.2
 EOF
-# 2 frames a second leave the emulated CPUs time for the loops (camera_stall_s is 1 s).
-sed -i -e '/^\[\[camera\]\]/,$ s/^fps = .*/fps = 2.0/' /etc/weedspray/weedspray.toml
+# 2 frames a second leave the emulated CPUs time for the loops (camera_stall_s is 1 s). A
+# drop-in cannot change an [[camera]] entry: the main file's is edited (as guest-test.sh does).
+sed -i -e "/^\[\[camera\]\]/,\$ { s/^fps = .*/fps = 2.0/; s#^device = .*#device = '$video_node'# }" \
+  /etc/weedspray/weedspray.toml
 # Test-only: the ptys (char-pts) behind the Modbus ports, and the crash hook's variable.
 mkdir -p /etc/systemd/system/weedsprayd.service.d
 cat >/etc/systemd/system/weedsprayd.service.d/50-hil.conf <<EOF
@@ -344,6 +358,52 @@ within() { awk -v s="$1" -v c="$2" 'BEGIN { d = s - c; if (d < 0) d = -d; print 
 step flow_pulses_counted "$(within "$flow_sent" "$flow_counted")" "flow meter: plant sent $flow_sent, interrupt-cnt (the daemon's counter) counted $flow_counted"
 step wheel_pulses_counted "$(within "$wheel_sent" "$wheel_counted")" "wheel: plant sent $wheel_sent, the daemon's Distance $distance m x 20 pulses/m = $wheel_counted"
 hil_command speed 0.6
+
+# --- the camera: the daemon's zones follow the field image ----------------------------------------
+# Two frames of real photo tiles (truth.txt: each zone's plant cover from the photo's hand-drawn
+# mask, and what the vision library's default pipeline measured on the host on the same bytes).
+# Each is shown for a while; the daemon must then see a weedy zone where the mask has plants and
+# a bare one where it has none (ZoneDensity above / at most the spray law's decision threshold),
+# measure what the host's library measured (the V4L2 path delivered the frame intact), and spray
+# the weedy zones' nozzles, not the bare ones' (NozzleDuty, after the camera-to-nozzle distance).
+if [ "$video_node" = /dev/video20 ]; then
+  decision="$(sed -n 's/^decision_threshold = //p' /etc/weedspray/weedspray.toml | head -n1)"
+  camera_ok=0
+  library_error=0
+  details=""
+  for frame in weeds-0-2 weeds-1-3; do
+    hil_command frame "$frame"
+    sleep 6 # 3 frames at 2 fps, then 1.2 m to the nozzles at 0.6 m/s
+    read -r -a truth <<<"$(sed -n "s/^$frame cover \([^|]*\)|.*/\1/p" "$frames_dir/truth.txt")"
+    read -r -a library <<<"$(sed -n "s/^$frame .*| library \([^|]*\)|.*/\1/p" "$frames_dir/truth.txt")"
+    for read_no in 1 2 3; do
+      density="$(bus_value ZoneDensity)"
+      duty="$(bus_value NozzleDuty)"
+      verdict="$(awk -v t="${truth[*]}" -v l="${library[*]}" -v d="$density" -v u="$duty" -v th="$decision" '
+        BEGIN {
+          n = split(t, tt, " "); split(l, ll, " "); split(d, dd, " "); split(u, uu, " "); bad = 0; e = 0
+          if (dd[1] != n || uu[1] != n) bad = 1
+          for (z = 1; z <= n; z++) {
+            x = dd[z + 1] - ll[z]; if (x < 0) x = -x; if (x > e) e = x
+            if (tt[z] > 0 && !(dd[z + 1] > th && uu[z + 1] > 0)) bad = 1
+            if (tt[z] == 0 && !(dd[z + 1] <= th && uu[z + 1] == 0)) bad = 1
+          }
+          if (e > 0.01) bad = 1
+          printf "%d %.4f\n", bad, e
+        }')"
+      read -r bad error <<<"$verdict"
+      [ "$bad" -eq 0 ] || camera_ok=1
+      library_error="$(awk -v a="$library_error" -v b="$error" 'BEGIN { print (b > a) ? b : a }')"
+      details+="$frame read $read_no: ZoneDensity ${density#4 } NozzleDuty ${duty#4 }; "
+      sleep 0.5
+    done
+    details+="$frame truth cover ${truth[*]}, library ${library[*]}; "
+  done
+  hil_command frame field
+  figure camera_density_vs_library_max "$library_error"
+  info "camera: $(hil camera_writes) frames written, $(hil camera_write_errors) failed; FrameRate $(bus_value FrameRate)"
+  step camera_follows_image "$camera_ok" "decision threshold $decision; $details"
+fi
 
 # --- tank low -------------------------------------------------------------------------------------
 hil_command tank_l 20 # 10 %, below alarms.tank_low_pct = 15

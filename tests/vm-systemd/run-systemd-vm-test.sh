@@ -38,6 +38,7 @@ log_file=""
 boot_timeout_s=""
 selftest=""
 hil=""
+hil_frames_made=0
 vm_arch=amd64
 
 die() {
@@ -252,6 +253,18 @@ build_disk() { # -> $work_dir/rootfs.ext4
   [ "$vm_arch" = amd64 ] || hil_tree="$build_root"
   [ -x "$hil_tree/tools/hil/weedspray-hil" ] || die "no weedspray-hil in $hil_tree/tools/hil"
   install -m 755 "$hil_tree/tools/hil/weedspray-hil" "$root/usr/local/bin/weedspray-hil"
+  # The camera's field images (x86 guest: v4l2loopback is built for it only): tiles of the
+  # bundled peanut photos with each zone's true plant cover, made by the package tree's
+  # weedspray-lab. Without the data folder the guest falls back to vivid's green pattern.
+  if [ -n "$hil" ] && [ "$vm_arch" = amd64 ]; then
+    if "$pkg_build/lab/weedspray-lab" hil-frames --out "$root/usr/local/share/weedspray-hil/frames" \
+      >"$work_dir/hil-frames.log" 2>&1; then
+      hil_frames_made=1
+      sed 's/^/run-systemd-vm-test: /' "$work_dir/hil-frames.log" >&2
+    else
+      note "no field frames for the camera (vivid instead): $(tail -n1 "$work_dir/hil-frames.log")"
+    fi
+  fi
   unit_dir="$root/etc/systemd/system"
   install -D -m 644 "$script_dir/weedspray-vm-test.service" "$unit_dir/weedspray-vm-test.service"
   mkdir -p "$unit_dir/multi-user.target.wants"
@@ -338,7 +351,9 @@ hil_targets_met() {
     -v fc="$(hil_figure flow_pulses_counted)" -v k9="$(hil_figure kill9_unsafe_ms)" \
     -v ab="$(hil_figure abort_unsafe_ms)" -v sg="$(hil_figure segv_unsafe_ms)" \
     -v wd="$(hil_figure watchdog_unsafe_ms)" -v rs="$(hil_figure restart_s)" \
-    -v failed="$(hil_figure steps_failed)" -v passed="$(hil_figure steps_passed)" '
+    -v failed="$(hil_figure steps_failed)" -v passed="$(hil_figure steps_passed)" \
+    -v camera="$(hil_figure camera)" -v frames="$hil_frames_made" \
+    -v steps="$(grep -ac '^WEEDSPRAY-HIL-STEP camera_follows_image PASS' "$guest_log")" '
     function bad(why) { print "run-systemd-vm-test: HIL target missed: " why > "/dev/stderr"; n++ }
     function abs(x) { return x < 0 ? -x : x }
     function unsafe(name, v, limit) { if (v == "" || v < 0 || v > limit) bad(name " = " v " ms (limit " limit ")") }
@@ -349,6 +364,8 @@ hil_targets_met() {
       unsafe("kill9_unsafe_ms", k9, 100); unsafe("abort_unsafe_ms", ab, 10)
       unsafe("segv_unsafe_ms", sg, 10); unsafe("watchdog_unsafe_ms", wd, 100)
       if (rs == "") bad("no restart_s")
+      # Field images made: the guest must have shown them and judged the daemon on them.
+      if (frames == 1 && (camera != "loopback" || steps != 1)) bad("camera " camera ", camera_follows_image passed " steps " times")
       if (failed != "0" || passed == "" || passed < 1) bad("steps_failed = " failed)
       exit n > 0
     }'

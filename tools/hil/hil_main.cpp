@@ -7,10 +7,13 @@
 //   - makes the flow meter's and the wheel sensor's pulses with gpio-sim pulls, as many as the
 //     plant's meter and wheel produce;
 //   - serves the pressure transmitter (ADC), the return valve's DAC and the tank level as Modbus
-//     RTU slaves on pty pairs (modbus_slaves.hpp).
+//     RTU slaves on pty pairs (modbus_slaves.hpp);
+//   - with --camera-device, shows the daemon's camera field images: raw YUYV frames written
+//     into v4l2loopback (loopback_camera.hpp).
 // Interface for the scenario script, in --run-dir:
 //   status   rewritten every 50 ms: key=value lines (cumulative counters and the plant's state)
-//   control  a FIFO taking one command a line: "speed M_PER_S", "tank_l LITRES", "quit"
+//   control  a FIFO taking one command a line: "speed M_PER_S", "tank_l LITRES",
+//            "frame NAME" (the camera's frame NAME.yuyv from now on), "quit"
 // On quit (or SIGTERM) it prints its ground truth as "WEEDSPRAY-HIL-TRUTH key=value" lines.
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -22,6 +25,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <memory>
 #include <sstream>
@@ -30,6 +34,7 @@
 
 #include "control/plant/hydraulic_plant.hpp"
 #include "io/signal_conversion.hpp"
+#include "tools/hil/loopback_camera.hpp"
 #include "tools/hil/modbus_slaves.hpp"
 #include "tools/hil/sim_gpio_lines.hpp"
 
@@ -59,6 +64,7 @@ struct Options {
   double dac_volts_per_count = 0.001;
   double tank_pct_per_count = 0.1;
   std::uint64_t seed = 1;
+  LoopbackCameraConfig camera;  // no device: no camera
 };
 
 double now_s() {
@@ -95,7 +101,7 @@ struct Measured {
 };
 
 void write_status(const Options& o, const control::plant::HydraulicPlant& plant, const Measured& m,
-                  ModbusBoard& board, double elapsed_s) {
+                  ModbusBoard& board, const LoopbackCamera* camera, double elapsed_s) {
   std::ostringstream s;
   s << "elapsed_s=" << elapsed_s << "\nsamples=" << m.samples << "\nsampled_s=" << m.sampled_s
     << "\nsample_hz=" << (m.sampled_s > 0 ? static_cast<double>(m.samples) / m.sampled_s : 0)
@@ -117,6 +123,9 @@ void write_status(const Options& o, const control::plant::HydraulicPlant& plant,
       << "\ndac_writes=" << board.dac_writes << "\nanalog_requests=" << board.analog_requests
       << "\ntank_requests=" << board.tank_requests << "\nbad_frames=" << board.bad_frames;
   }
+  if (camera)
+    s << "\ncamera_frame=" << camera->current() << "\ncamera_writes=" << camera->writes()
+      << "\ncamera_write_errors=" << camera->write_errors();
   s << "\n";
   const std::string tmp = o.run_dir + "/status.tmp";
   if (FILE* f = std::fopen(tmp.c_str(), "w")) {
@@ -146,23 +155,27 @@ void print_truth(const control::plant::HydraulicPlant& plant, const Measured& m)
   std::fflush(stdout);
 }
 
-void handle_command(const std::string& line, control::plant::HydraulicPlant& plant) {
+void handle_command(const std::string& line, control::plant::HydraulicPlant& plant,
+                    LoopbackCamera* camera) {
   std::istringstream in(line);
-  std::string verb;
-  double value = 0;
-  in >> verb >> value;
+  std::string verb, argument;
+  in >> verb >> argument;
+  const double value = std::strtod(argument.c_str(), nullptr);
   if (verb == "speed") plant.set_ground_speed(value);
   if (verb == "tank_l") plant.set_tank_level_l(value);
+  if (verb == "frame" && !(camera && camera->show(argument)))
+    std::fprintf(stderr, "weedspray-hil: no camera frame '%s'\n", argument.c_str());
   if (verb == "quit") g_quit = true;
 }
 
-void poll_commands(int fifo, std::string& pending, control::plant::HydraulicPlant& plant) {
+void poll_commands(int fifo, std::string& pending, control::plant::HydraulicPlant& plant,
+                   LoopbackCamera* camera) {
   char buffer[256];
   ssize_t n = 0;
   while ((n = ::read(fifo, buffer, sizeof buffer)) > 0) pending.append(buffer, n);
   std::size_t end = 0;
   while ((end = pending.find('\n')) != std::string::npos) {
-    handle_command(pending.substr(0, end), plant);
+    handle_command(pending.substr(0, end), plant, camera);
     pending.erase(0, end + 1);
   }
 }
@@ -199,6 +212,8 @@ int run(const Options& o) {
   }
   start_analog_bus({.link = o.run_dir + "/analog"}, board);
   start_tank_bus({.link = o.run_dir + "/tank"}, board);
+  std::unique_ptr<LoopbackCamera> camera;
+  if (!o.camera.device.empty()) camera = std::make_unique<LoopbackCamera>(o.camera);
   const std::string fifo_path = o.run_dir + "/control";
   ::unlink(fifo_path.c_str());
   ::mkfifo(fifo_path.c_str(), 0600);
@@ -286,11 +301,11 @@ int run(const Options& o) {
 
     if (t >= next_status) {
       next_status = t + 0.05;
-      if (fifo >= 0) poll_commands(fifo, pending, plant);
-      write_status(o, plant, m, board, t - start);
+      if (fifo >= 0) poll_commands(fifo, pending, plant, camera.get());
+      write_status(o, plant, m, board, camera.get(), t - start);
     }
   }
-  write_status(o, plant, m, board, now_s() - start);
+  write_status(o, plant, m, board, camera.get(), now_s() - start);
   print_truth(plant, m);
   return 0;
 }
@@ -320,6 +335,14 @@ int main(int argc, char** argv) {
   app.add_option("--wheel-pulses-per-m", o.wheel_pulses_per_m);
   app.add_option("--flow-pulses-per-l", o.flow_pulses_per_l, "the flow meter's label value");
   app.add_option("--seed", o.seed);
+  app.add_option("--camera-device", o.camera.device, "v4l2loopback node to write frames into");
+  app.add_option("--camera-frames", o.camera.frames_dir,
+                 "folder of NAME.yuyv frames (weedspray-lab hil-frames)");
+  app.add_option("--camera-frame", o.camera.first_frame, "the frame shown first")
+      ->default_val("field");
+  app.add_option("--camera-width", o.camera.width)->default_val(320);
+  app.add_option("--camera-height", o.camera.height)->default_val(180);
+  app.add_option("--camera-fps", o.camera.fps, "frames written per second")->default_val(2.0);
   CLI11_PARSE(app, argc, argv);
   std::signal(SIGTERM, [](int) { weedspray::hil::g_quit = true; });
   std::signal(SIGINT, [](int) { weedspray::hil::g_quit = true; });
