@@ -59,6 +59,7 @@ struct Candidate {
   cv::Rect window;
   double cover = 0;
   double surround_cover = 0;  // of the window grown by a quarter of its width on every side
+  double weed = 0;            // weed-class share of the window
 };
 
 double share(const cv::Mat& integral, const cv::Rect& r) {
@@ -99,42 +100,51 @@ int run_hil_frames(const HilFramesOptions& o) {
   if (o.width % (2 * o.zones) != 0)
     throw std::runtime_error("hil-frames: --width must split into zones of an even width");
   const std::filesystem::path peanut = std::filesystem::path(o.data_dir) / "peanut";
-  const std::vector<LabelledImage> photos =
-      load_labelled_images(peanut / "images", peanut / "masks");
-  if (photos.empty())
-    throw std::runtime_error("hil-frames: no labelled photos in " + peanut.string());
+  const std::filesystem::path masks_dir = peanut / "masks";
+  if (!std::filesystem::is_directory(masks_dir))
+    throw std::runtime_error("hil-frames: " + masks_dir.string() + ": not a folder");
+  std::vector<std::string> stems;
+  for (const auto& entry : std::filesystem::directory_iterator(masks_dir))
+    if (entry.path().extension() == ".png") stems.push_back(entry.path().stem().string());
+  std::sort(stems.begin(), stems.end());
+  if (stems.empty()) throw std::runtime_error("hil-frames: no masks in " + masks_dir.string());
 
-  // One scale for every tile: the frame's height is this much of a photo's height (3/4: a
-  // 960x720 photo gives 540-row windows, scaled by 1/3 to 180 frame rows).
+  // One scale for every tile: the frame's height is 3/4 of a photo's (a 960x720 photo gives
+  // 540-row windows, scaled by 1/3 to 180 frame rows). The masks are scanned one at a time (all
+  // photos at once would take gigabytes); only the chosen tiles' photos are read.
   const int zone_w = o.width / o.zones;
-  const int window_h = photos.front().bgr.rows * 3 / 4;
-  const int window_w = window_h * zone_w / o.height;
-  const int stride = std::max(1, window_w / 10);
   std::vector<Candidate> candidates;
-  std::vector<cv::Mat> plant_integrals(photos.size()), weed_integrals(photos.size());
-  for (std::size_t i = 0; i < photos.size(); ++i) {
-    const LabelledImage& photo = photos[i];
-    if (photo.bgr.rows < window_h || photo.bgr.cols < window_w) continue;
-    cv::Mat plant01 = photo.plant > 0, weed01 = photo.mask == 2;  // 0 / 255
+  int window_w = 0, window_h = 0;
+  for (std::size_t i = 0; i < stems.size(); ++i) {
+    const std::filesystem::path mask_path = masks_dir / (stems[i] + ".png");
+    const cv::Mat mask = cv::imread(mask_path.string(), cv::IMREAD_GRAYSCALE);
+    if (mask.empty()) throw std::runtime_error("hil-frames: cannot read " + mask_path.string());
+    if (window_h == 0) {
+      window_h = mask.rows * 3 / 4;
+      window_w = window_h * zone_w / o.height;
+    }
+    if (mask.rows < window_h || mask.cols < window_w) continue;
+    cv::Mat plant01 = mask != 0, weed01 = mask == 2, plant_integral, weed_integral;  // 0 / 255
     plant01 /= 255;
     weed01 /= 255;
-    cv::integral(plant01, plant_integrals[i], CV_64F);
-    cv::integral(weed01, weed_integrals[i], CV_64F);
-    for (int y = 0; y + window_h <= photo.bgr.rows; y += stride)
-      for (int x = 0; x + window_w <= photo.bgr.cols; x += stride) {
+    cv::integral(plant01, plant_integral, CV_64F);
+    cv::integral(weed01, weed_integral, CV_64F);
+    const int stride = std::max(1, window_w / 10);
+    const int margin = window_w / 4;
+    for (int y = 0; y + window_h <= mask.rows; y += stride)
+      for (int x = 0; x + window_w <= mask.cols; x += stride) {
         const cv::Rect window(x, y, window_w, window_h);
-        const int margin = window_w / 4;
         const cv::Rect surround =
             (window + cv::Size(2 * margin, 2 * margin) - cv::Point(margin, margin)) &
-            cv::Rect(0, 0, photo.bgr.cols, photo.bgr.rows);
-        candidates.push_back(
-            {i, window, share(plant_integrals[i], window), share(plant_integrals[i], surround)});
+            cv::Rect(0, 0, mask.cols, mask.rows);
+        candidates.push_back({i, window, share(plant_integral, window),
+                              share(plant_integral, surround), share(weed_integral, window)});
       }
   }
   // Each tile from its own photo, the first in name order that fits: bare = no plant pixel in
   // the window or around it (a mask's outline is drawn by hand: a leaf tip just outside it
   // showed in the first bare tile); weedy = the cover closest to the target.
-  std::vector<bool> used(photos.size(), false);
+  std::vector<bool> used(stems.size(), false);
   auto take = [&](double target) {
     const Candidate* best = nullptr;
     for (const Candidate& c : candidates) {
@@ -147,16 +157,17 @@ int run_hil_frames(const HilFramesOptions& o) {
       throw std::runtime_error("hil-frames: no tile with plant cover near " +
                                std::to_string(target));
     used[best->image] = true;
+    const LabelledImage photo =
+        load_labelled_images(peanut / "images", masks_dir, {stems[best->image]}).front();
     Tile tile;
-    tile.photo = photos[best->image].name;
+    tile.photo = photo.name;
     tile.window = best->window;
     tile.cover = best->cover;
-    tile.weed = share(weed_integrals[best->image], best->window);
-    cv::resize(photos[best->image].bgr(best->window), tile.bgr, cv::Size(zone_w, o.height), 0, 0,
-               cv::INTER_AREA);
+    tile.weed = best->weed;
+    cv::resize(photo.bgr(best->window), tile.bgr, cv::Size(zone_w, o.height), 0, 0, cv::INTER_AREA);
     return tile;
   };
-  // Covers 10-40 %: a field's patches, not a lawn. The rate law turns them into different duties.
+  // Covers 10-40 %: a field's patches, not a lawn.
   const std::vector<double> field_targets{0.20, 0.40, 0.10, 0.30};
   std::vector<Tile> field, weedy, bare;
   for (int z = 0; z < o.zones; ++z) field.push_back(take(field_targets[z % 4]));
@@ -212,7 +223,7 @@ int run_hil_frames(const HilFramesOptions& o) {
   truth.close();
   if (!truth) throw std::runtime_error("hil-frames: cannot write truth.txt in " + o.out_dir);
   std::printf("hil-frames: %zu frames %dx%d in %s (from %zu photos in %s)\n", frames.size(),
-              o.width, o.height, o.out_dir.c_str(), photos.size(), peanut.c_str());
+              o.width, o.height, o.out_dir.c_str(), stems.size(), peanut.c_str());
   std::ifstream again(std::filesystem::path(o.out_dir) / "truth.txt");
   for (std::string line; std::getline(again, line);) std::printf("  %s\n", line.c_str());
   return 0;
