@@ -22,7 +22,7 @@
 // The first g_i above alarm_threshold that beats every other nozzle's by isolation_margin names
 // nozzle i (blocked: down, worn or valve stuck open: up); the margin because the nozzles'
 // open times overlap, so one nozzle's fault raises its neighbours' evidence too for the first
-// duty mixes. This uses the baselines of the other nozzles as known instead of re-estimating all of
+// duty mixes. This holds the other nozzles at their baselines instead of re-estimating all of
 // them every window: the running fit's scatter (±9-14 % at 6 s, anti-correlated between
 // neighbours) is mostly a poorly conditioned duty mix, which this test does not see, and the
 // evidence accumulates while the fault lasts instead of a band having to clear the scatter.
@@ -34,8 +34,8 @@
 // online flow trim scales every duty alike, so it changes the open times this
 // detector is fed, not the c_i: it cannot hide one nozzle's fault.
 //
-// ratio() is for display: each nozzle's flow from an exponentially forgetting least-squares
-// fit of all of them (time_constant_s) over its baseline.
+// ratio(): each nozzle's flow from an exponentially forgetting least-squares fit of all of them
+// (time_constant_s) over its baseline; what the band judges, for display with the CUSUM.
 //
 // Pure (no clocks, threads or I/O), fixed-size state: no allocation after construction.
 #pragma once
