@@ -24,6 +24,8 @@ void validate(const NozzleHealthConfig& c) {
   require(c.common_time_constant_s > 0, "common_time_constant_s must be > 0");
   require(c.isolation_margin >= 0 && std::isfinite(c.isolation_margin),
           "isolation_margin must be >= 0 and finite");
+  require(c.duty_mask >= 0 && c.duty_mask <= 1, "duty_mask must be in [0, 1]");
+  require(c.min_pulse_s >= 0 && std::isfinite(c.min_pulse_s), "min_pulse_s must be >= 0");
 }
 
 NozzleHealth::NozzleHealth(const NozzleHealthConfig& config) : config_(config) {
@@ -44,6 +46,9 @@ void NozzleHealth::reset() noexcept {
   noise_var_ = 0.0;
   common_num_ = 0.0;
   common_den_ = 0.0;
+  base_open_s_ = 0.0;
+  duty_recent_ = -1.0;
+  nozzle_duty_.fill(0.0);
   cusum_down_.fill(0.0);
   cusum_up_.fill(0.0);
   open_weight_ = {};
@@ -88,6 +93,19 @@ void NozzleHealth::add_window(std::span<const double> open_s, double metered_l,
   for (std::size_t i = 0; i < n; ++i) any_open |= open_s[i] > 0.0;
   if (!any_open) return;  // nothing sprays: nothing to learn (and the meter coasts)
   const double keep = std::exp(-window_s / config_.time_constant_s);
+  double open_sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) open_sum += open_s[i];
+  const double duty = open_sum / (static_cast<double>(config_.nozzles) * window_s);
+  // One PWM period (nozzles x window): the mean duty whatever the phases' mix in one window.
+  const double duty_keep = std::exp(-1.0 / static_cast<double>(config_.nozzles));
+  duty_recent_ = duty_recent_ < 0.0 ? duty : duty_keep * duty_recent_ + (1.0 - duty_keep) * duty;
+  const double period_s = static_cast<double>(config_.nozzles) * window_s;
+  bool short_pulse = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    nozzle_duty_[i] = duty_keep * nozzle_duty_[i] + (1.0 - duty_keep) * open_s[i] / window_s;
+    // A closed nozzle's forgotten duty fades through small values: 1 % is closed.
+    short_pulse |= nozzle_duty_[i] > 0.01 && nozzle_duty_[i] * period_s < config_.min_pulse_s;
+  }
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t k = 0; k < n; ++k) {
       const double aa = open_s[i] * open_s[k];
@@ -103,6 +121,7 @@ void NozzleHealth::add_window(std::span<const double> open_s, double metered_l,
     base_vv_ += metered_l * metered_l;
     base_v_ += metered_l;
     base_windows_ += 1.0;
+    base_open_s_ += open_sum;
     if (sprayed_s_ < config_.baseline_s || base_windows_ <= static_cast<double>(n)) return;
     baseline_ready_ = solve(base_s_, base_b_, baseline_);
     if (!baseline_ready_) return;
@@ -121,6 +140,12 @@ void NozzleHealth::add_window(std::span<const double> open_s, double metered_l,
     judge_band(n, window_s);
     return;
   }
+  // Far from the baseline's duties the valves' dead times change every nozzle's flow per
+  // commanded second alike: neither a nozzle's fault nor the slow common scale.
+  const double base_duty =
+      base_open_s_ / (static_cast<double>(config_.nozzles) * base_windows_ * window_s);
+  if (config_.duty_mask > 0.0 && std::abs(duty_recent_ - base_duty) > config_.duty_mask) return;
+  if (short_pulse) return;
   double predicted = 0.0;
   for (std::size_t i = 0; i < n; ++i) predicted += open_s[i] * baseline_[i];
   double residual = metered_l - predicted;

@@ -63,6 +63,16 @@ struct NozzleHealthConfig {
   double alarm_threshold = 24.0;  // CUSUM: ...named once its log-likelihood ratio exceeds this
   double isolation_margin = 6.0;  // CUSUM: the named nozzle's evidence over the runner-up's
   double common_time_constant_s = 20.0;  // CUSUM: forgetting of the common scale taken out
+  // CUSUM: windows are not judged while the boom's mean duty (over one PWM period) is further
+  // than duty_mask from the baseline's mean duty, or while an open nozzle's pulse (its duty
+  // over one period x the period) is shorter than min_pulse_s (0: all judged). The valves
+  // close later than they open (the simulator's plant: 11 ms per pulse) and take their travel
+  // to open, so the flow per commanded open second depends on the pulse width: the baselines
+  // hold near the duties they were learned at, a jump of every duty far from them looks like
+  // every nozzle changing, and short pulses are mostly the valve's delays (README, experiment
+  // blockage).
+  double duty_mask = 0.2;
+  double min_pulse_s = 0.04;
 };
 
 // Throws std::invalid_argument naming the field.
@@ -110,6 +120,9 @@ class NozzleHealth {
   double noise_var_ = 0.0;   // s2: residual variance per window against the baselines
   double common_num_ = 0.0;  // forgotten sums for the common scale of the residual
   double common_den_ = 0.0;
+  double base_open_s_ = 0.0;   // the baseline's open time of all nozzles (its mean duty)
+  double duty_recent_ = -1.0;  // the boom's mean duty over the last period; < 0: none yet
+  Vector nozzle_duty_{};       // each nozzle's duty over the last period (same forgetting)
   Vector cusum_down_{};
   Vector cusum_up_{};
   Vector open_weight_{};  // band: forgotten open time per nozzle (judgeable?)

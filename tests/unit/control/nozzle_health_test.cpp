@@ -40,11 +40,12 @@ struct Feed {
   double line_scale = 1.0;   // every nozzle's flow alike (meter drift, pressure)
   double metered_l = 0.0;    // true volume through the meter
   std::uint64_t pulses = 0;  // what the meter counted (8500 pulses/L)
-  // One second of windows with duties redrawn in [0.3, 0.9].
-  void second(NozzleHealth& h) {
+  // One second of windows with duties redrawn in [0.3, 0.9], or the given ones.
+  void second(NozzleHealth& h, const std::array<double, 4>* duties = nullptr) {
     std::uniform_real_distribution<double> duty(0.3, 0.9);
     std::array<double, 4> d{};
     for (auto& x : d) x = duty(rng);
+    if (duties != nullptr) d = *duties;
     for (int p = 0; p < 3; ++p)
       for (int w = 0; w < 4; ++w) {
         std::array<double, 4> open{};
@@ -169,6 +170,40 @@ TEST(NozzleHealth, ASlowDriftOfTheWholeLineIsNotANozzleFault) {
   EXPECT_LE(seconds, 10);
 }
 
+// The daemon's simulator's case: a field at one duty (25 %), valves that close 20 ms later
+// than they open (each pulse sprays 20 ms more than commanded: 24 % more than the commanded
+// open time at 25 % duty, 7.5 % at 80 %), and every 10 s for 2 s either every duty jumps to
+// 80 % (a dense patch) or nozzle 1 runs 8 % pulses (27 ms). The flow per commanded second is
+// not the baseline's in either: the first moves every nozzle alike, the second mostly nozzle 1
+// and its neighbours. Returns the nozzle named (-1: none).
+int duty_episodes_alarm(const NozzleHealthConfig& config, bool every_duty_jumps) {
+  NozzleHealth h(config);
+  Feed feed;
+  feed.open_delay = 0.015 / kPeriod;
+  feed.close_delay = 0.035 / kPeriod;
+  const std::array<double, 4> field{0.25, 0.25, 0.25, 0.25};
+  const std::array<double, 4> episode = every_duty_jumps
+                                            ? std::array<double, 4>{0.8, 0.8, 0.8, 0.8}
+                                            : std::array<double, 4>{0.25, 0.08, 0.25, 0.25};
+  for (int s = 0; s < 360 && h.alarmed_nozzle() < 0; ++s)
+    feed.second(h, s >= 60 && s % 10 < 2 ? &episode : &field);
+  return h.alarmed_nozzle();
+}
+
+TEST(NozzleHealth, DutiesFarFromTheBaselinesAndShortPulsesAreNotJudged) {
+  const NozzleHealthConfig defaults;
+  EXPECT_EQ(duty_episodes_alarm(defaults, true), -1);
+  EXPECT_EQ(duty_episodes_alarm(defaults, false), -1);
+  // Without the duty mask the jumps are blamed on a nozzle; without the shortest pulse the
+  // short pulses are.
+  NozzleHealthConfig no_duty_mask;
+  no_duty_mask.duty_mask = 0.0;
+  EXPECT_NE(duty_episodes_alarm(no_duty_mask, true), -1);
+  NozzleHealthConfig no_min_pulse;
+  no_min_pulse.min_pulse_s = 0.0;
+  EXPECT_NE(duty_episodes_alarm(no_min_pulse, false), -1);
+}
+
 // Equal duties (a uniform field): staggered phases rotate the window mixes and the nozzles
 // separate; synchronous phases give every nozzle the same open time in every window, and no
 // nozzle can be told from another.
@@ -213,6 +248,12 @@ TEST(NozzleHealth, RejectsBadConfig) {
   EXPECT_THROW(NozzleHealth{c}, std::invalid_argument);
   c = {};
   c.isolation_margin = -1.0;
+  EXPECT_THROW(NozzleHealth{c}, std::invalid_argument);
+  c = {};
+  c.duty_mask = 1.5;
+  EXPECT_THROW(NozzleHealth{c}, std::invalid_argument);
+  c = {};
+  c.min_pulse_s = -0.01;
   EXPECT_THROW(NozzleHealth{c}, std::invalid_argument);
 }
 
