@@ -47,8 +47,9 @@ void NozzleHealth::reset() noexcept {
   common_num_ = 0.0;
   common_den_ = 0.0;
   base_open_s_ = 0.0;
-  duty_recent_ = -1.0;
-  nozzle_duty_.fill(0.0);
+  recent_open_ = {};
+  recent_slot_ = 0;
+  recent_windows_ = 0;
   cusum_down_.fill(0.0);
   cusum_up_.fill(0.0);
   open_weight_ = {};
@@ -95,17 +96,23 @@ void NozzleHealth::add_window(std::span<const double> open_s, double metered_l,
   const double keep = std::exp(-window_s / config_.time_constant_s);
   double open_sum = 0.0;
   for (std::size_t i = 0; i < n; ++i) open_sum += open_s[i];
-  const double duty = open_sum / (static_cast<double>(config_.nozzles) * window_s);
-  // One PWM period (nozzles x window): the mean duty whatever the phases' mix in one window.
-  const double duty_keep = std::exp(-1.0 / static_cast<double>(config_.nozzles));
-  duty_recent_ = duty_recent_ < 0.0 ? duty : duty_keep * duty_recent_ + (1.0 - duty_keep) * duty;
-  const double period_s = static_cast<double>(config_.nozzles) * window_s;
+  // The last PWM period's windows (nozzles x window; exact sums: a forgotten average of one
+  // staggered nozzle's windows would swing with its phase): each nozzle's open time in it, the
+  // length of its pulse.
+  recent_open_[recent_slot_] = {};
+  for (std::size_t i = 0; i < n; ++i) recent_open_[recent_slot_][i] = open_s[i];
+  recent_slot_ = (recent_slot_ + 1) % config_.nozzles;
+  if (recent_windows_ < config_.nozzles) ++recent_windows_;
+  double period_open_s = 0.0;
   bool short_pulse = false;
   for (std::size_t i = 0; i < n; ++i) {
-    nozzle_duty_[i] = duty_keep * nozzle_duty_[i] + (1.0 - duty_keep) * open_s[i] / window_s;
-    // A closed nozzle's forgotten duty fades through small values: 1 % is closed.
-    short_pulse |= nozzle_duty_[i] > 0.01 && nozzle_duty_[i] * period_s < config_.min_pulse_s;
+    double pulse_s = 0.0;
+    for (std::size_t w = 0; w < config_.nozzles; ++w) pulse_s += recent_open_[w][i];
+    period_open_s += pulse_s;
+    short_pulse |= pulse_s > 0.0 && pulse_s < config_.min_pulse_s;
   }
+  const double recent_duty =
+      period_open_s / (static_cast<double>(config_.nozzles * recent_windows_) * window_s);
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t k = 0; k < n; ++k) {
       const double aa = open_s[i] * open_s[k];
@@ -144,7 +151,7 @@ void NozzleHealth::add_window(std::span<const double> open_s, double metered_l,
   // commanded second alike: neither a nozzle's fault nor the slow common scale.
   const double base_duty =
       base_open_s_ / (static_cast<double>(config_.nozzles) * base_windows_ * window_s);
-  if (config_.duty_mask > 0.0 && std::abs(duty_recent_ - base_duty) > config_.duty_mask) return;
+  if (config_.duty_mask > 0.0 && std::abs(recent_duty - base_duty) > config_.duty_mask) return;
   if (short_pulse) return;
   double predicted = 0.0;
   for (std::size_t i = 0; i < n; ++i) predicted += open_s[i] * baseline_[i];

@@ -29,8 +29,9 @@
 // A slow common scale of every nozzle (forgotten over common_time_constant_s) is taken out of
 // the residual first, so that a slow drift of the whole line (meter, pressure) is not blamed on
 // one nozzle; a sudden common step of a few % still is (relearn the baseline after changing the
-// set-point), and so are seconds-long flow changes of a few % that the model does not explain
-// (the daemon's simulator after a jump of every duty: see README, experiment blockage). The
+// set-point). The model counts commanded open time, but the valves close later than they open:
+// the flow per commanded second depends on the pulse width, so windows at duties far from the
+// baseline's, or with short pulses, are not judged (duty_mask, min_pulse_s). The
 // online flow trim scales every duty alike, so it changes the open times this
 // detector is fed, not the c_i: it cannot hide one nozzle's fault.
 //
@@ -120,9 +121,10 @@ class NozzleHealth {
   double noise_var_ = 0.0;   // s2: residual variance per window against the baselines
   double common_num_ = 0.0;  // forgotten sums for the common scale of the residual
   double common_den_ = 0.0;
-  double base_open_s_ = 0.0;   // the baseline's open time of all nozzles (its mean duty)
-  double duty_recent_ = -1.0;  // the boom's mean duty over the last period; < 0: none yet
-  Vector nozzle_duty_{};       // each nozzle's duty over the last period (same forgetting)
+  double base_open_s_ = 0.0;  // the baseline's open time of all nozzles (its mean duty)
+  Matrix recent_open_{};      // the last period's windows (slot: window mod nozzles), open times
+  std::size_t recent_slot_ = 0;
+  std::size_t recent_windows_ = 0;  // windows in recent_open_ (up to nozzles)
   Vector cusum_down_{};
   Vector cusum_up_{};
   Vector open_weight_{};  // band: forgotten open time per nozzle (judgeable?)
