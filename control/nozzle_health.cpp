@@ -50,6 +50,7 @@ void NozzleHealth::reset() noexcept {
   recent_open_ = {};
   recent_slot_ = 0;
   recent_windows_ = 0;
+  masked_windows_left_ = 0;
   cusum_down_.fill(0.0);
   cusum_up_.fill(0.0);
   open_weight_ = {};
@@ -151,8 +152,17 @@ void NozzleHealth::add_window(std::span<const double> open_s, double metered_l,
   // commanded second alike: neither a nozzle's fault nor the slow common scale.
   const double base_duty =
       base_open_s_ / (static_cast<double>(config_.nozzles) * base_windows_ * window_s);
-  if (config_.duty_mask > 0.0 && std::abs(recent_duty - base_duty) > config_.duty_mask) return;
-  if (short_pulse) return;
+  // The period after a masked one too: its windows still hold the meter's and the hose's lag
+  // of the masked pulses.
+  if ((config_.duty_mask > 0.0 && std::abs(recent_duty - base_duty) > config_.duty_mask) ||
+      short_pulse) {
+    masked_windows_left_ = config_.nozzles;
+    return;
+  }
+  if (masked_windows_left_ > 0) {
+    --masked_windows_left_;
+    return;
+  }
   double predicted = 0.0;
   for (std::size_t i = 0; i < n; ++i) predicted += open_s[i] * baseline_[i];
   double residual = metered_l - predicted;

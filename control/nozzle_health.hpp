@@ -124,7 +124,8 @@ class NozzleHealth {
   double base_open_s_ = 0.0;  // the baseline's open time of all nozzles (its mean duty)
   Matrix recent_open_{};      // the last period's windows (slot: window mod nozzles), open times
   std::size_t recent_slot_ = 0;
-  std::size_t recent_windows_ = 0;  // windows in recent_open_ (up to nozzles)
+  std::size_t recent_windows_ = 0;       // windows in recent_open_ (up to nozzles)
+  std::size_t masked_windows_left_ = 0;  // still not judged after a masked window
   Vector cusum_down_{};
   Vector cusum_up_{};
   Vector open_weight_{};  // band: forgotten open time per nozzle (judgeable?)

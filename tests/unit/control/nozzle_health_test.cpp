@@ -204,6 +204,36 @@ TEST(NozzleHealth, DutiesFarFromTheBaselinesAndShortPulsesAreNotJudged) {
   EXPECT_NE(duty_episodes_alarm(no_min_pulse, false), -1);
 }
 
+// The period after a masked one is not judged either (the meter and the hose still carry the
+// masked pulses): after one period of a short pulse, windows far off their prediction move no
+// evidence for the period that still holds it and the next one.
+TEST(NozzleHealth, ThePeriodAfterAMaskedOneIsNotJudged) {
+  NozzleHealth h(NozzleHealthConfig{});
+  const std::array<double, 4> flow{0.011, 0.0105, 0.0112, 0.0108};
+  auto window = [&](const std::array<double, 4>& duty, int w, double scale) {
+    std::array<double, 4> open{};
+    double v = 0.0;
+    for (std::size_t i = 0; i < 4; ++i) {
+      open[i] = open_in_window(static_cast<double>(i) * 0.25, duty[i], w);
+      v += open[i] * flow[i] * scale;
+    }
+    h.add_window(open, v, kWindow);
+  };
+  const std::array<double, 4> field{0.6, 0.6, 0.6, 0.6};
+  const std::array<double, 4> short_pulse{0.6, 0.1, 0.6, 0.6};  // 33 ms
+  for (int k = 0; k < 70 * 12; ++k) window(field, k % 4, 1.0);
+  ASSERT_TRUE(h.baseline_ready());
+  for (int w = 0; w < 4; ++w) window(short_pulse, w, 1.0);
+  int judged_after = 0;  // windows until one moves the evidence
+  while (h.evidence(0) + h.evidence(1) + h.evidence(2) + h.evidence(3) == 0.0 &&
+         judged_after < 40) {
+    window(field, judged_after % 4, 0.7);
+    ++judged_after;
+  }
+  // The short pulse leaves the last period's windows after 1 more; then a period of 4 held.
+  EXPECT_EQ(judged_after, 6);
+}
+
 // Equal duties (a uniform field): staggered phases rotate the window mixes and the nozzles
 // separate; synchronous phases give every nozzle the same open time in every window, and no
 // nozzle can be told from another.
