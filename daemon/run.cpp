@@ -619,7 +619,8 @@ class Daemon final : public CommandHandler {
         const int n = control.nozzle_flow_fault;
         const double ratio = n >= 0 ? control.nozzle_flow_ratio[static_cast<std::size_t>(n)] : 1.0;
         spdlog::warn("alarm raised: {} (nozzle {}: {}, its flow {:.2f} of its baseline)", name, n,
-                     ratio < 1.0 ? "blocked" : "over (worn or valve stuck open)", ratio);
+                     control.nozzle_flow_fault_low ? "blocked" : "over (worn or valve stuck open)",
+                     ratio);
       } else if (id == AlarmId::kVisionModelFailed) {
         spdlog::error(
             "alarm raised: {} ({}; that camera's nozzles stay closed until its frames "

@@ -38,7 +38,8 @@ struct ExperimentOptions {
   std::string stems_file;
   std::string weed_source = "truth";
   std::string model;
-  double decision_threshold = -1.0;  // < 0: the daemon's spray.decision_threshold default
+  double decision_threshold = -1.0;    // < 0: the daemon's spray.decision_threshold default
+  std::string health_judge = "cusum";  // blockage: NozzleHealth's judge (band | cusum)
   // step: the pressure loop's timing; unset: 5 / 0 / 0 ms for one machine, the daemon's
   // (10 / 2.5 / 1 ms) for --plants.
   std::optional<double> control_period_ms;
@@ -309,49 +310,61 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
 
 int run_blockage_command(const ExperimentOptions& o) {
   const ex::FleetOptions fleet{o.seed, o.plants > 0 ? o.plants : 20, false};
-  const ex::BlockageOptions options;
+  ex::BlockageOptions options;
+  options.health.judge =
+      o.health_judge == "band" ? control::NozzleJudge::kBand : control::NozzleJudge::kCusum;
   const ex::BlockageFleetResult r = ex::run_blockage_fleet(fleet, options);
   if (o.json) {
     std::printf(
-        "{\"plants\": %d, \"seed\": %llu, \"blockage\": %.2f, \"limit_s\": %.1f, "
+        "{\"judge\": \"%s\", \"plants\": %d, \"seed\": %llu, \"blockage\": %.2f, "
+        "\"limit_s\": %.1f, "
         "\"named_within_limit\": %d, \"false_alarms\": %d, \"healthy_minutes\": %.1f, ",
-        fleet.plants, static_cast<unsigned long long>(o.seed), options.blockage,
-        options.detect_limit_s, r.named_within_limit, r.false_alarms, r.healthy_minutes);
+        o.health_judge.c_str(), fleet.plants, static_cast<unsigned long long>(o.seed),
+        options.blockage, options.detect_limit_s, r.named_within_limit, r.false_alarms,
+        r.healthy_minutes);
     print_spread_json("detect_s", r.detect_s);
     print_spread_json("healthy_worst_deviation", r.healthy_worst_deviation);
+    print_spread_json("healthy_max_evidence", r.healthy_max_evidence);
     std::printf("\"machines\": [");
     for (std::size_t i = 0; i < r.machines.size(); ++i) {
       const auto& m = r.machines[i];
       std::printf(
           "%s{\"blocked\": %d, \"named\": %d, \"detect_s\": %.2f, "
-          "\"false_alarm\": %s}",
+          "\"false_alarm\": %s, \"healthy_worst_deviation\": %.3f, "
+          "\"healthy_max_evidence\": %.2f}",
           i ? ", " : "", m.blocked_nozzle + 1, m.named_nozzle + 1, m.detect_s,
-          m.false_alarm ? "true" : "false");
+          m.false_alarm ? "true" : "false", m.healthy_worst_deviation, m.healthy_max_evidence);
     }
     std::printf("]}\n");
   } else {
     std::printf(
-        "per-nozzle health from the line meter, %d drawn machines (seed %llu), variable-rate "
+        "per-nozzle health from the line meter (%s judge), %d drawn machines (seed %llu), "
+        "variable-rate "
         "spraying at %.1f MPa / %.0f Hz, staggered, trim on: %.0f s baseline + %.0f min healthy, "
         "then one nozzle %.0f %% blocked\n",
-        fleet.plants, static_cast<unsigned long long>(o.seed), options.pressure_mpa,
-        options.frequency_hz, options.health.baseline_s, options.healthy_s / 60.0,
-        options.blockage * 100.0);
-    std::printf("%8s %8s %8s %10s %12s %16s\n", "machine", "blocked", "named", "after_s",
-                "false_alarm", "healthy_scatter");
+        o.health_judge.c_str(), fleet.plants, static_cast<unsigned long long>(o.seed),
+        options.pressure_mpa, options.frequency_hz, options.health.baseline_s,
+        options.healthy_s / 60.0, options.blockage * 100.0);
+    std::printf("%8s %8s %8s %10s %12s %16s %17s\n", "machine", "blocked", "named", "after_s",
+                "false_alarm", "healthy_scatter", "healthy_evidence");
     for (std::size_t i = 0; i < r.machines.size(); ++i) {
       const auto& m = r.machines[i];
-      std::printf("%8zu %8d %8d %10.2f %12s %16.3f\n", i + 1, m.blocked_nozzle + 1,
+      std::printf("%8zu %8d %8d %10.2f %12s %16.3f %17.2f\n", i + 1, m.blocked_nozzle + 1,
                   m.named_nozzle + 1, m.detect_s, m.false_alarm ? "YES" : "no",
-                  m.healthy_worst_deviation);
+                  m.healthy_worst_deviation, m.healthy_max_evidence);
     }
     std::printf(
         "named within %.0f s: %d of %d; false alarms: %d in %.0f healthy machine-minutes; "
         "time to name: mean %.2f s, sd %.2f, worst %.2f; healthy scatter (largest |ratio - 1|): "
-        "mean %.3f, worst %.3f\n",
+        "mean %.3f, worst %.3f",
         options.detect_limit_s, r.named_within_limit, fleet.plants, r.false_alarms,
         r.healthy_minutes, r.detect_s.mean, r.detect_s.sd, r.detect_s.worst,
         r.healthy_worst_deviation.mean, r.healthy_worst_deviation.worst);
+    if (options.health.judge == control::NozzleJudge::kCusum)
+      std::printf("; healthy evidence (largest, alarm above %.0f): mean %.2f, sd %.2f, worst %.2f",
+                  options.health.alarm_threshold, r.healthy_max_evidence.mean,
+                  r.healthy_max_evidence.sd, r.healthy_max_evidence.worst);
+    std::printf("\n");
   }
   return 0;
 }
@@ -877,6 +890,9 @@ void add_experiment_commands(CLI::App& app) {
                   "savings: zones with a weed density below this are not sprayed (default: the "
                   "daemon's spray.decision_threshold)")
       ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--health-judge", options->health_judge,
+                  "blockage: the nozzle health detector's judge (control/nozzle_health.hpp)")
+      ->check(CLI::IsMember({"band", "cusum"}));
   cmd->callback([options] {
     try {
       const int rc = run_experiment(*options);

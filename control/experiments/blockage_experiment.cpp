@@ -56,6 +56,7 @@ BlockageMachine blockage_once(const Machine& machine, std::uint64_t fleet_seed, 
         out.healthy_worst_deviation = std::max(
             out.healthy_worst_deviation, std::abs(health.ratio(static_cast<std::size_t>(i)) - 1.0));
   }
+  out.healthy_max_evidence = rig.health_max_evidence();
   out.false_alarm = health.alarmed_nozzle() >= 0;
   if (out.false_alarm) return out;
   rig.plant().set_nozzle_blockage(out.blocked_nozzle, options.blockage);
@@ -84,10 +85,12 @@ BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet, const Blockage
   const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
   std::vector<double> detect;
   std::vector<double> scatter;
+  std::vector<double> evidence;
   for (std::size_t i = 0; i < machines.size(); ++i) {
     const BlockageMachine m = blockage_once(machines[i], fleet.seed, static_cast<int>(i), options);
     r.false_alarms += m.false_alarm ? 1 : 0;
     scatter.push_back(m.healthy_worst_deviation);
+    evidence.push_back(m.healthy_max_evidence);
     const bool right = m.named_nozzle == m.blocked_nozzle && m.detect_s >= 0.0;
     if (right) detect.push_back(m.detect_s);
     if (right && m.detect_s <= options.detect_limit_s) ++r.named_within_limit;
@@ -95,6 +98,7 @@ BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet, const Blockage
   }
   r.detect_s = spread_of(detect);
   r.healthy_worst_deviation = spread_of(scatter);
+  r.healthy_max_evidence = spread_of(evidence);
   r.healthy_minutes = static_cast<double>(machines.size()) * options.healthy_s / 60.0;
   return r;
 }

@@ -176,6 +176,9 @@ void ClosedLoopRig::health_meter_window_closed() {
   health_->add_window(std::span<const double>(health_pending_open_s_.data(),
                                               static_cast<std::size_t>(plant_.nozzle_count())),
                       litres, health_window_s_);
+  for (int i = 0; i < plant_.nozzle_count(); ++i)
+    health_max_evidence_ =
+        std::max(health_max_evidence_, health_->evidence(static_cast<std::size_t>(i)));
   next_health_meter_s_ = -1.0;
 }
 

@@ -117,6 +117,9 @@ class ClosedLoopRig {
   const RigConfig& config() const { return config_; }
   // The detector (config.nozzle_health set), else nullptr.
   const NozzleHealth* nozzle_health() const { return health_ ? &*health_ : nullptr; }
+  // The largest NozzleHealth::evidence of any nozzle after any window so far (its CUSUMs move
+  // every window, between the experiment's samples).
+  double health_max_evidence() const { return health_max_evidence_; }
 
  private:
   void control_tick();
@@ -160,6 +163,7 @@ class ClosedLoopRig {
   std::array<double, plant::kMaxNozzles> health_open_s_{};
   std::array<double, plant::kMaxNozzles> health_pending_open_s_{};
   std::uint64_t health_pulses_ = 0;
+  double health_max_evidence_ = 0.0;
 };
 
 }  // namespace weedspray::control::experiments

@@ -372,6 +372,9 @@ struct BlockageMachine {
   // Largest |ratio - 1| of any nozzle during the healthy part (sampled every redraw): the
   // detector's scatter on this machine, what the alarm fraction must clear.
   double healthy_worst_deviation = 0.0;
+  // Largest evidence (NozzleHealth::evidence, the CUSUMs) of any nozzle after any window of
+  // the healthy part: what alarm_threshold must clear.
+  double healthy_max_evidence = 0.0;
 };
 struct BlockageFleetResult {
   std::vector<BlockageMachine> machines;
@@ -379,6 +382,7 @@ struct BlockageFleetResult {
   int false_alarms = 0;
   Spread detect_s;  // over the machines that named the right nozzle
   Spread healthy_worst_deviation;
+  Spread healthy_max_evidence;
   double healthy_minutes = 0.0;
 };
 BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet,

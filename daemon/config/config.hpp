@@ -190,8 +190,10 @@ struct NozzleHealthSection {
   bool enabled;
   double baseline_s;
   double time_constant_s;
+  std::string judge;  // band|cusum
   double alarm_fraction;
   double alarm_hold_s;
+  double alarm_threshold;
 };
 
 struct WheelSection {

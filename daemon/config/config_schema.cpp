@@ -347,10 +347,22 @@ const std::vector<KeySpec<Config>>& config_keys() {
     {WS_KEY(nozzle_health, baseline_s), 60.0, 1, 3600, "s",
      "spraying time over which each nozzle's flow is learned as its baseline"},
     {WS_KEY(nozzle_health, time_constant_s), 6.0, 0.5, 600, "s",
-     "forgetting time of the running per-nozzle estimate"},
+     "forgetting time of the running per-nozzle estimate (the ratios shown; band: judged)"},
+    {WS_KEY(nozzle_health, judge), std::string("band"), 0, 0, "",
+     "band: a nozzle whose ratio is off 1 by alarm_fraction for alarm_hold_s is a fault; cusum: "
+     "the evidence that one nozzle's flow changed by alarm_fraction, summed over the meter's "
+     "windows (the lab's 20 % blockage named in 3.5 s instead of 7-9 s, no false alarm in 400 "
+     "machine-minutes; but it names seconds-long flow changes of a few % after a jump of every "
+     "duty in the simulator: README, experiment blockage)",
+     {"band", "cusum"}},
     {WS_KEY(nozzle_health, alarm_fraction), 0.12, 0.01, 0.99, "",
-     "a nozzle whose flow / baseline is off 1 by more than this is a fault..."},
-    {WS_KEY(nozzle_health, alarm_hold_s), 1.0, 0, 600, "s", "...once it lasted this long"},
+     "band: a nozzle whose flow / baseline is off 1 by more than this is a fault...; cusum: the "
+     "change of one nozzle's flow, as a fraction of its baseline, looked for..."},
+    {WS_KEY(nozzle_health, alarm_hold_s), 1.0, 0, 600, "s", "band: ...once it lasted this long"},
+    {WS_KEY(nozzle_health, alarm_threshold), 24.0, 1, 1000, "",
+     "cusum: ...named once its evidence (log-likelihood ratio) exceeds this: higher, fewer false "
+     "alarms and later names (24: about 1 false alarm in 10^5 machine-minutes on the lab's "
+     "fleet)"},
     // [wheel]
     {WS_KEY(wheel, source), std::string("pulses"), 0, 0, "",
      "speed from the Hall wheel sensor, or a fixed speed", {"pulses", "fixed"}},

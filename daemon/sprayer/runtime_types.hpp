@@ -115,9 +115,10 @@ struct ControlStatus {
   bool speed_fell_back = false;                    // speed.source = "gnss" without a usable fix
   double yaw_rate_deg_per_s = 0;  // turn compensation's yaw rate, clockwise (0: off or straight)
   // Nozzle health ([nozzle_health] enabled): each nozzle's flow over its baseline (1 until the
-  // baseline is learned) and the nozzle named at fault (-1: none).
+  // baseline is learned) and the nozzle named at fault (-1: none), its flow down (blocked) or up.
   std::array<double, control::kMaxHealthNozzles> nozzle_flow_ratio{};
   int nozzle_flow_fault = -1;
+  bool nozzle_flow_fault_low = false;
   std::uint64_t nozzle_health_reset = 0;  // the LiveParams::trip_reset the detector restarted at
 };
 

@@ -137,7 +137,10 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
     health.baseline_s = config.nozzle_health.baseline_s;
     health.time_constant_s = config.nozzle_health.time_constant_s;
     health.alarm_fraction = config.nozzle_health.alarm_fraction;
+    health.judge = config.nozzle_health.judge == "cusum" ? control::NozzleJudge::kCusum
+                                                         : control::NozzleJudge::kBand;
     health.alarm_hold_s = config.nozzle_health.alarm_hold_s;
+    health.alarm_threshold = config.nozzle_health.alarm_threshold;
     nozzle_health_.emplace(health);
   }
   if (config.spray.quantiser_levels >= 2) {
@@ -652,6 +655,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       for (std::size_t n = 0; n < std::min(nozzles, control::kMaxHealthNozzles); ++n)
         status.nozzle_flow_ratio[n] = nozzle_health_->ratio(n);
       status.nozzle_flow_fault = nozzle_health_->alarmed_nozzle();
+      status.nozzle_flow_fault_low = nozzle_health_->alarmed_low();
     }
 
     if (spray && status.speed_m_per_s > 0) {

@@ -3,8 +3,9 @@
 # baseline) on a private bus:
 #  1. healthy: the baseline is learned while spraying and no nozzle_flow_fault is raised;
 #  2. InjectSimFault nozzle2_blocked_30: nozzle_flow_fault within 10 s, the log names nozzle 2
-#     (0-based, as NozzleDuty and the sim fault count), its NozzleHealth ratio is the lowest and
-#     below 0.88; the daemon keeps spraying (a warning: the valves stay driven);
+#     (0-based, as NozzleDuty and the sim fault count), its NozzleHealth ratio is (or within
+#     10 s more becomes) the lowest and below 0.88; the daemon keeps spraying (a warning: the
+#     valves stay driven);
 #  3. ClearAlarms (after a clean) restarts the baseline: no alarm, ratios 1 while relearning.
 # usage: nozzle_health_sim_test.sh BUILD_DIR
 set -euo pipefail
@@ -62,7 +63,7 @@ import sys
 judged = [[float(x) for x in line.split()[4:8]] for line in open(sys.argv[1])]
 judged = [r for r in judged if r != [1.0] * 4]  # the baseline learned
 dev = max((abs(x - 1) for r in judged for x in r), default=float("nan"))
-print(f"healthy: {len(judged)} s judged, largest |ratio - 1| seen {dev:.3f} (alarm above 0.12)")
+print(f"healthy: {len(judged)} s judged, largest |ratio - 1| seen {dev:.3f} (alarm above 0.12 with judge = band)")
 PY
 healthy=$(prop NozzleHealth)
 $PY - "$healthy" <<'PY' || fail "NozzleHealth on a healthy machine: $healthy"
@@ -86,11 +87,21 @@ named=$(date +%s.%N)
 prop Alarms | grep -q nozzle_flow_fault || fail "no nozzle_flow_fault 10 s after the blockage: $(prop NozzleHealth)"
 grep -q "alarm raised: nozzle_flow_fault (nozzle 2: blocked" "$T/daemon.log" ||
   fail "the alarm does not name nozzle 2: $(grep nozzle_flow_fault "$T/daemon.log")"
-blocked=$(prop NozzleHealth)
+# With judge = "cusum" the alarm usually comes before the shown ratio (6 s forgetting) has moved
+# all the way: that ratio must follow within 10 s more (with "band" it already has).
+for _ in $(seq 1 100); do
+  blocked=$(prop NozzleHealth)
+  $PY - "$blocked" 2>/dev/null <<'PY' && break
+import sys
+ratios = [float(x) for x in sys.argv[1].split()[1:]]
+assert ratios[2] < 0.88 and ratios[2] == min(ratios), ratios
+PY
+  sleep 0.1
+done
 $PY - "$blocked" <<'PY' || fail "NozzleHealth with nozzle 2 blocked: $blocked"
 import sys
 ratios = [float(x) for x in sys.argv[1].split()[1:]]
-assert ratios[2] < 0.88 and ratios[2] == min(ratios), ratios  # alarm_fraction 0.12
+assert ratios[2] < 0.88 and ratios[2] == min(ratios), ratios
 PY
 "$BUILD/daemon/sprayctl" --user status >"$T/status.txt"
 grep -q "^Nozzle health: [0-9.]* [0-9.]* 0\.[0-8]" "$T/status.txt" ||

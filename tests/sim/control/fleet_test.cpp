@@ -95,11 +95,14 @@ TEST(FleetBlockage, ABlockedNozzleIsNamedAndAHealthyMinuteIsQuiet) {
   const BlockageFleetResult r = run_blockage_fleet({1, 1, false}, options);
   ASSERT_EQ(r.machines.size(), 1U);
   EXPECT_FALSE(r.machines[0].false_alarm);
-  // The healthy scatter is measured (a real estimate never sits exactly on its baseline) and,
-  // with no false alarm, stayed inside the alarm band.
+  // The healthy scatter of the shown ratios and the detector's evidence are measured (a real
+  // estimate never sits exactly on its baseline) and, with no false alarm, the evidence stayed
+  // below the alarm threshold.
   EXPECT_GT(r.machines[0].healthy_worst_deviation, 0.0);
-  EXPECT_LT(r.machines[0].healthy_worst_deviation, options.health.alarm_fraction);
   EXPECT_EQ(r.healthy_worst_deviation.count, 1);
+  EXPECT_GT(r.machines[0].healthy_max_evidence, 0.0);
+  EXPECT_LT(r.machines[0].healthy_max_evidence, options.health.alarm_threshold);
+  EXPECT_EQ(r.healthy_max_evidence.count, 1);
   EXPECT_EQ(r.machines[0].named_nozzle, r.machines[0].blocked_nozzle);
   EXPECT_EQ(r.named_within_limit, 1);
 }

@@ -263,6 +263,20 @@ TEST(ConfigErrors, NozzleHealthNeedsSeparableWindows) {
   EXPECT_NO_THROW(parse("[pwm]\nstaggered = false\n"));  // off: no rule
 }
 
+// The judge: band by default (the daemon's behaviour before the CUSUM), cusum on request with
+// its threshold; anything else is refused naming the key.
+TEST(ConfigErrors, NozzleHealthJudge) {
+  EXPECT_EQ(parse("[nozzle_health]\nenabled = true\n").nozzle_health.judge, "band");
+  const Config cusum =
+      parse("[nozzle_health]\nenabled = true\njudge = \"cusum\"\nalarm_threshold = 30\n");
+  EXPECT_EQ(cusum.nozzle_health.judge, "cusum");
+  EXPECT_EQ(cusum.nozzle_health.alarm_threshold, 30.0);
+  EXPECT_EQ(parse_error({{"main.toml", "[nozzle_health]\njudge = \"glr\"\n"}}).key(),
+            "nozzle_health.judge");
+  EXPECT_EQ(parse_error({{"main.toml", "[nozzle_health]\nalarm_threshold = 0\n"}}).key(),
+            "nozzle_health.alarm_threshold");
+}
+
 TEST(ConfigSchema, GpioLinesByName) {
   Config config = parse(
       "[gpio]\nvalve_names = [\"valve0\", \"valve1\", \"valve2\", \"valve3\"]\n"
