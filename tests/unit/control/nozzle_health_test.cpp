@@ -66,6 +66,17 @@ struct Feed {
   }
 };
 
+// Nozzle 2 20 % blocked; fed until a nozzle is named, at most 30 s: the seconds it took.
+int block_and_wait(NozzleHealth& h, Feed& feed) {
+  feed.flow_l_per_s[2] *= 0.8;
+  int seconds = 0;
+  while (h.alarmed_nozzle() < 0 && seconds < 30) {
+    feed.second(h);
+    ++seconds;
+  }
+  return seconds;
+}
+
 TEST(NozzleHealth, LearnsTheBaselineThenNamesTheBlockedNozzle) {
   NozzleHealth h(NozzleHealthConfig{});
   Feed feed;
@@ -73,12 +84,7 @@ TEST(NozzleHealth, LearnsTheBaselineThenNamesTheBlockedNozzle) {
   ASSERT_TRUE(h.baseline_ready());
   for (std::size_t i = 0; i < 4; ++i) EXPECT_NEAR(h.ratio(i), 1.0, 0.05);
   EXPECT_EQ(h.alarmed_nozzle(), -1);
-  feed.flow_l_per_s[2] *= 0.8;  // 20 % blocked
-  int seconds = 0;
-  while (h.alarmed_nozzle() < 0 && seconds < 30) {
-    feed.second(h);
-    ++seconds;
-  }
+  const int seconds = block_and_wait(h, feed);
   EXPECT_EQ(h.alarmed_nozzle(), 2);
   EXPECT_TRUE(h.alarmed_low());
   EXPECT_LE(seconds, 10);
@@ -102,12 +108,7 @@ TEST(NozzleHealth, TheBandJudgeNamesTheBlockedNozzleOnceItsRatioLeftTheBand) {
   for (int s = 0; s < 120; ++s) feed.second(h);
   ASSERT_TRUE(h.baseline_ready());
   EXPECT_EQ(h.alarmed_nozzle(), -1);
-  feed.flow_l_per_s[2] *= 0.8;  // 20 % blocked
-  int seconds = 0;
-  while (h.alarmed_nozzle() < 0 && seconds < 30) {
-    feed.second(h);
-    ++seconds;
-  }
+  const int seconds = block_and_wait(h, feed);
   EXPECT_EQ(h.alarmed_nozzle(), 2);
   EXPECT_TRUE(h.alarmed_low());
   EXPECT_LE(seconds, 10);
