@@ -99,6 +99,17 @@ double flow_for_duty_l_per_min(const NozzleLine& line, double duty_pct,
          pressure_scale(pressure_mpa, line.calibration_pressure_mpa);
 }
 
+double line_slope_l_per_min_per_pct(const NozzleLine& line, double pressure_mpa) noexcept {
+  return line.slope_l_per_min_per_pct * pressure_scale(pressure_mpa, line.calibration_pressure_mpa);
+}
+
+double held_open_flow_l_per_min(const NozzleLine& line, double pressure_mpa) noexcept {
+  if (!(line.full_open_flow_l_per_min > 0.0))
+    return flow_for_duty_l_per_min(line, 100.0, pressure_mpa);
+  return line.full_open_flow_l_per_min *
+         pressure_scale(pressure_mpa, line.calibration_pressure_mpa);
+}
+
 SprayDecision spray_decision(const SprayLawConfig& c, const NozzleLine& line, double density,
                              double speed_m_per_s, double pressure_mpa) noexcept {
   SprayDecision decision;

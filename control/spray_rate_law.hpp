@@ -81,6 +81,11 @@ double clamp_duty_for_flow_pct(const SprayLawConfig& config, double raw_duty_pct
 // Flow the line delivers at a duty and pressure (inverse of the above, for sims and logs).
 double flow_for_duty_l_per_min(const NozzleLine& line, double duty_pct,
                                double pressure_mpa) noexcept;
+// The line's slope dq/ds at a pressure [L/min per % duty] (what a duty offset is worth).
+double line_slope_l_per_min_per_pct(const NozzleLine& line, double pressure_mpa) noexcept;
+// The flow with the valve held open at a pressure: the calibrated full-open flow scaled by
+// sqrt(P / P_cal), else (unknown) the line at 100 %.
+double held_open_flow_l_per_min(const NozzleLine& line, double pressure_mpa) noexcept;
 
 struct SprayDecision {
   double target_flow_l_per_min = 0.0;

@@ -283,12 +283,15 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
   if (o.json) {
     std::printf("{\"plants\": %d, \"seed\": %llu, \"changed_after_calibration\": true, ", o.plants,
                 static_cast<unsigned long long>(o.seed));
-    for (const auto* row : {&r.trim_on, &r.trim_off})
-      print_spreads_json(row == &r.trim_on ? "trim_on" : "trim_off",
+    for (const auto& [key, row] :
+         {std::pair{"trim_on", &r.trim_on}, std::pair{"integral_trim", &r.integral_trim},
+          std::pair{"trim_off", &r.trim_off}})
+      print_spreads_json(key,
                          {{"mean_error_pct", &row->mean_error_pct},
                           {"max_error_pct", &row->max_error_pct},
+                          {"max_error_below_100_pct", &row->max_error_modulated_pct},
                           {"pressure_band_mpa", &row->pressure_band_mpa}},
-                         row == &r.trim_on);
+                         row != &r.trim_off);
     std::printf("}\n");
   } else {
     std::printf(
@@ -297,11 +300,13 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
         "speed ramps)\n",
         o.plants, static_cast<unsigned long long>(o.seed));
     std::printf("%-34s%12s%12s%12s\n", "over the machines", "mean", "sd", "worst");
-    for (const auto* row : {&r.trim_on, &r.trim_off}) {
-      const bool on = row == &r.trim_on;
-      std::printf("-- online flow trim %s\n", on ? "ON" : "OFF");
+    for (const auto& [name, row] :
+         {std::pair{"ON: model (default)", &r.trim_on},
+          std::pair{"ON: integral (FlowTrim)", &r.integral_trim}, std::pair{"OFF", &r.trim_off}}) {
+      std::printf("-- online flow trim %s\n", name);
       print_spread_row("mean error [%]", row->mean_error_pct, "%12.3f");
       print_spread_row("max error [%]", row->max_error_pct, "%12.3f");
+      print_spread_row("  ...below 100 % duty [%]", row->max_error_modulated_pct, "%12.3f");
       print_spread_row("pressure band [MPa]", row->pressure_band_mpa, "%12.4f");
     }
   }

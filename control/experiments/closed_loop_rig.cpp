@@ -68,6 +68,7 @@ ClosedLoopRig::ClosedLoopRig(const RigConfig& config)
     if (!(config.health_flow_lag_s >= 0.0 && config.health_flow_lag_s < health_window_s_))
       throw std::invalid_argument("RigConfig.health_flow_lag_s must be in [0, one PWM phase)");
   }
+  if (config.fixes.flow_feedback && config.fixes.model_trim) boom_trim_.emplace(config.boom_trim);
   plant_.set_ground_speed(config.ground_speed_m_per_s);
   plant_.set_return_valve_volts(10.0);  // fully open: the safe state, no pressure
 }
@@ -112,7 +113,12 @@ void ClosedLoopRig::apply_flow_requests() {
     // the calibrated full-open flow.
     NozzleLine line = lines_[k];
     if (full_open_flows_[k] > 0.0) line.full_open_flow_l_per_min = full_open_flows_[k];
-    const double flow = requested_flows_[k];
+    // The model trim asks the line for what makes this nozzle deliver the request, but never
+    // below a full opening the law chose (boom_trim.hpp).
+    double flow = requested_flows_[k];
+    line_slopes_[k] = line_slope_l_per_min_per_pct(line, pressure);
+    if (boom_trim_ && flow > 0.0 && raw_duty_for_flow_pct(line, flow, pressure) < 100.0)
+      flow = boom_trim_->flow_to_ask(flow, line_slopes_[k]);
     double duty = flow > 0.0 ? raw_duty_for_flow_pct(line, flow, pressure) : 0.0;
     if (config_.duty_clamp) duty = clamp_duty_for_flow_pct(*config_.duty_clamp, duty, flow);
     // What the law promises for the duty it chose (the trim's reference): a clamp that raised
@@ -121,14 +127,12 @@ void ClosedLoopRig::apply_flow_requests() {
       promised_flows_[k] = 0.0;
     } else if (duty >= 100.0) {
       promised_flows_[k] =
-          line.full_open_flow_l_per_min > 0.0 && pressure > 0.0
-              ? line.full_open_flow_l_per_min * std::sqrt(pressure / line.calibration_pressure_mpa)
-          : line.full_open_flow_l_per_min > 0.0 ? line.full_open_flow_l_per_min
-                                                : flow;
+          line.full_open_flow_l_per_min > 0.0 ? held_open_flow_l_per_min(line, pressure) : flow;
     } else {
       promised_flows_[k] = flow_for_duty_l_per_min(line, duty, pressure);
     }
-    if (config_.fixes.flow_feedback && duty > 0.0 && duty < 100.0) duty *= trim_.correction();
+    if (config_.fixes.flow_feedback && !boom_trim_ && duty > 0.0 && duty < 100.0)
+      duty *= trim_.correction();
     duties_[k] = std::clamp(duty, 0.0, 100.0);
   }
   pwm_.set_duties(std::span<const double>(duties_.data(), static_cast<std::size_t>(n)));
@@ -151,6 +155,7 @@ void ClosedLoopRig::start() {
   dac_due_s_ = -1.0;
   next_record_s_ = now;
   next_trim_s_ = now + config_.flow_trim_window_s;
+  boom_trim_windows_.reset();
   trim_pulses_ = plant_.flow_meter_pulses();
   trim_pressure_error_ = 0.0;
   if (health_) {
@@ -212,10 +217,11 @@ void ClosedLoopRig::control_tick() {
 
   // FlowTrim decides itself whether a window is usable (pressure off set-point, too little
   // trimmable flow); the rig only measures.
-  trim_pressure_error_ =
-      std::max(trim_pressure_error_,
-               std::abs(filtered_pressure_mpa_ - config_.setpoint_mpa) / config_.setpoint_mpa);
-  if (config_.fixes.flow_feedback && flows_requested_ && plant_.time_s() >= next_trim_s_ - 1e-9) {
+  const double pressure_error =
+      std::abs(filtered_pressure_mpa_ - config_.setpoint_mpa) / config_.setpoint_mpa;
+  trim_pressure_error_ = std::max(trim_pressure_error_, pressure_error);
+  if (config_.fixes.flow_feedback && !boom_trim_ && flows_requested_ &&
+      plant_.time_s() >= next_trim_s_ - 1e-9) {
     const std::uint64_t pulses = plant_.flow_meter_pulses();
     const double window = config_.flow_trim_window_s;
     FlowTrimInput input;
@@ -236,6 +242,23 @@ void ClosedLoopRig::control_tick() {
     next_trim_s_ += window;
   }
   if (flows_requested_) apply_flow_requests();
+  if (boom_trim_) {
+    // The model trim, fed as the daemon feeds it (daemon/sprayer/sprayer.cpp): the lines'
+    // promise at the duties just latched, a tick at a time.
+    double promised = 0.0;
+    double slope = 0.0;
+    for (int i = 0; i < plant_.nozzle_count(); ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      if (duties_[k] > 0.0) promised += promised_flows_[k];
+      if (duties_[k] > 0.0 && duties_[k] < 100.0) slope += line_slopes_[k];
+    }
+    const bool usable =
+        flows_requested_ && pressure_error <= config_.flow_trim.max_pressure_error_fraction;
+    BoomTrimWindow window;
+    if (boom_trim_windows_.tick(dt, promised, slope, usable, plant_.flow_meter_pulses(),
+                                config_.meter_pulses_per_l, window))
+      boom_trim_->add_window(window);
+  }
 }
 
 void ClosedLoopRig::run_for(double duration_s) {

@@ -15,6 +15,7 @@
 #include <span>
 #include <vector>
 
+#include "control/boom_trim.hpp"
 #include "control/calibration.hpp"
 #include "control/flow_feedback.hpp"
 #include "control/nozzle_health.hpp"
@@ -36,6 +37,9 @@ struct RigFixes {
   bool staggered = true;              // staggered PWM phases (else synchronous)
   bool pressure_compensation = true;  // duty from the calibrated line at sqrt(Pcal/P)
   bool flow_feedback = true;          // FlowTrim on the (calibrated) meter
+  // With flow_feedback: BoomTrim (the meter against the lines' promise as a model: common
+  // gain and valve timing) instead of FlowTrim's integral law.
+  bool model_trim = true;
 };
 
 struct RigConfig {
@@ -59,7 +63,7 @@ struct RigConfig {
   // Flow meter K-factor the controller uses (label 8500 until a catch test replaced it).
   double meter_pulses_per_l = 8500.0;
   FlowTrimConfig flow_trim{};
-  double flow_trim_window_s = 1.0;  // meter reading averaged over this window
+  double flow_trim_window_s = 1.0;  // meter reading averaged over this window (FlowTrim)
   // The spray law's duty clamp (< min -> 0, > max -> 100), applied to requested flows' duties.
   std::optional<SprayLawConfig> duty_clamp{};
   // Time constant of the pressure filter the compensation uses (noise would otherwise jitter
@@ -73,6 +77,7 @@ struct RigConfig {
   // the close command).
   std::optional<NozzleHealthConfig> nozzle_health{};
   double health_flow_lag_s = 0.03;
+  BoomTrimConfig boom_trim{};  // fixes.model_trim
 };
 
 struct TraceSample {
@@ -117,6 +122,8 @@ class ClosedLoopRig {
   const RigConfig& config() const { return config_; }
   // The detector (config.nozzle_health set), else nullptr.
   const NozzleHealth* nozzle_health() const { return health_ ? &*health_ : nullptr; }
+  // The model trim (fixes.flow_feedback and fixes.model_trim), else nullptr.
+  const BoomTrim* boom_trim() const { return boom_trim_ ? &*boom_trim_ : nullptr; }
   // The largest NozzleHealth::evidence of any nozzle after any window so far (its CUSUMs move
   // every window, between the experiment's samples).
   double health_max_evidence() const { return health_max_evidence_; }
@@ -157,6 +164,9 @@ class ClosedLoopRig {
   double trim_pressure_error_ = 0.0;  // worst |P - P_set| / P_set of the current trim window
   std::vector<TraceSample> trace_;
   std::optional<NozzleHealth> health_;
+  std::optional<BoomTrim> boom_trim_;
+  BoomTrimWindows boom_trim_windows_{};
+  std::array<double, plant::kMaxNozzles> line_slopes_{};  // dL/dd now [L/min per % duty]
   double health_window_s_ = 0.0;
   double next_health_window_s_ = -1.0;  // end of the commanded-open window
   double next_health_meter_s_ = -1.0;   // end of the lagged meter window (< 0: none pending)

@@ -138,6 +138,8 @@ struct SprayRunOptions {
   plant::PlantParams plant{};
   std::optional<MachineChange> change{};
   bool flow_feedback = true;  // online flow trim (not raw)
+  // ...as a model (BoomTrim: common gain and valve timing) or FlowTrim's integral law.
+  bool model_trim = true;
 };
 LinearityResult run_linearity(const SprayRunOptions& options);
 
@@ -168,6 +170,9 @@ struct OrthogonalResult {
   std::vector<OrthogonalRun> runs;
   double mean_error_pct = 0.0;
   double max_error_pct = 0.0;
+  // ...over the nozzle-runs below 100 % duty: a nozzle held open cannot be trimmed up, so a
+  // blocked one there sprays its blockage short whatever the controller does.
+  double max_error_modulated_pct = 0.0;
   double pressure_band_mpa = 0.0;
   bool raw = false;
 };
@@ -297,13 +302,15 @@ struct FleetOptions {
   bool changed = true;  // apply the drawn change after calibration
 };
 struct OrthogonalFleetRow {
-  Spread mean_error_pct;  // per machine: mean over its 64 nozzle-runs
-  Spread max_error_pct;   // per machine: its worst nozzle-run
+  Spread mean_error_pct;           // per machine: mean over its 64 nozzle-runs
+  Spread max_error_pct;            // per machine: its worst nozzle-run
+  Spread max_error_modulated_pct;  // ...of those below 100 % duty
   Spread pressure_band_mpa;
   std::vector<OrthogonalResult> machines;
 };
 struct OrthogonalFleetResult {
-  OrthogonalFleetRow trim_on;
+  OrthogonalFleetRow trim_on;        // the model trim (BoomTrim), the daemon's default
+  OrthogonalFleetRow integral_trim;  // FlowTrim's integral law (the trim until stop 23)
   OrthogonalFleetRow trim_off;
 };
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet,

@@ -42,7 +42,7 @@ PreparedMachine prepare_machine(const SprayRunOptions& options) {
   cal_options.frequency_hz = options.frequency_hz;
   cal_options.plant = options.plant;
   const CalibrationResult& cal = cached_calibration(cal_options);
-  m.config.fixes = {true, true, options.flow_feedback};
+  m.config.fixes = {true, true, options.flow_feedback, options.model_trim};
   m.config.meter_pulses_per_l = cal.meter.pulses_per_litre;
   for (const auto& n : cal.nozzles) m.lines.push_back(n.fitted);
   m.full_flows = calibrated_full_flows(cal);
@@ -132,6 +132,8 @@ OrthogonalResult run_orthogonal(const SprayRunOptions& options) {
     for (const auto& p : run.nozzles) {
       result.mean_error_pct += p.error_pct;
       result.max_error_pct = std::max(result.max_error_pct, p.error_pct);
+      if (p.duty_pct < 100.0)
+        result.max_error_modulated_pct = std::max(result.max_error_modulated_pct, p.error_pct);
       ++count;
     }
     result.pressure_band_mpa = std::max(result.pressure_band_mpa, run.pressure_band_mpa);
@@ -147,13 +149,15 @@ namespace weedspray::control::experiments {
 namespace {
 
 OrthogonalFleetRow summarise(std::vector<OrthogonalResult> machines) {
-  std::vector<double> mean, max, band;
+  std::vector<double> mean, max, max_modulated, band;
   for (const auto& r : machines) {
     mean.push_back(r.mean_error_pct);
     max.push_back(r.max_error_pct);
+    max_modulated.push_back(r.max_error_modulated_pct);
     band.push_back(r.pressure_band_mpa);
   }
-  return {spread_of(mean), spread_of(max), spread_of(band), std::move(machines)};
+  return {spread_of(mean), spread_of(max), spread_of(max_modulated), spread_of(band),
+          std::move(machines)};
 }
 
 }  // namespace
@@ -177,7 +181,7 @@ LinearityFleetResult run_linearity_fleet(const FleetOptions& fleet, const SprayR
 }
 
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const SprayRunOptions& base) {
-  std::vector<OrthogonalResult> on, off;
+  std::vector<OrthogonalResult> on, integral, off;
   const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
   for (std::size_t i = 0; i < machines.size(); ++i) {
     const Machine& m = machines[i];
@@ -187,11 +191,14 @@ OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const Spra
     options.raw = false;
     options.change = fleet.changed ? draw_change(m, fleet.seed, static_cast<int>(i)) : no_change(m);
     options.flow_feedback = true;
+    options.model_trim = true;
     on.push_back(run_orthogonal(options));
+    options.model_trim = false;
+    integral.push_back(run_orthogonal(options));
     options.flow_feedback = false;
     off.push_back(run_orthogonal(options));
   }
-  return {summarise(std::move(on)), summarise(std::move(off))};
+  return {summarise(std::move(on)), summarise(std::move(integral)), summarise(std::move(off))};
 }
 
 }  // namespace weedspray::control::experiments

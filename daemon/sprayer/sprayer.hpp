@@ -16,7 +16,7 @@
 #include <optional>
 #include <vector>
 
-#include "control/flow_feedback.hpp"
+#include "control/boom_trim.hpp"
 #include "control/nozzle_health.hpp"
 #include "control/nozzle_scheduler.hpp"
 #include "control/odometry.hpp"
@@ -162,7 +162,8 @@ class Sprayer {
   std::unique_ptr<control::PwmSchedule> schedule_;
   std::unique_ptr<io::ValvePwmDriver<control::PwmSchedule>> pwm_driver_;
   std::optional<control::Odometry> odometry_;
-  control::FlowTrim flow_trim_;
+  control::BoomTrim boom_trim_;  // the meter against the lines' promise (control/boom_trim.hpp)
+  control::BoomTrimWindows boom_trim_windows_;
   std::optional<control::NozzleHealth> nozzle_health_;  // [nozzle_health] enabled; control loop
   std::vector<control::DutyQuantiser> quantisers_;
   std::array<CameraWorker, kMaxCameras> cameras_;
