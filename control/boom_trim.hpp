@@ -1,9 +1,14 @@
-// Boom trim: the line flow meter against what the calibrated lines promise, as a model
-// (issue 12). Replaces FlowTrim's integral law (flow_feedback.hpp), which drives the metered
-// total to the requested total by moving only the modulated nozzles: a nozzle held fully
-// open that sprays 4 % more than its calibration then has its excess taken out of the
-// modulated ones, and a row with one modulated nozzle among three open ones moved it by 10 %
-// (`experiment orthogonal --plants 20`, worst machine).
+// Boom trim as a model: the line flow meter against what the calibrated lines promise (issue
+// 12, stop 23). LAB ONLY for now (`weedspray-lab experiment orthogonal --plants N`, row
+// "model"): the daemon keeps FlowTrim's integral law (flow_feedback.hpp). That law drives the
+// metered total to the requested total by moving only the modulated nozzles: a nozzle held
+// open that sprays 4 % more than its calibration has its excess taken out of the modulated
+// ones (a row with one modulated nozzle among three open ones moved it by 10 % on the worst
+// machine of `experiment orthogonal --plants 20`). This model is better there on every figure,
+// but on a sparse variable-rate field (`experiment savings --plants 20`) it under-doses: 20.8 %
+// of nozzle-zones below target against 9.1 % with the integral law. Valves switching all the
+// time bias the meter's windows (below), and a model fitted to each window takes that for the
+// boom; an integral law only cares that the totals match.
 //
 // Model of what the boom delivers after its calibration, per window:
 //   V = k P + D S + e
@@ -17,7 +22,7 @@
 // measurement noise learned from the innovations). With one mix of duties only k P + D S is
 // seen; the prior shares it between k and D, and as the mix changes they come apart.
 //
-// The rate law then asks each modulated nozzle's line for (request - a D) / k (a: its slope);
+// The rate law would then ask each modulated nozzle's line for (request - a D) / k (a: slope);
 // a nozzle held open is not moved (its flow does not follow the line near 100 %: the
 // off-pulse is shorter than the valve's closing delay).
 //

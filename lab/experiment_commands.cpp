@@ -284,7 +284,7 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
     std::printf("{\"plants\": %d, \"seed\": %llu, \"changed_after_calibration\": true, ", o.plants,
                 static_cast<unsigned long long>(o.seed));
     for (const auto& [key, row] :
-         {std::pair{"trim_on", &r.trim_on}, std::pair{"integral_trim", &r.integral_trim},
+         {std::pair{"trim_on", &r.trim_on}, std::pair{"model_trim", &r.model_trim},
           std::pair{"trim_off", &r.trim_off}})
       print_spreads_json(key,
                          {{"mean_error_pct", &row->mean_error_pct},
@@ -300,9 +300,9 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
         "speed ramps)\n",
         o.plants, static_cast<unsigned long long>(o.seed));
     std::printf("%-34s%12s%12s%12s\n", "over the machines", "mean", "sd", "worst");
-    for (const auto& [name, row] :
-         {std::pair{"ON: model (default)", &r.trim_on},
-          std::pair{"ON: integral (FlowTrim)", &r.integral_trim}, std::pair{"OFF", &r.trim_off}}) {
+    for (const auto& [name, row] : {std::pair{"ON (the daemon's: integral, FlowTrim)", &r.trim_on},
+                                    std::pair{"ON: model (BoomTrim, lab only)", &r.model_trim},
+                                    std::pair{"OFF", &r.trim_off}}) {
       std::printf("-- online flow trim %s\n", name);
       print_spread_row("mean error [%]", row->mean_error_pct, "%12.3f");
       print_spread_row("max error [%]", row->max_error_pct, "%12.3f");

@@ -243,8 +243,8 @@ void ClosedLoopRig::control_tick() {
   }
   if (flows_requested_) apply_flow_requests();
   if (boom_trim_) {
-    // The model trim, fed as the daemon feeds it (daemon/sprayer/sprayer.cpp): the lines'
-    // promise at the duties just latched, a tick at a time.
+    // The model trim (lab only, boom_trim.hpp), fed a tick at a time: the lines' promise at
+    // the duties just latched.
     double promised = 0.0;
     double slope = 0.0;
     for (int i = 0; i < plant_.nozzle_count(); ++i) {

@@ -38,8 +38,9 @@ struct RigFixes {
   bool pressure_compensation = true;  // duty from the calibrated line at sqrt(Pcal/P)
   bool flow_feedback = true;          // FlowTrim on the (calibrated) meter
   // With flow_feedback: BoomTrim (the meter against the lines' promise as a model: common
-  // gain and valve timing) instead of FlowTrim's integral law.
-  bool model_trim = true;
+  // gain and valve timing) instead of FlowTrim's integral law. Not the default: it under-doses
+  // sparse variable-rate fields (boom_trim.hpp).
+  bool model_trim = false;
 };
 
 struct RigConfig {

@@ -138,8 +138,9 @@ struct SprayRunOptions {
   plant::PlantParams plant{};
   std::optional<MachineChange> change{};
   bool flow_feedback = true;  // online flow trim (not raw)
-  // ...as a model (BoomTrim: common gain and valve timing) or FlowTrim's integral law.
-  bool model_trim = true;
+  // ...as a model (BoomTrim: common gain and valve timing) or FlowTrim's integral law (the
+  // daemon's).
+  bool model_trim = false;
 };
 LinearityResult run_linearity(const SprayRunOptions& options);
 
@@ -309,8 +310,8 @@ struct OrthogonalFleetRow {
   std::vector<OrthogonalResult> machines;
 };
 struct OrthogonalFleetResult {
-  OrthogonalFleetRow trim_on;        // the model trim (BoomTrim), the daemon's default
-  OrthogonalFleetRow integral_trim;  // FlowTrim's integral law (the trim until stop 23)
+  OrthogonalFleetRow trim_on;     // FlowTrim's integral law, the daemon's
+  OrthogonalFleetRow model_trim;  // BoomTrim (lab only: boom_trim.hpp says why)
   OrthogonalFleetRow trim_off;
 };
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet,

@@ -181,7 +181,7 @@ LinearityFleetResult run_linearity_fleet(const FleetOptions& fleet, const SprayR
 }
 
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const SprayRunOptions& base) {
-  std::vector<OrthogonalResult> on, integral, off;
+  std::vector<OrthogonalResult> on, model, off;
   const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
   for (std::size_t i = 0; i < machines.size(); ++i) {
     const Machine& m = machines[i];
@@ -191,14 +191,15 @@ OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const Spra
     options.raw = false;
     options.change = fleet.changed ? draw_change(m, fleet.seed, static_cast<int>(i)) : no_change(m);
     options.flow_feedback = true;
-    options.model_trim = true;
-    on.push_back(run_orthogonal(options));
     options.model_trim = false;
-    integral.push_back(run_orthogonal(options));
+    on.push_back(run_orthogonal(options));
+    options.model_trim = true;
+    model.push_back(run_orthogonal(options));
+    options.model_trim = false;
     options.flow_feedback = false;
     off.push_back(run_orthogonal(options));
   }
-  return {summarise(std::move(on)), summarise(std::move(integral)), summarise(std::move(off))};
+  return {summarise(std::move(on)), summarise(std::move(model)), summarise(std::move(off))};
 }
 
 }  // namespace weedspray::control::experiments

@@ -20,10 +20,6 @@ namespace {
 using std::chrono::duration;
 using namespace std::chrono_literals;
 
-// The boom trim learns only while the pressure is within this fraction of its set-point (as
-// FlowTrim's max_pressure_error_fraction): the lines' promise holds there.
-constexpr double kTrimPressureTolerance = 0.05;
-
 double seconds(Nanos t) {
   return duration<double>(t).count();
 }
@@ -104,7 +100,7 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
                                               : control::PressureControlMode::kFuzzyPid,
           controller_config(config))),
       schedule_(std::make_unique<control::PwmSchedule>(pwm_config(config))),
-      boom_trim_(control::BoomTrimConfig{}) {
+      flow_trim_(control::FlowTrimConfig{}) {
   // pressure.loop_hz goes down to 10 Hz: the watch waits three of the loop's periods, never less
   // than 50 ms (at 20 Hz a fixed 50 ms took the running loop for stalled and stopped the pump).
   pressure_watch_ = io::LoopWatch(std::max(kCrossWatchTimeout, 3 * pressure_period()));
@@ -580,6 +576,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
 
     io::ValveCommand command;
     command.valve_count = static_cast<std::uint32_t>(nozzles);
+    double requested_l_per_min = 0;
     double open_sum = 0;
     for (std::size_t n = 0; n < nozzles; ++n) {
       const int owner = nozzle_owner_[n];
@@ -614,6 +611,8 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
               params.law, quantisers_[n].quantise(std::clamp(decision.raw_duty_pct, 0.0, 100.0)),
               decision.target_flow_l_per_min);
         }
+        requested_l_per_min +=
+            control::flow_for_duty_l_per_min(params.lines[n], duty, compensation_pressure);
       } else if (!quantisers_.empty()) {
         quantisers_[n].reset();
       }
@@ -622,37 +621,24 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
     }
     status.open_fraction = nozzles > 0 ? open_sum / static_cast<double>(nozzles) : 0.0;
     if (io_.flow != nullptr && spray) {
-      // The boom trim asks each modulated nozzle's line for what makes it deliver the law's
-      // flow, within the calibrated band (never into the closed one); a valve held open is not
-      // moved (control/boom_trim.hpp). Then the window's promise at the duties latched.
-      double promised_l_per_min = 0.0;
-      double slope_l_per_min_per_pct = 0.0;
+      const double correction =
+          flow_trim_.update(requested_l_per_min, status.flow_l_per_min, status.open_fraction, dt);
       for (std::size_t n = 0; n < nozzles; ++n) {
+        // The trim moves duties only inside the calibrated band, never into the closed one.
+        // It scales each nozzle's FLOW (q = A s + b), not its duty: scaling duties would move
+        // a low-duty nozzle's flow by less than a high-duty one's (the intercept b), so nozzles
+        // sprayed at different rates (densities, the inner and outer side of a turn) would no
+        // longer keep their ratio.
         const double d = command.duty_pct[n];
-        if (d <= 0) continue;
-        const control::NozzleLine& line = params.lines[n];
-        if (d >= 100) {
-          promised_l_per_min += control::held_open_flow_l_per_min(line, compensation_pressure);
-          continue;
+        if (d > 0 && d < 100) {
+          const control::NozzleLine& line = params.lines[n];
+          const double flow = control::flow_for_duty_l_per_min(line, d, compensation_pressure);
+          const double trimmed =
+              control::raw_duty_for_flow_pct(line, flow * correction, compensation_pressure);
+          command.duty_pct[n] =
+              std::clamp(trimmed, params.law.min_duty_pct, params.law.max_duty_pct);
         }
-        const double slope = control::line_slope_l_per_min_per_pct(line, compensation_pressure);
-        const double flow = control::flow_for_duty_l_per_min(line, d, compensation_pressure);
-        const double trimmed = control::raw_duty_for_flow_pct(
-            line, boom_trim_.flow_to_ask(flow, slope), compensation_pressure);
-        command.duty_pct[n] = std::clamp(trimmed, params.law.min_duty_pct, params.law.max_duty_pct);
-        promised_l_per_min +=
-            control::flow_for_duty_l_per_min(line, command.duty_pct[n], compensation_pressure);
-        slope_l_per_min_per_pct += slope;
       }
-      const bool on_setpoint =
-          params.setpoint_mpa > 0 && std::abs(pressure.pressure_mpa - params.setpoint_mpa) <=
-                                         kTrimPressureTolerance * params.setpoint_mpa;
-      control::BoomTrimWindow window;
-      if (boom_trim_windows_.tick(dt, promised_l_per_min, slope_l_per_min_per_pct, on_setpoint,
-                                  status.flow_pulses, params.flow_pulses_per_litre, window))
-        boom_trim_.add_window(window);
-    } else {
-      boom_trim_windows_.reset();
     }
     command.issued_at = now;
     pwm_driver_->command(command);

@@ -16,7 +16,7 @@
 #include <optional>
 #include <vector>
 
-#include "control/boom_trim.hpp"
+#include "control/flow_feedback.hpp"
 #include "control/nozzle_health.hpp"
 #include "control/nozzle_scheduler.hpp"
 #include "control/odometry.hpp"
@@ -162,8 +162,7 @@ class Sprayer {
   std::unique_ptr<control::PwmSchedule> schedule_;
   std::unique_ptr<io::ValvePwmDriver<control::PwmSchedule>> pwm_driver_;
   std::optional<control::Odometry> odometry_;
-  control::BoomTrim boom_trim_;  // the meter against the lines' promise (control/boom_trim.hpp)
-  control::BoomTrimWindows boom_trim_windows_;
+  control::FlowTrim flow_trim_;
   std::optional<control::NozzleHealth> nozzle_health_;  // [nozzle_health] enabled; control loop
   std::vector<control::DutyQuantiser> quantisers_;
   std::array<CameraWorker, kMaxCameras> cameras_;
