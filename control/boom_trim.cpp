@@ -51,13 +51,6 @@ void BoomTrim::reset() noexcept {
   windows_ = 0;
 }
 
-double BoomTrim::gain_sd() const noexcept {
-  return std::sqrt(cov_[0][0]);
-}
-double BoomTrim::offset_sd() const noexcept {
-  return std::sqrt(cov_[1][1]);
-}
-
 double BoomTrim::flow_to_ask(double request_l_per_min,
                              double slope_l_per_min_per_pct) const noexcept {
   if (!(request_l_per_min > 0.0) || !std::isfinite(request_l_per_min)) return request_l_per_min;

@@ -27,13 +27,15 @@
 // off-pulse is shorter than the valve's closing delay).
 //
 // Why not one trim per nozzle, from the staggered phase windows the health detector reads:
-// tried (issue 12, stop 23). The meter sits at the manifold behind the feed hose's inertance and
-// the boom's compliance, and the valves move 15-40 ms after their command, so which window a
-// pulse's volume lands in depends on timing the controller does not know: per-nozzle gains
-// from those windows scattered by 5-25 % on the simulator's machines. From whole windows, with
-// the state carried over many mixes, the model's mix-dependent errors (pressure lost along the
-// boom, the meter's low-flow error) were taken for nozzle changes: 1.9 % mean error on machines
-// as made, against 0.74 % for a common trim.
+// tried (issue 12, stop 23, probes on the lab's machines, not commands). The meter sits at the
+// manifold behind the feed hose's inertance and the boom's compliance, and the valves move
+// 15-40 ms after their command, so which window a pulse's volume lands in depends on timing the
+// controller does not know: on seed 1's first machine as made, the per-nozzle gains came out
+// 0.80-1.26 instead of ~1, and moved by 5-10 % with 20 ms of assumed meter lag. From whole 1 s
+// windows, a gain and an offset per nozzle with the state carried over the L16's 16 mixes, the
+// model's mix-dependent errors (pressure lost along the boom, the meter's low-flow error) were
+// taken for nozzle changes: on that machine as made 1.89 % mean error against 0.74 % for a
+// common trim, and on 6 changed machines 2.80 % mean / 8.5 % max against FlowTrim's 2.24 / 7.1.
 //
 // Pure (no clocks, threads or I/O), fixed-size state, allocation-free.
 #pragma once
@@ -80,8 +82,6 @@ class BoomTrim {
 
   double gain() const noexcept { return theta_[0]; }        // k
   double offset_pct() const noexcept { return theta_[1]; }  // D
-  double gain_sd() const noexcept;
-  double offset_sd() const noexcept;
   // The flow to ask a modulated nozzle's line for so that it delivers request [L/min]
   // (slope: its line's dL/dd at the current pressure, L/min per % duty).
   double flow_to_ask(double request_l_per_min, double slope_l_per_min_per_pct) const noexcept;

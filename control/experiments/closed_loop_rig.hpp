@@ -123,8 +123,6 @@ class ClosedLoopRig {
   const RigConfig& config() const { return config_; }
   // The detector (config.nozzle_health set), else nullptr.
   const NozzleHealth* nozzle_health() const { return health_ ? &*health_ : nullptr; }
-  // The model trim (fixes.flow_feedback and fixes.model_trim), else nullptr.
-  const BoomTrim* boom_trim() const { return boom_trim_ ? &*boom_trim_ : nullptr; }
   // The largest NozzleHealth::evidence of any nozzle after any window so far (its CUSUMs move
   // every window, between the experiment's samples).
   double health_max_evidence() const { return health_max_evidence_; }
