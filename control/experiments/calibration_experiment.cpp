@@ -32,6 +32,7 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
   ClosedLoopRig rig(config);
   const int n = rig.plant().nozzle_count();
   const double nominal = config.meter_pulses_per_l;
+  if (options.change) apply_change(rig.plant(), *options.change);
 
   // Catch test: all nozzles open, liquid collected (the plant's TRUE volume) vs pulses.
   rig.command_duties(std::vector<double>(static_cast<std::size_t>(n), 100.0));
@@ -93,7 +94,7 @@ const CalibrationResult& cached_calibration(const CalibrationOptions& options) {
     return a.seed == b.seed && a.pressure_mpa == b.pressure_mpa &&
            a.frequency_hz == b.frequency_hz && a.catch_test_s == b.catch_test_s &&
            a.duties_pct == b.duties_pct && a.settle_s == b.settle_s && a.measure_s == b.measure_s &&
-           a.plant == b.plant;
+           a.plant == b.plant && a.change == b.change;
   };
   static std::mutex mutex;
   // deque: references handed out stay valid as entries are added.

@@ -106,6 +106,7 @@ struct CalibrationOptions {
   double settle_s = 2.0;
   double measure_s = 20.0;
   plant::PlantParams plant{};  // the machine calibrated (PlantParams{} = the ideal bench)
+  std::optional<MachineChange> change{};  // applied before calibrating: a recalibration
 };
 CalibrationResult run_calibration(const CalibrationOptions& options);
 
@@ -141,6 +142,8 @@ struct SprayRunOptions {
   // ...as a model (BoomTrim: common gain and valve timing) or FlowTrim's integral law (the
   // daemon's).
   bool model_trim = false;
+  // Calibrate after `change`, not before it (a user recalibrating the changed machine).
+  bool recalibrated = false;
 };
 LinearityResult run_linearity(const SprayRunOptions& options);
 
@@ -300,7 +303,8 @@ TruthTally tally_against_truth(const SavingsRun& run,
 struct FleetOptions {
   std::uint64_t seed = 1;
   int plants = 20;
-  bool changed = true;  // apply the drawn change after calibration
+  bool changed = true;                    // apply the drawn change after calibration
+  ChangeParts parts = ChangeParts::kAll;  // ...all of it or one half (orthogonal only)
 };
 struct OrthogonalFleetRow {
   Spread mean_error_pct;           // per machine: mean over its 64 nozzle-runs
@@ -313,6 +317,10 @@ struct OrthogonalFleetResult {
   OrthogonalFleetRow trim_on;     // FlowTrim's integral law, the daemon's
   OrthogonalFleetRow model_trim;  // BoomTrim (lab only: boom_trim.hpp says why)
   OrthogonalFleetRow trim_off;
+  // The remedy the daemon offers for what no boom trim can see: the catch test and the nozzle
+  // calibration run again on the changed machine (sprayctl calibrate meter / nozzles), then
+  // the daemon's trim.
+  OrthogonalFleetRow recalibrated;
 };
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet,
                                            const SprayRunOptions& base = {});

@@ -73,6 +73,25 @@ MachineChange no_change(const Machine& machine) {
   return c;
 }
 
+MachineChange draw_change_parts(const Machine& machine, std::uint64_t seed, int index,
+                                ChangeParts parts) {
+  const MachineChange drawn = draw_change(machine, seed, index);
+  MachineChange kept = no_change(machine);
+  if (parts == ChangeParts::kAll || parts == ChangeParts::kPerNozzle) {
+    kept.nozzle_wear = drawn.nozzle_wear;
+    kept.valve_ageing = drawn.valve_ageing;
+    kept.blocked_nozzle = drawn.blocked_nozzle;
+    kept.blockage = drawn.blockage;
+  }
+  if (parts == ChangeParts::kAll || parts == ChangeParts::kCommon) {
+    kept.meter_drift = drawn.meter_drift;
+    kept.supply_volts_end = drawn.supply_volts_end;
+    kept.speed_start_m_per_s = drawn.speed_start_m_per_s;
+    kept.speed_end_m_per_s = drawn.speed_end_m_per_s;
+  }
+  return kept;
+}
+
 void apply_change(plant::HydraulicPlant& plant, const MachineChange& change) {
   for (int i = 0; i < plant.nozzle_count(); ++i) {
     const auto k = static_cast<std::size_t>(i);

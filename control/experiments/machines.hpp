@@ -50,7 +50,13 @@ struct MachineChange {
   double supply_volts_end = 24.0;
   double speed_start_m_per_s = 1.0;
   double speed_end_m_per_s = 1.0;
+  bool operator==(const MachineChange&) const = default;
 };
+
+// Which parts of a drawn change a run gets: all of it, or one half to tell the halves' errors
+// apart. Per-nozzle parts: each nozzle's wear, its valve's ageing, the partial blockage. Common
+// parts: the meter's drift and the supply and speed ramps (one for the whole boom).
+enum class ChangeParts { kAll, kCommon, kPerNozzle, kNone };
 
 // Machine `index` of the fleet `seed`. Different (seed, index) pairs give independent machines.
 Machine draw_machine(std::uint64_t seed, int index);
@@ -59,6 +65,9 @@ std::vector<Machine> draw_machines(std::uint64_t seed, int count, int first_inde
 MachineChange draw_change(const Machine& machine, std::uint64_t seed, int index);
 // No change: the machine as it was calibrated.
 MachineChange no_change(const Machine& machine);
+// draw_change() with only `parts` of it kept (the others as made).
+MachineChange draw_change_parts(const Machine& machine, std::uint64_t seed, int index,
+                                ChangeParts parts);
 
 // The static part of the change (wear, blockage, ageing, meter drift) and the start of the
 // ramps; then apply_change_progress(fraction in [0, 1]) moves supply voltage and speed.

@@ -41,6 +41,7 @@ PreparedMachine prepare_machine(const SprayRunOptions& options) {
   cal_options.pressure_mpa = options.pressure_mpa;
   cal_options.frequency_hz = options.frequency_hz;
   cal_options.plant = options.plant;
+  if (options.recalibrated) cal_options.change = options.change;
   const CalibrationResult& cal = cached_calibration(cal_options);
   m.config.fixes = {true, true, options.flow_feedback, options.model_trim};
   m.config.meter_pulses_per_l = cal.meter.pulses_per_litre;
@@ -181,7 +182,7 @@ LinearityFleetResult run_linearity_fleet(const FleetOptions& fleet, const SprayR
 }
 
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const SprayRunOptions& base) {
-  std::vector<OrthogonalResult> on, model, off;
+  std::vector<OrthogonalResult> on, model, off, recalibrated;
   const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
   for (std::size_t i = 0; i < machines.size(); ++i) {
     const Machine& m = machines[i];
@@ -189,7 +190,9 @@ OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const Spra
     options.seed = m.seed;
     options.plant = m.params;
     options.raw = false;
-    options.change = fleet.changed ? draw_change(m, fleet.seed, static_cast<int>(i)) : no_change(m);
+    options.change = fleet.changed
+                         ? draw_change_parts(m, fleet.seed, static_cast<int>(i), fleet.parts)
+                         : no_change(m);
     options.flow_feedback = true;
     options.model_trim = false;
     on.push_back(run_orthogonal(options));
@@ -198,8 +201,12 @@ OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const Spra
     options.model_trim = false;
     options.flow_feedback = false;
     off.push_back(run_orthogonal(options));
+    options.flow_feedback = true;
+    options.recalibrated = true;
+    recalibrated.push_back(run_orthogonal(options));
   }
-  return {summarise(std::move(on)), summarise(std::move(model)), summarise(std::move(off))};
+  return {summarise(std::move(on)), summarise(std::move(model)), summarise(std::move(off)),
+          summarise(std::move(recalibrated))};
 }
 
 }  // namespace weedspray::control::experiments
