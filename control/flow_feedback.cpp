@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace weedspray::control {
@@ -66,6 +67,52 @@ double FlowTrim::update(const FlowTrimInput& in) noexcept {
       std::clamp(config_.gain_per_s * relative_error * in.dt_s, -max_step, max_step);
   correction_ = std::clamp(correction_ + step, config_.min_correction, config_.max_correction);
   return correction_;
+}
+
+double promised_flow_l_per_min(const NozzleLine& line, double duty_pct,
+                               double pressure_mpa) noexcept {
+  if (!(duty_pct > 0.0)) return 0.0;
+  if (duty_pct >= 100.0) return held_open_flow_l_per_min(line, pressure_mpa);
+  return flow_for_duty_l_per_min(line, duty_pct, pressure_mpa);
+}
+
+double trimmed_duty_pct(const NozzleLine& line, double duty_pct, double correction,
+                        double pressure_mpa) noexcept {
+  if (!(duty_pct > 0.0) || duty_pct >= 100.0 || !std::isfinite(correction)) return duty_pct;
+  const double flow = flow_for_duty_l_per_min(line, duty_pct, pressure_mpa);
+  return raw_duty_for_flow_pct(line, flow * correction, pressure_mpa);
+}
+
+bool FlowTrimWindows::tick(double dt_s, const FlowTrimTick& tick, double pulses_per_litre,
+                           FlowTrimInput& out) noexcept {
+  if (!started_) {
+    started_ = true;
+    start_pulses_ = tick.pulses;
+    elapsed_s_ = 0.0;
+    sums_ = {};
+    return false;
+  }
+  if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return false;
+  elapsed_s_ += dt_s;
+  sums_.requested_total_l_per_min += tick.promised_l_per_min * dt_s;
+  sums_.trimmable_l_per_min += tick.trimmable_l_per_min * dt_s;
+  sums_.open_fraction += tick.open_fraction * dt_s;
+  sums_.pressure_error_fraction =
+      std::max(sums_.pressure_error_fraction, std::abs(tick.pressure_error_fraction));
+  if (elapsed_s_ < window_s_ - 1e-9) return false;
+  out.requested_total_l_per_min = sums_.requested_total_l_per_min / elapsed_s_;
+  out.trimmable_l_per_min = sums_.trimmable_l_per_min / elapsed_s_;
+  out.open_fraction = sums_.open_fraction / elapsed_s_;
+  out.pressure_error_fraction = sums_.pressure_error_fraction;
+  out.measured_total_l_per_min =
+      pulses_per_litre > 0.0
+          ? static_cast<double>(tick.pulses - start_pulses_) / pulses_per_litre / elapsed_s_ * 60.0
+          : std::numeric_limits<double>::quiet_NaN();  // FlowTrim freezes
+  out.dt_s = elapsed_s_;
+  start_pulses_ = tick.pulses;
+  elapsed_s_ = 0.0;
+  sums_ = {};
+  return true;
 }
 
 }  // namespace weedspray::control

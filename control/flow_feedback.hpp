@@ -14,6 +14,10 @@
 // reading says nothing about the duties. Units: flow L/min, dt s. Pure; allocation-free.
 #pragma once
 
+#include <cstdint>
+
+#include "control/spray_rate_law.hpp"
+
 namespace weedspray::control {
 
 struct FlowTrimConfig {
@@ -65,6 +69,56 @@ class FlowTrim {
   FlowTrimConfig config_;
   double correction_ = 1.0;
   bool frozen_ = true;
+};
+
+// What the law promises a nozzle at the duty it chose: the trim's reference. Closed: 0; held
+// open: the full-open flow at the pressure (held_open_flow_l_per_min); between: its line.
+double promised_flow_l_per_min(const NozzleLine& line, double duty_pct,
+                               double pressure_mpa) noexcept;
+
+// The duty that makes a modulated nozzle (0 < duty < 100) spray `correction` x what its line
+// promises at duty_pct: the trim scales each nozzle's FLOW, not its duty. Scaling duties would
+// move a low-duty nozzle's flow by less than a high-duty one's (the line's intercept), so
+// nozzles sprayed at different rates would not keep their ratio, and the trim's error, which is
+// normalised by the modulated nozzles' flow, would not be what one step of it moves. Closed
+// and held-open duties are returned as they are; the result is not clamped (the caller's law
+// owns its band).
+double trimmed_duty_pct(const NozzleLine& line, double duty_pct, double correction,
+                        double pressure_mpa) noexcept;
+
+// One control tick as the trim sees it.
+struct FlowTrimTick {
+  double promised_l_per_min = 0.0;       // summed over the nozzles, at the law's duties
+  double trimmable_l_per_min = 0.0;      // of that, the modulated nozzles' share
+  double open_fraction = 0.0;            // mean commanded duty of all valves, 0..1
+  double pressure_error_fraction = 0.0;  // |P - P_set| / P_set now
+  std::uint64_t pulses = 0;              // the meter's running count
+};
+
+// Cuts the control loop's ticks into FlowTrim windows against the meter's pulse count: the
+// daemon's sprayer and the lab's rig both feed FlowTrim through this, so the lab's figures for
+// the trim are the daemon's. Over a window the promised and trimmable flows and the open
+// fraction are time means, the pressure error is the worst tick's, and the measured flow is the
+// pulses counted over the window's length (a whole number of ticks: at 3 Hz PWM a 1 s window is
+// three whole periods of every valve, which a window shorter than a period is not).
+// Allocation-free.
+class FlowTrimWindows {
+ public:
+  explicit FlowTrimWindows(double window_s = 1.0) : window_s_(window_s) {}
+  // One tick of dt [s] (ticks after the window's start). The first tick after construction or
+  // reset() only starts a window. True when a window closed: then `out` holds it.
+  bool tick(double dt_s, const FlowTrimTick& tick, double pulses_per_litre,
+            FlowTrimInput& out) noexcept;
+  // Not spraying, or the duties not the law's (a calibration): the next tick starts afresh.
+  void reset() noexcept { started_ = false; }
+  double window_s() const noexcept { return window_s_; }
+
+ private:
+  double window_s_;
+  bool started_ = false;
+  std::uint64_t start_pulses_ = 0;
+  double elapsed_s_ = 0.0;
+  FlowTrimInput sums_{};  // time integrals (flows, open fraction) and the worst pressure error
 };
 
 }  // namespace weedspray::control

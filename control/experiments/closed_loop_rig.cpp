@@ -44,7 +44,8 @@ ClosedLoopRig::ClosedLoopRig(const RigConfig& config)
       plant_(config.plant, config.seed),
       controller_(config.controller_mode, config.controller),
       pwm_(pwm_config(config)),
-      trim_(config.flow_trim) {
+      trim_(config.flow_trim),
+      trim_windows_(config.flow_trim_window_s) {
   if (!(config.control_period_s > 0.0 && config.control_period_s <= 0.1))
     throw std::invalid_argument("RigConfig.control_period_s must be in (0, 0.1]");
   if (config.adc_bits < 8 || config.adc_bits > 24)
@@ -131,8 +132,8 @@ void ClosedLoopRig::apply_flow_requests() {
     } else {
       promised_flows_[k] = flow_for_duty_l_per_min(line, duty, pressure);
     }
-    if (config_.fixes.flow_feedback && !boom_trim_ && duty > 0.0 && duty < 100.0)
-      duty *= trim_.correction();
+    if (config_.fixes.flow_feedback && !boom_trim_)
+      duty = trimmed_duty_pct(line, duty, trim_.correction(), pressure);
     duties_[k] = std::clamp(duty, 0.0, 100.0);
   }
   pwm_.set_duties(std::span<const double>(duties_.data(), static_cast<std::size_t>(n)));
@@ -154,10 +155,8 @@ void ClosedLoopRig::start() {
   next_sample_s_ = now + config_.control_period_s - config_.converter_lead_s;
   dac_due_s_ = -1.0;
   next_record_s_ = now;
-  next_trim_s_ = now + config_.flow_trim_window_s;
   boom_trim_windows_.reset();
-  trim_pulses_ = plant_.flow_meter_pulses();
-  trim_pressure_error_ = 0.0;
+  trim_windows_.reset();
   if (health_) {
     next_health_window_s_ = now + health_window_s_;
     next_health_meter_s_ = -1.0;
@@ -215,31 +214,23 @@ void ClosedLoopRig::control_tick() {
     plant_.set_return_valve_volts(10.0 * (1.0 - u));
   }
 
-  // FlowTrim decides itself whether a window is usable (pressure off set-point, too little
-  // trimmable flow); the rig only measures.
   const double pressure_error =
       std::abs(filtered_pressure_mpa_ - config_.setpoint_mpa) / config_.setpoint_mpa;
-  trim_pressure_error_ = std::max(trim_pressure_error_, pressure_error);
-  if (config_.fixes.flow_feedback && !boom_trim_ && flows_requested_ &&
-      plant_.time_s() >= next_trim_s_ - 1e-9) {
-    const std::uint64_t pulses = plant_.flow_meter_pulses();
-    const double window = config_.flow_trim_window_s;
-    FlowTrimInput input;
-    input.measured_total_l_per_min =
-        static_cast<double>(pulses - trim_pulses_) / config_.meter_pulses_per_l / window * 60.0;
+  // FlowTrim decides itself whether a window is usable (pressure off set-point, too little
+  // trimmable flow); the rig only measures, through the daemon's window cutter.
+  if (config_.fixes.flow_feedback && !boom_trim_ && flows_requested_) {
+    FlowTrimTick tick;
     for (int i = 0; i < plant_.nozzle_count(); ++i) {
       const auto k = static_cast<std::size_t>(i);
       // The trim compares against what the lines promise for the duties actually latched.
-      if (duties_[k] > 0.0) input.requested_total_l_per_min += promised_flows_[k];
-      if (duties_[k] > 0.0 && duties_[k] < 100.0) input.trimmable_l_per_min += promised_flows_[k];
-      input.open_fraction += duties_[k] / 100.0 / plant_.nozzle_count();
+      tick.promised_l_per_min += promised_flows_[k];
+      if (duties_[k] > 0.0 && duties_[k] < 100.0) tick.trimmable_l_per_min += promised_flows_[k];
+      tick.open_fraction += duties_[k] / 100.0 / plant_.nozzle_count();
     }
-    input.pressure_error_fraction = trim_pressure_error_;
-    input.dt_s = window;
-    trim_.update(input);
-    trim_pressure_error_ = 0.0;
-    trim_pulses_ = pulses;
-    next_trim_s_ += window;
+    tick.pressure_error_fraction = pressure_error;
+    tick.pulses = plant_.flow_meter_pulses();
+    FlowTrimInput input;
+    if (trim_windows_.tick(dt, tick, config_.meter_pulses_per_l, input)) trim_.update(input);
   }
   if (flows_requested_) apply_flow_requests();
   if (boom_trim_) {

@@ -155,12 +155,10 @@ class ClosedLoopRig {
   double dac_due_s_ = -1.0;  // converter_lag_s > 0: when the pending DAC write lands (< 0: none)
   double dac_pending_volts_ = 0.0;
   double next_record_s_ = 0.0;
-  double next_trim_s_ = 0.0;
   double pwm_start_s_ = 0.0;
   double measured_pressure_mpa_ = 0.0;
   double filtered_pressure_mpa_ = 0.0;
-  std::uint64_t trim_pulses_ = 0;
-  double trim_pressure_error_ = 0.0;  // worst |P - P_set| / P_set of the current trim window
+  FlowTrimWindows trim_windows_;
   std::vector<TraceSample> trace_;
   std::optional<NozzleHealth> health_;
   std::optional<BoomTrim> boom_trim_;

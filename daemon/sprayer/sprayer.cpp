@@ -418,6 +418,10 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   double volume_at_last_record = 0;
   std::uint64_t flow_count_start = io_.flow != nullptr ? io_.flow->snapshot().count : 0;
   std::uint64_t volume_count = flow_count_start;
+  // The trim judges the pressure through the lab rig's 0.1 s filter: a single noisy read off
+  // the set-point must not freeze a whole window.
+  constexpr double kTrimPressureFilterS = 0.1;
+  double trim_pressure_mpa = -1.0;  // < 0: not yet read
   Nanos flow_window_start = last;
   double fixed_distance = 0;
   std::uint64_t frames_lost = 0;
@@ -576,7 +580,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
 
     io::ValveCommand command;
     command.valve_count = static_cast<std::uint32_t>(nozzles);
-    double requested_l_per_min = 0;
+    control::FlowTrimTick trim_tick;
     double open_sum = 0;
     for (std::size_t n = 0; n < nozzles; ++n) {
       const int owner = nozzle_owner_[n];
@@ -611,8 +615,10 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
               params.law, quantisers_[n].quantise(std::clamp(decision.raw_duty_pct, 0.0, 100.0)),
               decision.target_flow_l_per_min);
         }
-        requested_l_per_min +=
-            control::flow_for_duty_l_per_min(params.lines[n], duty, compensation_pressure);
+        const double promised =
+            control::promised_flow_l_per_min(params.lines[n], duty, compensation_pressure);
+        trim_tick.promised_l_per_min += promised;
+        if (duty > 0 && duty < 100) trim_tick.trimmable_l_per_min += promised;
       } else if (!quantisers_.empty()) {
         quantisers_[n].reset();
       }
@@ -621,24 +627,33 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
     }
     status.open_fraction = nozzles > 0 ? open_sum / static_cast<double>(nozzles) : 0.0;
     if (io_.flow != nullptr && spray) {
-      const double correction =
-          flow_trim_.update(requested_l_per_min, status.flow_l_per_min, status.open_fraction, dt);
+      // The lab's rig feeds the same trim through the same windows (closed_loop_rig.cpp), so
+      // `weedspray-lab experiment orthogonal` measures this law.
+      trim_pressure_mpa = trim_pressure_mpa < 0.0
+                              ? pressure.pressure_mpa
+                              : trim_pressure_mpa + (1.0 - std::exp(-dt / kTrimPressureFilterS)) *
+                                                        (pressure.pressure_mpa - trim_pressure_mpa);
+      trim_tick.open_fraction = status.open_fraction;
+      trim_tick.pressure_error_fraction =
+          params.setpoint_mpa > 0 ? (trim_pressure_mpa - params.setpoint_mpa) / params.setpoint_mpa
+                                  : 0.0;
+      trim_tick.pulses = status.flow_pulses;
+      control::FlowTrimInput trim_window;
+      if (flow_trim_windows_.tick(dt, trim_tick, params.flow_pulses_per_litre, trim_window))
+        flow_trim_.update(trim_window);
+      const double correction = flow_trim_.correction();
       for (std::size_t n = 0; n < nozzles; ++n) {
         // The trim moves duties only inside the calibrated band, never into the closed one.
-        // It scales each nozzle's FLOW (q = A s + b), not its duty: scaling duties would move
-        // a low-duty nozzle's flow by less than a high-duty one's (the intercept b), so nozzles
-        // sprayed at different rates (densities, the inner and outer side of a turn) would no
-        // longer keep their ratio.
         const double d = command.duty_pct[n];
         if (d > 0 && d < 100) {
-          const control::NozzleLine& line = params.lines[n];
-          const double flow = control::flow_for_duty_l_per_min(line, d, compensation_pressure);
-          const double trimmed =
-              control::raw_duty_for_flow_pct(line, flow * correction, compensation_pressure);
-          command.duty_pct[n] =
-              std::clamp(trimmed, params.law.min_duty_pct, params.law.max_duty_pct);
+          command.duty_pct[n] = std::clamp(
+              control::trimmed_duty_pct(params.lines[n], d, correction, compensation_pressure),
+              params.law.min_duty_pct, params.law.max_duty_pct);
         }
       }
+    } else {
+      flow_trim_windows_.reset();
+      trim_pressure_mpa = -1.0;
     }
     command.issued_at = now;
     pwm_driver_->command(command);

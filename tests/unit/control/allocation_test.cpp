@@ -56,6 +56,7 @@ TEST(Allocation, PerCycleFunctionsDoNotAllocate) {
   NozzleScheduler scheduler(scheduler_config);
   Odometry odometry(OdometryConfig{});
   FlowTrim trim(FlowTrimConfig{});
+  FlowTrimWindows trim_windows(0.1);
   DutyQuantiser quantiser = DutyQuantiser::evenly_spaced(6, 2.0);
   const std::vector<double> frame(8, 40.0);
   const std::vector<double> duties{10, 20, 30, 40, 50, 60, 70, 80};
@@ -72,6 +73,11 @@ TEST(Allocation, PerCycleFunctionsDoNotAllocate) {
     const double duty = scheduler.duty_at(i % 4, odometry.distance_m(), odometry.speed_m_per_s());
     const SprayDecision d = spray_decision(SprayLawConfig{}, NozzleLine{}, 0.6, 1.0, 0.4);
     trim.update(1.0, 0.95, 0.5, 0.01);
+    FlowTrimInput window;
+    const FlowTrimTick tick{promised_flow_l_per_min(NozzleLine{}, d.duty_pct, 0.4), 0.5, 0.5, 0.01,
+                            static_cast<std::uint64_t>(i) * 3};
+    if (trim_windows.tick(0.01, tick, 8500.0, window)) trim.update(window);
+    trimmed_duty_pct(NozzleLine{}, d.duty_pct, trim.correction(), 0.4);
     quantiser.quantise(duty + d.duty_pct * 0.01);
   }
   EXPECT_EQ(g_allocations.load() - before, 0);

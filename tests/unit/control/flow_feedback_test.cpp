@@ -135,5 +135,83 @@ TEST(FlowTrim, RejectsBadConfig) {
   EXPECT_THROW(FlowTrim{config}, std::invalid_argument);
 }
 
+TEST(FlowTrimWindows, TimeMeansOverAWindowAndTheMetersPulsesOverItsLength) {
+  FlowTrimWindows windows(1.0);
+  FlowTrimInput out;
+  FlowTrimTick tick;
+  tick.pulses = 1000;
+  EXPECT_FALSE(windows.tick(0.01, tick, 8500.0, out));  // only starts the window
+  // 100 ticks of 10 ms: promised 2.0 L/min for the first half, 1.0 for the second; the meter
+  // counts 8500 x 1.5 / 60 pulses over the second.
+  bool closed = false;
+  for (int i = 1; i <= 100; ++i) {
+    tick.promised_l_per_min = i <= 50 ? 2.0 : 1.0;
+    tick.trimmable_l_per_min = i <= 50 ? 1.0 : 0.0;
+    tick.open_fraction = i <= 50 ? 0.6 : 0.2;
+    tick.pressure_error_fraction = i == 30 ? -0.08 : 0.01;
+    tick.pulses = 1000 + static_cast<std::uint64_t>(std::lround(8500.0 * 1.5 / 60.0 * i / 100.0));
+    closed = windows.tick(0.01, tick, 8500.0, out);
+    if (i < 100) {
+      ASSERT_FALSE(closed) << i;
+    }
+  }
+  ASSERT_TRUE(closed);
+  EXPECT_NEAR(out.requested_total_l_per_min, 1.5, 1e-9);
+  EXPECT_NEAR(out.trimmable_l_per_min, 0.5, 1e-9);
+  EXPECT_NEAR(out.open_fraction, 0.4, 1e-9);
+  EXPECT_NEAR(out.pressure_error_fraction, 0.08, 1e-12);  // the worst tick's, either sign
+  EXPECT_NEAR(out.measured_total_l_per_min, 1.5, 0.005);
+  EXPECT_NEAR(out.dt_s, 1.0, 1e-9);
+  // The next window starts where this one ended: 50 ticks measure only their own pulses.
+  for (int i = 1; i <= 100; ++i) {
+    tick.pulses += 10;
+    closed = windows.tick(0.01, tick, 8500.0, out);
+  }
+  ASSERT_TRUE(closed);
+  EXPECT_NEAR(out.measured_total_l_per_min, 1000.0 / 8500.0 * 60.0, 1e-9);
+}
+
+TEST(FlowTrimWindows, ResetStartsAfreshAndAnUnknownMeterFreezesTheTrim) {
+  FlowTrimWindows windows(0.5);
+  FlowTrimInput out;
+  FlowTrimTick tick{1.0, 1.0, 0.5, 0.0, 0};
+  windows.tick(0.01, tick, 8500.0, out);
+  for (int i = 0; i < 30; ++i) windows.tick(0.01, tick, 8500.0, out);
+  windows.reset();  // e.g. spraying stopped: the 0.3 s counted so far are dropped
+  tick.pulses = 500;
+  EXPECT_FALSE(windows.tick(0.01, tick, 8500.0, out));
+  int ticks = 0;
+  while (!windows.tick(0.01, tick, 0.0, out)) ++ticks;
+  EXPECT_EQ(ticks, 49);  // a whole 0.5 s after the restart
+  EXPECT_TRUE(std::isnan(out.measured_total_l_per_min));
+  FlowTrim trim(FlowTrimConfig{});
+  trim.update(out);
+  EXPECT_TRUE(trim.frozen());
+}
+
+TEST(TrimmedDuty, ScalesTheNozzlesFlowNotItsDuty) {
+  NozzleLine line;  // q = 0.00393 s + 0.217 at 0.4 MPa: a large intercept
+  for (double duty : {25.0, 50.0, 75.0}) {
+    const double trimmed = trimmed_duty_pct(line, duty, 1.1, 0.4);
+    EXPECT_NEAR(flow_for_duty_l_per_min(line, trimmed, 0.4),
+                1.1 * flow_for_duty_l_per_min(line, duty, 0.4), 1e-12)
+        << duty;
+    // Scaling the duty instead would move the flow by less than 10 % (the intercept).
+    EXPECT_GT(trimmed, 1.1 * duty) << duty;
+  }
+  EXPECT_EQ(trimmed_duty_pct(line, 0.0, 1.2, 0.4), 0.0);      // closed stays closed
+  EXPECT_EQ(trimmed_duty_pct(line, 100.0, 0.8, 0.4), 100.0);  // held open is not trimmed
+  EXPECT_DOUBLE_EQ(trimmed_duty_pct(line, 40.0, 1.0, 0.4), 40.0);
+}
+
+TEST(PromisedFlow, ClosedHeldOpenOrTheLine) {
+  NozzleLine line;
+  line.full_open_flow_l_per_min = 0.7;
+  EXPECT_EQ(promised_flow_l_per_min(line, 0.0, 0.4), 0.0);
+  EXPECT_NEAR(promised_flow_l_per_min(line, 100.0, 0.4), 0.7, 1e-12);  // not the line at 100 %
+  EXPECT_NEAR(promised_flow_l_per_min(line, 50.0, 0.4), flow_for_duty_l_per_min(line, 50.0, 0.4),
+              1e-12);
+}
+
 }  // namespace
 }  // namespace weedspray::control
