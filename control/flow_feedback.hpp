@@ -99,8 +99,8 @@ struct FlowTrimTick {
 // daemon's sprayer and the lab's rig both feed FlowTrim through this, so the lab's figures for
 // the trim are the daemon's. Over a window the promised and trimmable flows and the open
 // fraction are time means, the pressure error is the worst tick's, and the measured flow is the
-// pulses counted over the window's length (a whole number of ticks: at 3 Hz PWM a 1 s window is
-// three whole periods of every valve, which a window shorter than a period is not).
+// pulses counted over the window's length (a whole number of ticks: at a whole-Hz PWM frequency
+// a 1 s window holds whole periods of every valve, which a window shorter than a period does not).
 // Allocation-free.
 class FlowTrimWindows {
  public:

@@ -124,14 +124,7 @@ void ClosedLoopRig::apply_flow_requests() {
     if (config_.duty_clamp) duty = clamp_duty_for_flow_pct(*config_.duty_clamp, duty, flow);
     // What the law promises for the duty it chose (the trim's reference): a clamp that raised
     // or lowered the duty changed the promise too.
-    if (duty <= 0.0) {
-      promised_flows_[k] = 0.0;
-    } else if (duty >= 100.0) {
-      promised_flows_[k] =
-          line.full_open_flow_l_per_min > 0.0 ? held_open_flow_l_per_min(line, pressure) : flow;
-    } else {
-      promised_flows_[k] = flow_for_duty_l_per_min(line, duty, pressure);
-    }
+    promised_flows_[k] = promised_flow_l_per_min(line, duty, pressure);
     if (config_.fixes.flow_feedback && !boom_trim_)
       duty = trimmed_duty_pct(line, duty, trim_.correction(), pressure);
     duties_[k] = std::clamp(duty, 0.0, 100.0);

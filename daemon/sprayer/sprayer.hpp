@@ -163,7 +163,7 @@ class Sprayer {
   std::unique_ptr<io::ValvePwmDriver<control::PwmSchedule>> pwm_driver_;
   std::optional<control::Odometry> odometry_;
   control::FlowTrim flow_trim_;
-  control::FlowTrimWindows flow_trim_windows_;          // 1 s: three whole periods at 3 Hz
+  control::FlowTrimWindows flow_trim_windows_;          // 1 s: whole PWM periods at whole Hz
   std::optional<control::NozzleHealth> nozzle_health_;  // [nozzle_health] enabled; control loop
   std::vector<control::DutyQuantiser> quantisers_;
   std::array<CameraWorker, kMaxCameras> cameras_;
