@@ -56,7 +56,7 @@ double FlowTrim::update(const FlowTrimInput& in) noexcept {
       !usable || in.requested_total_l_per_min < config_.min_requested_flow_l_per_min ||
       in.trimmable_l_per_min < config_.min_requested_flow_l_per_min ||
       in.trimmable_l_per_min < config_.min_trimmable_fraction * in.requested_total_l_per_min ||
-      in.open_fraction < config_.min_open_fraction ||
+      in.open_fraction < config_.min_open_fraction || !in.promise_known ||
       std::abs(in.pressure_error_fraction) > config_.max_pressure_error_fraction;
   if (frozen_) return correction_;
   const double trimmable = std::min(in.trimmable_l_per_min, in.requested_total_l_per_min);
@@ -99,11 +99,13 @@ bool FlowTrimWindows::tick(double dt_s, const FlowTrimTick& tick, double pulses_
   sums_.open_fraction += tick.open_fraction * dt_s;
   sums_.pressure_error_fraction =
       std::max(sums_.pressure_error_fraction, std::abs(tick.pressure_error_fraction));
+  sums_.promise_known = sums_.promise_known && tick.promise_known;
   if (elapsed_s_ < window_s_ - 1e-9) return false;
   out.requested_total_l_per_min = sums_.requested_total_l_per_min / elapsed_s_;
   out.trimmable_l_per_min = sums_.trimmable_l_per_min / elapsed_s_;
   out.open_fraction = sums_.open_fraction / elapsed_s_;
   out.pressure_error_fraction = sums_.pressure_error_fraction;
+  out.promise_known = sums_.promise_known;
   out.measured_total_l_per_min =
       pulses_per_litre > 0.0
           ? static_cast<double>(tick.pulses - start_pulses_) / pulses_per_litre / elapsed_s_ * 60.0
@@ -113,6 +115,32 @@ bool FlowTrimWindows::tick(double dt_s, const FlowTrimTick& tick, double pulses_
   elapsed_s_ = 0.0;
   sums_ = {};
   return true;
+}
+
+CalibrationRatio::CalibrationRatio(const FlowTrimConfig& freeze_rules, double time_constant_s,
+                                   double min_observed_s)
+    : freeze_rules_(freeze_rules),
+      time_constant_s_(time_constant_s),
+      min_observed_s_(min_observed_s) {
+  if (!(time_constant_s > 0.0))
+    throw std::invalid_argument("CalibrationRatio time_constant_s must be > 0");
+  if (!(min_observed_s >= 0.0))
+    throw std::invalid_argument("CalibrationRatio min_observed_s must be >= 0");
+}
+
+void CalibrationRatio::update(const FlowTrimInput& in) noexcept {
+  const bool usable =
+      std::isfinite(in.requested_total_l_per_min) && std::isfinite(in.measured_total_l_per_min) &&
+      std::isfinite(in.open_fraction) && std::isfinite(in.pressure_error_fraction) &&
+      std::isfinite(in.dt_s) && in.dt_s > 0.0 && in.promise_known &&
+      in.requested_total_l_per_min >= freeze_rules_.min_requested_flow_l_per_min &&
+      in.open_fraction >= freeze_rules_.min_open_fraction &&
+      std::abs(in.pressure_error_fraction) <= freeze_rules_.max_pressure_error_fraction;
+  if (!usable) return;
+  const double keep = std::exp(-in.dt_s / time_constant_s_);
+  metered_ = metered_ * keep + in.measured_total_l_per_min * in.dt_s;
+  promised_ = promised_ * keep + in.requested_total_l_per_min * in.dt_s;
+  observed_s_ += in.dt_s;
 }
 
 }  // namespace weedspray::control

@@ -9,6 +9,7 @@
 // (Normalising by the whole request would dilute the error by the nozzles held at 100 %: a
 // trim wound up during a transient then takes minutes to unwind.)
 // Frozen (held) when too little flow is requested or trimmable, the valves are mostly closed,
+// a nozzle held open has no measured full-open flow (FlowTrimInput::promise_known),
 // the modulated share is too small to observe (min_trimmable_fraction), or the pressure was off
 // its set-point during the measurement window — there the meter
 // reading says nothing about the duties. Units: flow L/min, dt s. Pure; allocation-free.
@@ -45,6 +46,11 @@ struct FlowTrimInput {
   // Worst |P - P_set| / P_set over the window (0 if unknown / held).
   double pressure_error_fraction = 0.0;
   double dt_s = 0.0;  // window length
+  // False when, at some tick of the window, a nozzle was held open whose full-open flow no
+  // calibration measured: its promise was then the line extrapolated to 100 %, which is not
+  // what an open valve sprays (on the simulated machine held-open nozzles sprayed ~15 % more
+  // by volume), and the trim would take that out of the modulated nozzles. Freezes the trim.
+  bool promise_known = true;
 };
 
 class FlowTrim {
@@ -93,6 +99,7 @@ struct FlowTrimTick {
   double open_fraction = 0.0;            // mean commanded duty of all valves, 0..1
   double pressure_error_fraction = 0.0;  // |P - P_set| / P_set now
   std::uint64_t pulses = 0;              // the meter's running count
+  bool promise_known = true;             // see FlowTrimInput::promise_known
 };
 
 // Cuts the control loop's ticks into FlowTrim windows against the meter's pulse count: the
@@ -119,6 +126,36 @@ class FlowTrimWindows {
   std::uint64_t start_pulses_ = 0;
   double elapsed_s_ = 0.0;
   FlowTrimInput sums_{};  // time integrals (flows, open fraction) and the worst pressure error
+};
+
+// How far the boom sprays from its calibration, for the daemon's calibration_drift warning:
+// the line meter's volume over what the calibrated lines promise at the duties actually
+// commanded (after the trim), both summed with exponential forgetting over usable windows
+// (FlowTrim's freeze rules for flow, open valves and pressure; no modulated share needed).
+// FlowTrim's correction is not this: its integral law puts the held-open nozzles' error on the
+// modulated ones, so on the uncalibrated simulated machine it sat anywhere from 0.78 to 1.05 with
+// the field's mix of duties while this ratio only saw the boom. Feed it windows from a
+// FlowTrimWindows whose promised flow is taken at the commanded duties. Pure; allocation-free.
+class CalibrationRatio {
+ public:
+  // time_constant_s: the exponential average's; known after min_observed_s of usable windows.
+  explicit CalibrationRatio(const FlowTrimConfig& freeze_rules, double time_constant_s = 60.0,
+                            double min_observed_s = 30.0);
+  void update(const FlowTrimInput& window) noexcept;
+  bool known() const noexcept { return observed_s_ >= min_observed_s_; }
+  // Metered over promised volume (1 = as calibrated), 1 until known.
+  double ratio() const noexcept { return known() ? metered_ / promised_ : 1.0; }
+  void reset() noexcept { observed_s_ = metered_ = promised_ = 0.0; }
+
+ private:
+  FlowTrimConfig freeze_rules_;
+  double time_constant_s_;
+  double min_observed_s_;
+  double observed_s_ = 0.0;
+  // Exponentially forgotten volumes (a ratio of sums: no window, the first included, weighs
+  // more than its volume).
+  double metered_ = 0.0;
+  double promised_ = 0.0;
 };
 
 }  // namespace weedspray::control

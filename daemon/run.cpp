@@ -8,6 +8,7 @@
 #include <systemd/sd-event.h>
 
 #include <algorithm>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -20,6 +21,7 @@
 #include <optional>
 #include <thread>
 
+#include "control/flow_feedback.hpp"
 #include "daemon/backends/backends.hpp"
 #include "daemon/backends/emergency_write_handoff.hpp"
 #include "daemon/backends/sim_faults.hpp"
@@ -590,6 +592,7 @@ class Daemon final : public CommandHandler {
     // Not from a status older than the last ClearAlarms (the detector restarts on it).
     in.nozzle_flow_fault =
         control.nozzle_flow_fault >= 0 && control.nozzle_health_reset == trip_reset_;
+    in.calibration_ratio = control.calibration_ratio;
 
     const AlarmMask raised = alarms_.evaluate(in);
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
@@ -621,6 +624,20 @@ class Daemon final : public CommandHandler {
         spdlog::warn("alarm raised: {} (nozzle {}: {}, its flow {:.2f} of its baseline)", name, n,
                      control.nozzle_flow_fault_low ? "blocked" : "over (worn or valve stuck open)",
                      ratio);
+      } else if (id == AlarmId::kCalibrationDrift) {
+        const double ratio = control.calibration_ratio;
+        const double c = control.flow_trim_correction;
+        const control::FlowTrimConfig trim;
+        spdlog::warn(
+            "alarm raised: {} (the line meter has read {:.1f} % {} than the calibrated nozzles "
+            "promise at the commanded duties for {} s; the flow trim at x{:.3f}{}; meter K drift, "
+            "worn or blocked nozzles, or never calibrated: run `sprayctl calibrate meter`, then "
+            "`sprayctl calibrate nozzles`)",
+            name, std::abs(ratio - 1.0) * 100.0, ratio > 1.0 ? "more" : "less",
+            config_.alarms.calibration_drift_hold_s, c,
+            c <= trim.min_correction || c >= trim.max_correction
+                ? " is at its limit: the dose is NOT held"
+                : " holds the boom's total");
       } else if (id == AlarmId::kVisionModelFailed) {
         spdlog::error(
             "alarm raised: {} ({}; that camera's nozzles stay closed until its frames "
@@ -869,6 +886,9 @@ class Daemon final : public CommandHandler {
       s.nozzle_flow_ratio.assign(control.nozzle_flow_ratio.begin(),
                                  control.nozzle_flow_ratio.begin() + n);
     }
+    s.flow_trim_correction = control.flow_trim_correction;
+    s.calibration_ratio = control.calibration_ratio_known ? control.calibration_ratio : 0.0;
+    s.flow_trim_active = control.flow_trim_active;
     return s;
   }
 

@@ -364,7 +364,10 @@ void HydraulicPlant::substep(double dt) {
       next_pulse_at_ = static_cast<double>(flow_pulses_) + 1.0 + jitter(realism_rng_);
     }
   } else {
-    flow_pulses_ = static_cast<std::uint64_t>(metered_l_ * true_meter_pulses_per_l());
+    // From the accumulated phase, not volume x today's K: a meter that drifts (set_meter_drift)
+    // changes the pulses to come, not the ones already counted (the product put 10 % of all
+    // the volume so far into one window when the daemon's sim drifted its meter 10 %).
+    flow_pulses_ = static_cast<std::uint64_t>(meter_phase_);
   }
   tank_level_l_ = std::max(0.0, tank_level_l_ - nozzle_flow * dt);
 

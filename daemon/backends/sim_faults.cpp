@@ -2,6 +2,8 @@
 
 #include <cerrno>
 #include <cstdlib>
+#include <string>
+#include <string_view>
 #include <utility>
 
 #include "control/plant/hydraulic_plant.hpp"
@@ -23,6 +25,18 @@ std::optional<double> partial_blockage(const std::string& suffix) {
   }
   if (percent < 1) return std::nullopt;
   return percent / 100.0;
+}
+
+// "meter_drift_8" with prefix "meter_drift_" -> 8 (1..max whole percent; else nullopt).
+std::optional<int> percent_after(const std::string& name, std::string_view prefix, int max) {
+  if (!name.starts_with(prefix)) return std::nullopt;
+  const std::string digits = name.substr(prefix.size());
+  if (digits.empty() || digits.size() > 2 ||
+      digits.find_first_not_of("0123456789") != std::string::npos)
+    return std::nullopt;
+  const int percent = std::stoi(digits);
+  if (percent < 1 || percent > max) return std::nullopt;
+  return percent;
 }
 
 }  // namespace
@@ -57,6 +71,19 @@ std::optional<SimFault> parse_sim_fault(const std::string& text) {
     fault.apply = [](Plant& p) { p.set_filter_blockage(1.0); };
   } else if (fault.name == "tank_empty") {
     fault.apply = [](Plant& p) { p.set_tank_level_l(0.0); };
+  } else if (const auto up = percent_after(fault.name, "meter_drift_", 30),
+             down = percent_after(fault.name, "meter_drift_minus_", 30);
+             up || down) {
+    // The meter's true K moves (a worn turbine, deposits): it counts that much more (or fewer)
+    // pulses per litre than its calibration says.
+    const double drift = up ? *up / 100.0 : -*down / 100.0;
+    fault.apply = [drift](Plant& p) { p.set_meter_drift(drift); };
+  } else if (const auto worn = percent_after(fault.name, "nozzles_worn_", 50)) {
+    // Every tip worn alike: each sprays that much more at the same pressure and duty.
+    const double wear = *worn / 100.0;
+    fault.apply = [wear](Plant& p) {
+      for (int i = 0; i < p.nozzle_count(); ++i) p.set_nozzle_wear(i, wear);
+    };
   } else if (fault.name.starts_with("nozzle") && fault.name.size() >= 9 && fault.name[6] >= '0' &&
              fault.name[6] <= '7' &&
              (fault.name.substr(7) == "_blocked" || fault.name.substr(7) == "_ok" ||

@@ -90,6 +90,9 @@ std::vector<const char*> changed_properties(const Status& a, const Status& b) {
         "MeterCalibration");
   check(a.nozzle_lines != b.nozzle_lines, "NozzleCalibration");
   check(a.nozzle_flow_ratio != b.nozzle_flow_ratio, "NozzleHealth");
+  check(a.flow_trim_correction != b.flow_trim_correction, "FlowTrim");
+  check(a.flow_trim_active != b.flow_trim_active, "FlowTrimActive");
+  check(a.calibration_ratio != b.calibration_ratio, "MeteredOverCalibrated");
   return names;
 }
 
@@ -127,6 +130,9 @@ const sd_bus_vtable kVtable[] = {
     WS_PROPERTY("MeterCalibration", "(sddd)"),
     WS_PROPERTY("NozzleCalibration", "a(sddd)"),
     WS_PROPERTY("NozzleHealth", "ad"),
+    WS_PROPERTY("FlowTrim", "d"),
+    WS_PROPERTY("FlowTrimActive", "b"),
+    WS_PROPERTY("MeteredOverCalibrated", "d"),
     SD_BUS_METHOD("Start", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("Stop", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("SetPressureSetpoint", "d", "", DbusService::method, kMethodFlags),
@@ -205,6 +211,9 @@ int DbusService::get_property(sd_bus*, const char*, const char*, const char* pro
   if (p == "Distance") return sd_bus_message_append(reply, "d", s.distance_m);
   if (p == "NozzleDuty") return append_doubles(reply, s.nozzle_duty_pct);
   if (p == "NozzleHealth") return append_doubles(reply, s.nozzle_flow_ratio);
+  if (p == "FlowTrim") return sd_bus_message_append(reply, "d", s.flow_trim_correction);
+  if (p == "FlowTrimActive") return sd_bus_message_append(reply, "b", s.flow_trim_active ? 1 : 0);
+  if (p == "MeteredOverCalibrated") return sd_bus_message_append(reply, "d", s.calibration_ratio);
   if (p == "ZoneDensity") return append_doubles(reply, s.zone_density);
   if (p == "Alarms") return append_strings(reply, s.alarms);
   if (p == "VolumeSprayed") return sd_bus_message_append(reply, "d", s.volume_sprayed_l);

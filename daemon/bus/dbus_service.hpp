@@ -6,7 +6,8 @@
 //     VisionLatencyMs d, VisionLatencyP99Ms d, ControlOverruns t, Mode s, SpeedSource s,
 //     GnssFix s, Position (ddd), GnssSpeed d, Course d, GnssHdop d, GnssSatellites u,
 //     GnssTime s, YawRate d (deg/s clockwise), WheelCalibration (tsdtd), Calibration (sds),
-//     MeterCalibration (sddd), NozzleCalibration a(sddd), NozzleHealth ad (README: D-Bus API)
+//     MeterCalibration (sddd), NozzleCalibration a(sddd), NozzleHealth ad, FlowTrim d,
+//     FlowTrimActive b, MeteredOverCalibrated d (README: D-Bus API)
 //   methods: Start(), Stop(), SetPressureSetpoint(d), ReloadConfig(), ClearAlarms(),
 //     InjectSimFault(s) (simulation only), Snapshot(u camera) -> ay PNG (live view, at most
 //     2 a second; the reply comes when the camera's next frame is processed),

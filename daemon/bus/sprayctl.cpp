@@ -470,6 +470,10 @@ void print_status(const Properties& p, bool json) {
             << "Nozzle duty:   " << get("NozzleDuty") << " %\n"
             << "Zone density:  " << get("ZoneDensity") << "\n"
             << "Nozzle health: " << get("NozzleHealth") << " (flow / baseline; none: off)\n"
+            << "Flow trim:     x" << get("FlowTrim") << " on the nozzles' flows ("
+            << (get("FlowTrimActive") == "true" ? "following the meter" : "held")
+            << "); meter / calibrated nozzles " << get("MeteredOverCalibrated")
+            << " (0: not yet known)\n"
             << "Sprayed:       " << get("VolumeSprayed") << " L over " << get("AreaCovered")
             << " m^2, saving " << get("SavingsPercent") << " %\n"
             << "Vision:        " << get("FrameRate") << " fps, latency " << get("VisionLatencyMs")

@@ -74,6 +74,13 @@ struct Status {
   std::vector<NozzleLineStatus> nozzle_lines;
   // [nozzle_health] enabled: each nozzle's flow over its baseline (1 until learned); else empty.
   std::vector<double> nozzle_flow_ratio;
+  // The online flow trim: the factor on the modulated nozzles' flows (1 = as calibrated) and
+  // whether it is following the meter now (false: held).
+  double flow_trim_correction = 1;
+  bool flow_trim_active = false;
+  // The meter's flow over what the calibrated nozzles promise (a minute's average; 0: not yet
+  // known): what calibration_drift judges.
+  double calibration_ratio = 0;
 
   bool operator==(const Status&) const = default;
 };

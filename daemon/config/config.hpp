@@ -257,9 +257,11 @@ struct AlarmsSection {
   double modbus_silent_s;
   double camera_stall_s;
   double debounce_s;
-  double sensor_fault_hold_s;  // a pressure-sensor fault must last this long to latch
-  double timing_tolerance_ms;  // lateness that affects spraying
-  int control_overrun_limit;   // such misses per second that raise control_overruns
+  double sensor_fault_hold_s;       // a pressure-sensor fault must last this long to latch
+  double timing_tolerance_ms;       // lateness that affects spraying
+  int control_overrun_limit;        // such misses per second that raise control_overruns
+  double calibration_drift_pct;     // the meter and the calibrated nozzles this far apart ...
+  double calibration_drift_hold_s;  // ... for this long raise calibration_drift
 };
 
 struct LogSection {

@@ -465,6 +465,12 @@ const std::vector<KeySpec<Config>>& config_keys() {
     {WS_KEY(alarms, control_overrun_limit), 3, 1, 1000000, "",
      "deadline misses that affect spraying (see timing_tolerance_ms) within one second that "
      "raise control_overruns"},
+    {WS_KEY(alarms, calibration_drift_pct), 5.0, 0.5, 50, "%",
+     "the line meter's flow and what the calibrated nozzles promise at the commanded duties "
+     "(a minute's average of spraying) further apart than this (meter drift, worn nozzles) ..."},
+    {WS_KEY(alarms, calibration_drift_hold_s), 30.0, 1, 3600, "s",
+     "... for this long raises calibration_drift, a warning: run sprayctl calibrate meter, then "
+     "calibrate nozzles"},
     // [log]
     {WS_KEY(log, dir), std::string(""), 0, 0, "path",
      "as-applied CSV folder (empty = <daemon.state_dir>/as-applied)"},

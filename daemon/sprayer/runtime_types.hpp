@@ -120,6 +120,14 @@ struct ControlStatus {
   int nozzle_flow_fault = -1;
   bool nozzle_flow_fault_low = false;
   std::uint64_t nozzle_health_reset = 0;  // the LiveParams::trip_reset the detector restarted at
+  // The online flow trim (control/flow_feedback.hpp): the factor on the modulated nozzles'
+  // flows, and whether its last window moved it (false: held, e.g. too few valves open).
+  double flow_trim_correction = 1.0;
+  bool flow_trim_active = false;
+  // The meter's flow over what the calibrated lines promise at the commanded duties, averaged
+  // (control::CalibrationRatio; 1 until known): calibration_drift's measure.
+  double calibration_ratio = 1.0;
+  bool calibration_ratio_known = false;
 };
 
 // gpsd thread -> main thread: the wheel calibration of request `request` (0: none asked).

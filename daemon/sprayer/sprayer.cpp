@@ -50,6 +50,21 @@ control::PwmConfig pwm_config(const Config& config) {
   return pwm;
 }
 
+// Same meter K and nozzle lines (what the flow trim's correction is relative to).
+bool same_calibration(const LiveParams& a, const LiveParams& b, std::size_t nozzles) noexcept {
+  if (a.flow_pulses_per_litre != b.flow_pulses_per_litre) return false;
+  for (std::size_t n = 0; n < nozzles; ++n) {
+    const control::NozzleLine& x = a.lines[n];
+    const control::NozzleLine& y = b.lines[n];
+    if (x.slope_l_per_min_per_pct != y.slope_l_per_min_per_pct ||
+        x.intercept_l_per_min != y.intercept_l_per_min ||
+        x.calibration_pressure_mpa != y.calibration_pressure_mpa ||
+        x.full_open_flow_l_per_min != y.full_open_flow_l_per_min)
+      return false;
+  }
+  return true;
+}
+
 control::FuzzyPidConfig controller_config(const Config& config) {
   const auto& p = config.pressure;
   control::FuzzyPidConfig c;
@@ -100,7 +115,8 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
                                               : control::PressureControlMode::kFuzzyPid,
           controller_config(config))),
       schedule_(std::make_unique<control::PwmSchedule>(pwm_config(config))),
-      flow_trim_(control::FlowTrimConfig{}) {
+      flow_trim_(control::FlowTrimConfig{}),
+      calibration_ratio_(control::FlowTrimConfig{}) {
   // pressure.loop_hz goes down to 10 Hz: the watch waits three of the loop's periods, never less
   // than 50 ms (at 20 Hz a fixed 50 ms took the running loop for stalled and stopped the pump).
   pressure_watch_ = io::LoopWatch(std::max(kCrossWatchTimeout, 3 * pressure_period()));
@@ -454,6 +470,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
                           static_cast<double>(std::max<std::size_t>(nozzles, 1)))),
       30ms);
   std::uint64_t health_reset_seen = params.trip_reset;
+  LiveParams trim_calibration = params;  // the meter K and lines the trim learned against
   while (!stop.stop_requested()) {
     loop.wait_next();
     const Nanos now = io_.clock->now();
@@ -462,6 +479,15 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
     if (params_.version() != params_version) {
       params_version = params_.version();
       params_.try_read(params);
+      // The trim's correction is relative to the calibration it learned against: a new meter K
+      // or nozzle line (sprayctl calibrate) starts it afresh.
+      if (!same_calibration(trim_calibration, params, nozzles)) {
+        flow_trim_.reset();
+        flow_trim_windows_.reset();
+        calibration_ratio_.reset();
+        calibration_windows_.reset();
+        trim_calibration = params;
+      }
     }
     // Travel: the wheel's pulses are the distance base whenever it is wired; the speed comes
     // from speed.source (daemon/sprayer/ground_speed.hpp).
@@ -619,6 +645,8 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
             control::promised_flow_l_per_min(params.lines[n], duty, compensation_pressure);
         trim_tick.promised_l_per_min += promised;
         if (duty > 0 && duty < 100) trim_tick.trimmable_l_per_min += promised;
+        if (duty >= 100 && !(params.lines[n].full_open_flow_l_per_min > 0))
+          trim_tick.promise_known = false;
       } else if (!quantisers_.empty()) {
         quantisers_[n].reset();
       }
@@ -642,6 +670,9 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       if (flow_trim_windows_.tick(dt, trim_tick, params.flow_pulses_per_litre, trim_window))
         flow_trim_.update(trim_window);
       const double correction = flow_trim_.correction();
+      status.flow_trim_active = !flow_trim_.frozen();
+      control::FlowTrimTick commanded_tick = trim_tick;
+      commanded_tick.promised_l_per_min = 0;
       for (std::size_t n = 0; n < nozzles; ++n) {
         // The trim moves duties only inside the calibrated band, never into the closed one.
         const double d = command.duty_pct[n];
@@ -650,11 +681,20 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
               control::trimmed_duty_pct(params.lines[n], d, correction, compensation_pressure),
               params.law.min_duty_pct, params.law.max_duty_pct);
         }
+        commanded_tick.promised_l_per_min += control::promised_flow_l_per_min(
+            params.lines[n], command.duty_pct[n], compensation_pressure);
       }
+      if (calibration_windows_.tick(dt, commanded_tick, params.flow_pulses_per_litre, trim_window))
+        calibration_ratio_.update(trim_window);
     } else {
       flow_trim_windows_.reset();
+      calibration_windows_.reset();
       trim_pressure_mpa = -1.0;
+      status.flow_trim_active = false;
     }
+    status.flow_trim_correction = flow_trim_.correction();
+    status.calibration_ratio = calibration_ratio_.ratio();
+    status.calibration_ratio_known = calibration_ratio_.known();
     command.issued_at = now;
     pwm_driver_->command(command);
     for (std::size_t n = 0; n < nozzles; ++n) status.duty_pct[n] = command.duty_pct[n];

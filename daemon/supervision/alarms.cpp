@@ -1,5 +1,7 @@
 #include "daemon/supervision/alarms.hpp"
 
+#include <cmath>
+
 namespace weedspray::daemon {
 namespace {
 
@@ -18,6 +20,7 @@ constexpr std::array<std::string_view, kAlarmCount> kNames = {
     "output_write_failed",
     "gnss_fix_lost",
     "nozzle_flow_fault",
+    "calibration_drift",
 };
 
 double seconds(std::chrono::nanoseconds t) {
@@ -114,6 +117,13 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
   set(AlarmId::kGnssFixLost, in.gnss_fix_lost, false);  // its timeout is the hold
   // A warning: the nozzle still sprays (too little or too much); the detector has its own hold.
   set(AlarmId::kNozzleFlowFault, in.nozzle_flow_fault, false);
+  // A warning: the flow trim keeps the boom's total while it can, but a meter and nozzles that
+  // disagree this much have changed since their calibration (or were never calibrated): the
+  // user should recalibrate (a new calibration starts the measure afresh). Judged in every
+  // state: the average is held, not forgotten, between sprays.
+  set(AlarmId::kCalibrationDrift,
+      std::abs(in.calibration_ratio - 1.0) * 100.0 > t.calibration_drift_pct, false);
+  hold_s[static_cast<std::size_t>(AlarmId::kCalibrationDrift)] = t.calibration_drift_hold_s;
   set(AlarmId::kControlOverruns,
       in.overruns_last_second >= static_cast<std::uint64_t>(t.control_overrun_limit), false);
 

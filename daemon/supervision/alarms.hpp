@@ -28,8 +28,9 @@ enum class AlarmId : std::uint8_t {
   kOutputWriteFailed,  // a valve/pump/return-valve/alarm output refused a write (line named)
   kGnssFixLost,        // GNSS enabled, no usable fix for gnss.lost_fix_timeout_s
   kNozzleFlowFault,    // one nozzle's flow off its baseline ([nozzle_health]; nozzle named)
+  kCalibrationDrift,   // the flow trim has held the boom off its calibration: recalibrate
 };
-inline constexpr std::size_t kAlarmCount = 14;
+inline constexpr std::size_t kAlarmCount = 15;
 
 using AlarmMask = std::uint32_t;
 constexpr AlarmMask alarm_bit(AlarmId id) noexcept {
@@ -66,6 +67,9 @@ struct AlarmInputs {
   bool output_write_failed = false;  // an output write failed since the last evaluation
   bool gnss_fix_lost = false;        // see gnss_fix_lost() (daemon/sprayer/ground_speed.hpp)
   bool nozzle_flow_fault = false;    // the nozzle health detector names a nozzle
+  // The line meter's flow over what the calibrated nozzles promise at the commanded duties,
+  // averaged (control::CalibrationRatio; 1 = as calibrated, and while not yet known).
+  double calibration_ratio = 1.0;
 };
 
 class AlarmEvaluator {

@@ -15,23 +15,6 @@ PY=/usr/bin/python3
 . "$(dirname "$0")/private_bus_lib.sh" nozzle-health
 start_private_bus
 
-prop() {  # prop NAME -> value as busctl prints it, without the type signature
-  busctl --user get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
-    org.weedspray.Sprayer1 "$1" | cut -d' ' -f2-
-}
-call() {  # call METHOD [SIGNATURE ARGS...]
-  busctl --user call org.weedspray.Sprayer1 /org/weedspray/Sprayer1 org.weedspray.Sprayer1 "$@"
-}
-wait_state() {  # wait_state STATE SECONDS
-  local state
-  for _ in $(seq 1 $(($2 * 10))); do
-    state=$(prop State 2>/dev/null || true)
-    [ "$state" = "\"$1\"" ] && return 0
-    kill -0 "$DAEMON_PID" 2>/dev/null || fail "weedsprayd exited"
-    sleep 0.1
-  done
-  fail "State is '$state', expected $1"
-}
 
 cat >"$T/weedspray.toml" <<'TOML'
 [boom]

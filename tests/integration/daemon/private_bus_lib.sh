@@ -2,7 +2,8 @@
 # Sourced by the daemon's D-Bus test scripts: a scratch folder $T, removed at exit together with
 # the daemon and the bus the script started ($DAEMON_PID, $BUS_PID) and whatever the script
 # adds to EXIT_HOOKS (commands, run after the daemon is killed), fail() with the tails of the
-# logs in FAIL_LOGS (default: $T/daemon.log), and start_private_bus.
+# logs in FAIL_LOGS (default: $T/daemon.log), start_private_bus, and prop/call/wait_state on
+# the sprayer's object.
 # usage: . private_bus_lib.sh NAME   ($T is /tmp/weedspray-NAME-test.XXXXXX; KEEP=1 keeps it)
 T=$(mktemp -d "/tmp/weedspray-$1-test.XXXXXX")
 DAEMON_PID=
@@ -37,4 +38,23 @@ start_private_bus() {
   DBUS_SESSION_BUS_ADDRESS=$(cat "$T/bus.addr")
   export DBUS_SESSION_BUS_ADDRESS
   BUS_PID=$(cat "$T/bus.pid")
+}
+
+# The sprayer's D-Bus object on that bus (scripts set DAEMON_PID before wait_state).
+prop() {  # prop NAME -> value as busctl prints it, without the type signature
+  busctl --user get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
+    org.weedspray.Sprayer1 "$1" | cut -d' ' -f2-
+}
+call() {  # call METHOD [SIGNATURE ARGS...]
+  busctl --user call org.weedspray.Sprayer1 /org/weedspray/Sprayer1 org.weedspray.Sprayer1 "$@"
+}
+wait_state() {  # wait_state STATE SECONDS
+  local state
+  for _ in $(seq 1 $(($2 * 10))); do
+    state=$(prop State 2>/dev/null || true)
+    [ "$state" = "\"$1\"" ] && return 0
+    kill -0 "$DAEMON_PID" 2>/dev/null || fail "weedsprayd exited"
+    sleep 0.1
+  done
+  fail "State is '$state', expected $1"
 }

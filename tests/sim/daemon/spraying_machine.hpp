@@ -12,8 +12,10 @@
 namespace weedspray::daemon {
 
 struct SprayingMachine {
-  SprayingMachine() {
+  // speed_m_per_s > 0: the constant speed (else sim.speed_max_m_per_s's default).
+  explicit SprayingMachine(double speed_m_per_s = 0.0) {
     config.sim.speed_profile = "constant";
+    if (speed_m_per_s > 0.0) config.sim.speed_max_m_per_s = speed_m_per_s;
     Options options;
     options.sim = true;
     backends = make_sim_backends(config, options);

@@ -189,6 +189,40 @@ TEST(FlowTrimWindows, ResetStartsAfreshAndAnUnknownMeterFreezesTheTrim) {
   EXPECT_TRUE(trim.frozen());
 }
 
+// One tick with a nozzle held open whose full-open flow nobody measured (the daemon's
+// configured and calibrated lines stop at the sweep's top duty) makes the whole window's
+// promise unknown: the trim holds, and calibration_drift's measure skips it.
+TEST(FlowTrimWindows, AHeldOpenNozzleWithoutAMeasuredFullFlowMakesTheWindowUnusable) {
+  FlowTrimWindows windows(0.1);
+  FlowTrimInput out;
+  FlowTrimTick tick{1.0, 0.6, 0.7, 0.0, 0};
+  windows.tick(0.01, tick, 8500.0, out);
+  for (int i = 1; i <= 10; ++i) {
+    tick.pulses = static_cast<std::uint64_t>(i) * 2;  // ~1.0 L/min
+    tick.promise_known = i != 4;
+    if (windows.tick(0.01, tick, 8500.0, out)) break;
+  }
+  EXPECT_FALSE(out.promise_known);
+  FlowTrim trim(FlowTrimConfig{});
+  FlowTrimInput half = out;
+  half.measured_total_l_per_min = 0.5;  // would move it a lot if it counted
+  trim.update(half);
+  EXPECT_TRUE(trim.frozen());
+  EXPECT_EQ(trim.correction(), 1.0);
+  half.promise_known = true;  // the same window with the promise known: it moves
+  trim.update(half);
+  EXPECT_FALSE(trim.frozen());
+  EXPECT_GT(trim.correction(), 1.0);
+  CalibrationRatio ratio(FlowTrimConfig{}, 60.0, 0.05);
+  ratio.update(out);
+  EXPECT_FALSE(ratio.known());
+  // The next window starts known again.
+  tick.promise_known = true;
+  while (!windows.tick(0.01, tick, 8500.0, out)) {
+  }
+  EXPECT_TRUE(out.promise_known);
+}
+
 TEST(TrimmedDuty, ScalesTheNozzlesFlowNotItsDuty) {
   NozzleLine line;  // q = 0.00393 s + 0.217 at 0.4 MPa: a large intercept
   for (double duty : {25.0, 50.0, 75.0}) {
@@ -211,6 +245,45 @@ TEST(PromisedFlow, ClosedHeldOpenOrTheLine) {
   EXPECT_NEAR(promised_flow_l_per_min(line, 100.0, 0.4), 0.7, 1e-12);  // not the line at 100 %
   EXPECT_NEAR(promised_flow_l_per_min(line, 50.0, 0.4), flow_for_duty_l_per_min(line, 50.0, 0.4),
               1e-12);
+}
+
+// calibration_drift's measure: the meter over the lines' promise at the commanded duties,
+// unknown (1) for its first 30 s of usable windows, volumes forgotten over 60 s; unlike FlowTrim it
+// needs no modulated share (all nozzles held open still tells it the boom's state), and it
+// skips windows whose flow, open valves or pressure make the promise meaningless.
+TEST(CalibrationRatio, AveragesTheMeterOverThePromiseOnceItHasSeenEnough) {
+  CalibrationRatio ratio(FlowTrimConfig{});
+  FlowTrimInput w;
+  w.requested_total_l_per_min = 2.0;  // promised at the commanded duties
+  w.trimmable_l_per_min = 0.0;        // every nozzle held open
+  w.measured_total_l_per_min = 2.16;
+  w.open_fraction = 1.0;
+  w.dt_s = 1.0;
+  for (int s = 0; s < 29; ++s) ratio.update(w);
+  EXPECT_FALSE(ratio.known());
+  EXPECT_EQ(ratio.ratio(), 1.0);
+  FlowTrimInput off_pressure = w;  // not counted: neither its ratio nor its time
+  off_pressure.pressure_error_fraction = 0.2;
+  off_pressure.measured_total_l_per_min = 4.0;
+  ratio.update(off_pressure);
+  FlowTrimInput closed = w;
+  closed.open_fraction = 0.05;
+  closed.measured_total_l_per_min = 4.0;
+  ratio.update(closed);
+  EXPECT_FALSE(ratio.known());
+  ratio.update(w);
+  ASSERT_TRUE(ratio.known());
+  EXPECT_NEAR(ratio.ratio(), 1.08, 1e-9);
+  // A change: the old volumes are forgotten with the 60 s time constant (equal promises, so
+  // the ratio is the volumes' weighted mean).
+  w.measured_total_l_per_min = 2.4;  // 1.2
+  for (int s = 0; s < 300; ++s) ratio.update(w);
+  EXPECT_NEAR(ratio.ratio(), 1.2, 0.12 * 0.01);
+  EXPECT_LT(ratio.ratio(), 1.2);
+  ratio.reset();
+  EXPECT_FALSE(ratio.known());
+  EXPECT_EQ(ratio.ratio(), 1.0);
+  EXPECT_THROW(CalibrationRatio(FlowTrimConfig{}, 0.0), std::invalid_argument);
 }
 
 }  // namespace

@@ -182,6 +182,31 @@ TEST(Alarms, VisionModelFailedIsAWarningUntilCleared) {
   EXPECT_EQ(alarms.present(), 0U);
 }
 
+// The meter and the calibrated nozzles more than 5 % apart for 30 s (the defaults) ask for a
+// recalibration: a warning, in any state (the average is held between sprays), and a shorter
+// excursion raises nothing.
+TEST(Alarms, CalibrationDriftWhenTheMeterAndTheNozzlesStayApart) {
+  AlarmEvaluator alarms(thresholds());
+  EXPECT_EQ(alarm_name(AlarmId::kCalibrationDrift), "calibration_drift");
+  auto in = healthy(1s);
+  in.calibration_ratio = 0.96;  // 4 %: within the band
+  for (int s = 1; s <= 100; ++s) EXPECT_EQ(alarms.evaluate(at(in, s * 1s)), 0U) << s;
+  in.calibration_ratio = 1.07;  // 20 s off, back, 20 s off: never 30 s in a row
+  for (int s = 101; s <= 120; ++s) EXPECT_EQ(alarms.evaluate(at(in, s * 1s)), 0U) << s;
+  in.calibration_ratio = 1.02;
+  EXPECT_EQ(alarms.evaluate(at(in, 121s)), 0U);
+  in.calibration_ratio = 0.93;
+  for (int s = 122; s <= 150; ++s) EXPECT_EQ(alarms.evaluate(at(in, s * 1s)), 0U) << s;
+  in.spraying = false;  // stopped: the correction stays, and so does the condition
+  in.open_fraction = 0;
+  EXPECT_EQ(alarms.evaluate(at(in, 152s)), alarm_bit(AlarmId::kCalibrationDrift));
+  EXPECT_FALSE(alarms.fault_latched());
+  // Latched until cleared; raised again after another hold while the drift remains.
+  EXPECT_EQ(alarms.clear(), alarm_bit(AlarmId::kCalibrationDrift));
+  EXPECT_EQ(alarms.evaluate(at(in, 160s)), 0U);
+  EXPECT_EQ(alarms.evaluate(at(in, 190s)), alarm_bit(AlarmId::kCalibrationDrift));
+}
+
 TEST(Alarms, NamesRoundTrip) {
   for (std::size_t i = 0; i < kAlarmCount; ++i) {
     const auto id = static_cast<AlarmId>(i);

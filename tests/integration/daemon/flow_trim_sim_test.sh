@@ -1,0 +1,84 @@
+#!/usr/bin/env bash
+# The online flow trim and calibration_drift: weedsprayd --sim (3 nozzles at 1 m/s; [alarms]
+# calibration_drift_hold_s = 5) on a private bus:
+#  1. Idle, before any spraying: FlowTrim 1, MeteredOverCalibrated 0 (not yet known);
+#  2. the machine calibrated from the daemon (a 2 s catch test with the volume the plant
+#     delivered, then calibrate nozzles), spraying: FlowTrimActive true, and once 30 s of
+#     windows are in, MeteredOverCalibrated within 5 % of 1 and no calibration_drift;
+#  3. InjectSimFault meter_drift_10 (the meter counts 10 % more pulses per litre): the ratio
+#     rises past 1.05 and calibration_drift is raised (a warning: still Spraying), the journal
+#     says by how much and which calibrations to run, sprayctl status shows the trim and ratio.
+# usage: flow_trim_sim_test.sh BUILD_DIR
+set -euo pipefail
+BUILD=$(realpath "$1")
+WEEDSPRAYD=$BUILD/daemon/weedsprayd
+SPRAYCTL=$BUILD/daemon/sprayctl
+PY=/usr/bin/python3
+. "$(dirname "$0")/private_bus_lib.sh" flow-trim
+start_private_bus
+
+has_drift() { prop Alarms | grep -q calibration_drift; }
+
+mkdir -p "$T/state"
+cat >"$T/weedspray.toml" <<'TOML'
+[boom]
+nozzles = 3
+[calibration]
+duties_pct = [20.0, 50.0, 80.0]
+settle_s = 1.0  # as daemon_calibration_sim (calibration_sim_test.sh says why)
+measure_s = 1.4
+min_r_squared = 0.95
+[alarms]
+calibration_drift_hold_s = 5.0
+[sim]
+speed_profile = "constant"
+speed_max_m_per_s = 1.0
+TOML
+"$WEEDSPRAYD" --sim --user --config "$T/weedspray.toml" --state-dir "$T/state" >>"$T/daemon.log" 2>&1 &
+DAEMON_PID=$!
+wait_state Idle 15
+[ "$(prop FlowTrim)" = "1" ] || fail "FlowTrim before spraying: $(prop FlowTrim)"
+[ "$(prop MeteredOverCalibrated)" = "0" ] || fail "MeteredOverCalibrated before spraying: $(prop MeteredOverCalibrated)"
+
+# 2. Calibrated, then spraying.
+call StartCatchTest d 2
+for _ in $(seq 1 80); do
+  prop Calibration | grep -q '^"awaiting_volume"' && break
+  sleep 0.1
+done
+litres=$(sed -n 's/.*sim: the catch test delivered \([0-9.]*\) L.*/\1/p' "$T/daemon.log" | tail -n1)
+[ -n "$litres" ] || fail "no catch test volume in the log: $(prop Calibration)"
+"$SPRAYCTL" --user calibrate meter --volume "$litres" >/dev/null || fail "calibrate meter"
+"$SPRAYCTL" --user calibrate nozzles >"$T/nozzles.txt" || fail "calibrate nozzles: $(cat "$T/nozzles.txt")"
+call Start
+wait_state Spraying 5
+record() { echo "t=$1 s FlowTrim $(prop FlowTrim) active $(prop FlowTrimActive) MeteredOverCalibrated $(prop MeteredOverCalibrated) Alarms $(prop Alarms)" >>"$T/trim.txt"; }
+for i in $(seq 1 60); do
+  sleep 1
+  record "$i"
+  has_drift && fail "calibration_drift on the calibrated machine: $(cat "$T/trim.txt")"
+  [ "$(prop MeteredOverCalibrated)" != "0" ] && [ "$i" -ge 36 ] && break
+done
+calibrated=$(prop MeteredOverCalibrated)
+$PY -c 'import sys; sys.exit(not abs(float(sys.argv[1]) - 1) < 0.05)' "$calibrated" ||
+  fail "MeteredOverCalibrated $calibrated on the calibrated machine: $(cat "$T/trim.txt")"
+echo "ok: calibrated, spraying: MeteredOverCalibrated $calibrated, FlowTrim $(prop FlowTrim), no alarm"
+
+# 3. The meter drifts.
+call InjectSimFault s meter_drift_10
+for j in $(seq 1 90); do
+  sleep 1
+  record "drift+$j"
+  has_drift && break
+done
+has_drift || fail "no calibration_drift 90 s after the meter drifted: $(tail -n 5 "$T/trim.txt")"
+ratio=$(prop MeteredOverCalibrated)
+$PY -c 'import sys; sys.exit(not float(sys.argv[1]) > 1.05)' "$ratio" || fail "MeteredOverCalibrated $ratio: $(cat "$T/trim.txt")"
+grep -q "alarm raised: calibration_drift (the line meter has read [0-9.]* % more than the calibrated nozzles promise at the commanded duties for 5 s; the flow trim at x[0-9.]* .*sprayctl calibrate meter.*sprayctl calibrate nozzles" "$T/daemon.log" ||
+  fail "the journal line: $(grep calibration_drift "$T/daemon.log")"
+[ "$(prop State)" = '"Spraying"' ] || fail "State $(prop State) after calibration_drift (a warning)"
+"$SPRAYCTL" --user status | grep -Eq "^Flow trim: *x[0-9.]+ on the nozzles' flows \((following the meter|held)\); meter / calibrated nozzles 1\.[0-9]+" ||
+  fail "sprayctl status: $("$SPRAYCTL" --user status | grep -i trim)"
+echo "ok: calibration_drift $j s after the meter drifted, MeteredOverCalibrated $ratio, FlowTrim $(prop FlowTrim)"
+call Stop
+wait_state Idle 5
