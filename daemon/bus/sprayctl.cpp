@@ -450,6 +450,11 @@ void print_status(const Properties& p, bool json) {
     const auto found = p.find(name);
     return found == p.end() ? std::string("?") : text_value(found->second);
   };
+  const auto is_true = [&](const char* name) {
+    const auto found = p.find(name);
+    const bool* b = found == p.end() ? nullptr : std::get_if<bool>(&found->second);
+    return b != nullptr && *b;
+  };
   // Degrees of latitude/longitude need 7 decimals (1 cm); altitude is the third value.
   const auto get_precise = [&](const char* name) {
     const auto found = p.find(name);
@@ -471,7 +476,7 @@ void print_status(const Properties& p, bool json) {
             << "Zone density:  " << get("ZoneDensity") << "\n"
             << "Nozzle health: " << get("NozzleHealth") << " (flow / baseline; none: off)\n"
             << "Flow trim:     x" << get("FlowTrim") << " on the nozzles' flows ("
-            << (get("FlowTrimActive") == "true" ? "following the meter" : "held")
+            << (is_true("FlowTrimActive") ? "following the meter" : "held")
             << "); meter / calibrated nozzles " << get("MeteredOverCalibrated")
             << " (0: not yet known)\n"
             << "Sprayed:       " << get("VolumeSprayed") << " L over " << get("AreaCovered")

@@ -59,6 +59,14 @@ for i in $(seq 1 60); do
   has_drift && fail "calibration_drift on the calibrated machine: $(cat "$T/trim.txt")"
   [ "$(prop MeteredOverCalibrated)" != "0" ] && [ "$i" -ge 36 ] && break
 done
+# sprayctl status says whether the trim follows the meter: at 1 m/s, calibrated, it does in most
+# windows (FlowTrimActive), so one of five reads must say so.
+following=0
+for _ in 1 2 3 4 5; do
+  "$SPRAYCTL" --user status | grep -q "^Flow trim: .*(following the meter)" && following=1
+  sleep 0.3
+done
+[ "$following" = 1 ] || fail "sprayctl status never says the trim follows the meter: $(tail -n 3 "$T/trim.txt")"
 calibrated=$(prop MeteredOverCalibrated)
 $PY -c 'import sys; sys.exit(not abs(float(sys.argv[1]) - 1) < 0.05)' "$calibrated" ||
   fail "MeteredOverCalibrated $calibrated on the calibrated machine: $(cat "$T/trim.txt")"
