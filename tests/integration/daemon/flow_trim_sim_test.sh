@@ -60,11 +60,11 @@ for i in $(seq 1 60); do
   [ "$(prop MeteredOverCalibrated)" != "0" ] && [ "$i" -ge 36 ] && break
 done
 # sprayctl status says whether the trim follows the meter: at 1 m/s, calibrated, it does in most
-# windows (FlowTrimActive), so one of five reads must say so.
+# windows (FlowTrimActive), so one of up to 20 reads over ~10 s must say so.
 following=0
-for _ in 1 2 3 4 5; do
-  "$SPRAYCTL" --user status | grep -q "^Flow trim: .*(following the meter)" && following=1
-  sleep 0.3
+for _ in $(seq 1 20); do
+  "$SPRAYCTL" --user status | grep -q "^Flow trim: .*(following the meter)" && following=1 && break
+  sleep 0.5
 done
 [ "$following" = 1 ] || fail "sprayctl status never says the trim follows the meter: $(tail -n 3 "$T/trim.txt")"
 calibrated=$(prop MeteredOverCalibrated)
