@@ -47,17 +47,26 @@ double FlowTrim::update(double requested_total_l_per_min, double measured_total_
   return update(input);
 }
 
+namespace {
+
+// Whether the meter over a window says anything about the lines' promise: finite, enough flow
+// and open valves, the promise known, the pressure on its set-point. FlowTrim and
+// CalibrationRatio share it; FlowTrim also needs a modulated share to move.
+bool window_usable(const FlowTrimConfig& c, const FlowTrimInput& in) noexcept {
+  return std::isfinite(in.requested_total_l_per_min) &&
+         std::isfinite(in.measured_total_l_per_min) && std::isfinite(in.open_fraction) &&
+         std::isfinite(in.pressure_error_fraction) && std::isfinite(in.dt_s) && in.dt_s > 0.0 &&
+         in.promise_known && in.requested_total_l_per_min >= c.min_requested_flow_l_per_min &&
+         in.open_fraction >= c.min_open_fraction &&
+         std::abs(in.pressure_error_fraction) <= c.max_pressure_error_fraction;
+}
+
+}  // namespace
+
 double FlowTrim::update(const FlowTrimInput& in) noexcept {
-  const bool usable =
-      std::isfinite(in.requested_total_l_per_min) && std::isfinite(in.trimmable_l_per_min) &&
-      std::isfinite(in.measured_total_l_per_min) && std::isfinite(in.open_fraction) &&
-      std::isfinite(in.pressure_error_fraction) && std::isfinite(in.dt_s) && in.dt_s > 0.0;
-  frozen_ =
-      !usable || in.requested_total_l_per_min < config_.min_requested_flow_l_per_min ||
-      in.trimmable_l_per_min < config_.min_requested_flow_l_per_min ||
-      in.trimmable_l_per_min < config_.min_trimmable_fraction * in.requested_total_l_per_min ||
-      in.open_fraction < config_.min_open_fraction || !in.promise_known ||
-      std::abs(in.pressure_error_fraction) > config_.max_pressure_error_fraction;
+  frozen_ = !window_usable(config_, in) || !std::isfinite(in.trimmable_l_per_min) ||
+            in.trimmable_l_per_min < config_.min_requested_flow_l_per_min ||
+            in.trimmable_l_per_min < config_.min_trimmable_fraction * in.requested_total_l_per_min;
   if (frozen_) return correction_;
   const double trimmable = std::min(in.trimmable_l_per_min, in.requested_total_l_per_min);
   const double relative_error =
@@ -129,14 +138,7 @@ CalibrationRatio::CalibrationRatio(const FlowTrimConfig& freeze_rules, double ti
 }
 
 void CalibrationRatio::update(const FlowTrimInput& in) noexcept {
-  const bool usable =
-      std::isfinite(in.requested_total_l_per_min) && std::isfinite(in.measured_total_l_per_min) &&
-      std::isfinite(in.open_fraction) && std::isfinite(in.pressure_error_fraction) &&
-      std::isfinite(in.dt_s) && in.dt_s > 0.0 && in.promise_known &&
-      in.requested_total_l_per_min >= freeze_rules_.min_requested_flow_l_per_min &&
-      in.open_fraction >= freeze_rules_.min_open_fraction &&
-      std::abs(in.pressure_error_fraction) <= freeze_rules_.max_pressure_error_fraction;
-  if (!usable) return;
+  if (!window_usable(freeze_rules_, in)) return;
   const double keep = std::exp(-in.dt_s / time_constant_s_);
   metered_ = metered_ * keep + in.measured_total_l_per_min * in.dt_s;
   promised_ = promised_ * keep + in.requested_total_l_per_min * in.dt_s;

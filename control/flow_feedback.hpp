@@ -132,9 +132,10 @@ class FlowTrimWindows {
 // the line meter's volume over what the calibrated lines promise at the duties actually
 // commanded (after the trim), both summed with exponential forgetting over usable windows
 // (FlowTrim's freeze rules for flow, open valves and pressure; no modulated share needed).
-// FlowTrim's correction is not this: its integral law puts the held-open nozzles' error on the
-// modulated ones, so on the uncalibrated simulated machine it sat anywhere from 0.78 to 1.05 with
-// the field's mix of duties while this ratio only saw the boom. Feed it windows from a
+// FlowTrim's correction is not this: its integral law drives the total and so puts the error of
+// nozzles it cannot move (held open, or clamped at the law's minimum duty) on the modulated
+// ones (the daemon's sim, 1 m/s, meter 10 % high: the trim at 0.73-0.74 where 1/1.1 = 0.91,
+// this ratio 1.06 and rising). Feed it windows from a
 // FlowTrimWindows whose promised flow is taken at the commanded duties. Pure; allocation-free.
 class CalibrationRatio {
  public:

@@ -11,32 +11,25 @@
 namespace weedspray::daemon {
 namespace {
 
-// "_blocked_30" -> 0.30 (a nozzle 30 % blocked: the calibration and health tests' worn tip).
-std::optional<double> partial_blockage(const std::string& suffix) {
-  constexpr std::string_view kPrefix = "_blocked_";
-  if (!suffix.starts_with(kPrefix) || suffix.size() == kPrefix.size() ||
-      suffix.size() > kPrefix.size() + 2) {
+// The number N of a fault named PREFIX + N, N one or two digits in 1..max ("meter_drift_8"
+// with prefix "meter_drift_" -> 8); else nullopt.
+std::optional<int> number_after(std::string_view name, std::string_view prefix, int max) {
+  if (!name.starts_with(prefix)) return std::nullopt;
+  const std::string_view digits = name.substr(prefix.size());
+  if (digits.empty() || digits.size() > 2 ||
+      digits.find_first_not_of("0123456789") != std::string_view::npos)
     return std::nullopt;
-  }
-  int percent = 0;
-  for (char c : suffix.substr(kPrefix.size())) {
-    if (c < '0' || c > '9') return std::nullopt;
-    percent = percent * 10 + (c - '0');
-  }
-  if (percent < 1) return std::nullopt;
-  return percent / 100.0;
+  int n = 0;
+  for (const char c : digits) n = n * 10 + (c - '0');
+  if (n < 1 || n > max) return std::nullopt;
+  return n;
 }
 
-// "meter_drift_8" with prefix "meter_drift_" -> 8 (1..max whole percent; else nullopt).
-std::optional<int> percent_after(const std::string& name, std::string_view prefix, int max) {
-  if (!name.starts_with(prefix)) return std::nullopt;
-  const std::string digits = name.substr(prefix.size());
-  if (digits.empty() || digits.size() > 2 ||
-      digits.find_first_not_of("0123456789") != std::string::npos)
-    return std::nullopt;
-  const int percent = std::stoi(digits);
-  if (percent < 1 || percent > max) return std::nullopt;
-  return percent;
+// "_blocked_30" -> 0.30 (a nozzle 30 % blocked: the calibration and health tests' worn tip).
+std::optional<double> partial_blockage(std::string_view suffix) {
+  const auto percent = number_after(suffix, "_blocked_", 99);
+  if (!percent) return std::nullopt;
+  return *percent / 100.0;
 }
 
 }  // namespace
@@ -71,14 +64,14 @@ std::optional<SimFault> parse_sim_fault(const std::string& text) {
     fault.apply = [](Plant& p) { p.set_filter_blockage(1.0); };
   } else if (fault.name == "tank_empty") {
     fault.apply = [](Plant& p) { p.set_tank_level_l(0.0); };
-  } else if (const auto up = percent_after(fault.name, "meter_drift_", 30),
-             down = percent_after(fault.name, "meter_drift_minus_", 30);
+  } else if (const auto up = number_after(fault.name, "meter_drift_", 30),
+             down = number_after(fault.name, "meter_drift_minus_", 30);
              up || down) {
     // The meter's true K moves (a worn turbine, deposits): it counts that much more (or fewer)
     // pulses per litre than its calibration says.
     const double drift = up ? *up / 100.0 : -*down / 100.0;
     fault.apply = [drift](Plant& p) { p.set_meter_drift(drift); };
-  } else if (const auto worn = percent_after(fault.name, "nozzles_worn_", 50)) {
+  } else if (const auto worn = number_after(fault.name, "nozzles_worn_", 50)) {
     // Every tip worn alike: each sprays that much more at the same pressure and duty.
     const double wear = *worn / 100.0;
     fault.apply = [wear](Plant& p) {
@@ -110,15 +103,13 @@ std::optional<SimFault> parse_sim_fault(const std::string& text) {
       }
     }
     // return_valve_write_fail_N: a Modbus module that misses N answers, then answers again.
-    const std::string counted = "return_valve_write_fail_";
+    const std::string_view counted = "return_valve_write_fail_";
     if (fault.name.starts_with(counted)) {
-      const std::string digits = fault.name.substr(counted.size());
-      const bool numeric = !digits.empty() && digits.size() <= 2 &&
-                           digits.find_first_not_of("0123456789") == std::string::npos;
-      if (!numeric || std::stoi(digits) < 1) return std::nullopt;
+      const auto writes = number_after(fault.name, counted, 99);
+      if (!writes) return std::nullopt;
       fault.output = OutputRole::kReturnValve;
       fault.output_error = EIO;
-      fault.output_write_count = std::stoi(digits);
+      fault.output_write_count = *writes;
       return fault;
     }
     return std::nullopt;

@@ -19,19 +19,12 @@ PY=/usr/bin/python3
 . "$(dirname "$0")/private_bus_lib.sh" calibration
 start_private_bus
 
-start_daemon() {
-  "$WEEDSPRAYD" --sim --user --config "$T/weedspray.toml" --state-dir "$T/state" "$@" \
-    >>"$T/daemon.log" 2>&1 &
-  DAEMON_PID=$!
-  wait_state Idle 15
-}
 stop_daemon() {
   kill -TERM "$DAEMON_PID"
   wait "$DAEMON_PID" || fail "weedsprayd exit status $?"
   DAEMON_PID=
 }
 
-mkdir -p "$T/state"
 cat >"$T/weedspray.toml" <<'TOML'
 [boom]
 nozzles = 3
@@ -51,7 +44,7 @@ min_r_squared = 0.95  # 1.4 s of one nozzle at 20 % is ~60 pulses: a coarse poin
 speed_profile = "constant"
 speed_max_m_per_s = 1.0
 TOML
-start_daemon
+start_sim_daemon
 
 # 1. The flow meter's catch test.
 call Start
@@ -113,7 +106,7 @@ echo "ok: nozzle lines: $(tr '\n' ';' <"$T/nozzles.txt")"
 stop_daemon
 
 # 3. After a restart: both reloaded; the calibrated K counts the true volume.
-start_daemon --sim-truth-file "$T/truth.txt"
+start_sim_daemon --sim-truth-file "$T/truth.txt"
 [ "$(prop MeterCalibration)" = "$meter" ] || fail "meter after restart: $(prop MeterCalibration)"
 [ "$(prop NozzleCalibration)" = "$lines" ] || fail "lines after restart: $(prop NozzleCalibration)"
 call Start

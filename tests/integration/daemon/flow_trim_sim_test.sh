@@ -19,7 +19,6 @@ start_private_bus
 
 has_drift() { prop Alarms | grep -q calibration_drift; }
 
-mkdir -p "$T/state"
 cat >"$T/weedspray.toml" <<'TOML'
 [boom]
 nozzles = 3
@@ -34,9 +33,7 @@ calibration_drift_hold_s = 5.0
 speed_profile = "constant"
 speed_max_m_per_s = 1.0
 TOML
-"$WEEDSPRAYD" --sim --user --config "$T/weedspray.toml" --state-dir "$T/state" >>"$T/daemon.log" 2>&1 &
-DAEMON_PID=$!
-wait_state Idle 15
+start_sim_daemon
 [ "$(prop FlowTrim)" = "1" ] || fail "FlowTrim before spraying: $(prop FlowTrim)"
 [ "$(prop MeteredOverCalibrated)" = "0" ] || fail "MeteredOverCalibrated before spraying: $(prop MeteredOverCalibrated)"
 

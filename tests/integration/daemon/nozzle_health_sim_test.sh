@@ -28,9 +28,7 @@ baseline_s = 20.0
 speed_profile = "constant"
 speed_max_m_per_s = 1.0
 TOML
-"$WEEDSPRAYD" --sim --user --config "$T/weedspray.toml" --state-dir "$T" >>"$T/daemon.log" 2>&1 &
-DAEMON_PID=$!
-wait_state Idle 15
+start_sim_daemon
 call Start
 wait_state Spraying 5
 

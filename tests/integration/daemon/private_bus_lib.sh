@@ -2,8 +2,8 @@
 # Sourced by the daemon's D-Bus test scripts: a scratch folder $T, removed at exit together with
 # the daemon and the bus the script started ($DAEMON_PID, $BUS_PID) and whatever the script
 # adds to EXIT_HOOKS (commands, run after the daemon is killed), fail() with the tails of the
-# logs in FAIL_LOGS (default: $T/daemon.log), start_private_bus, and prop/call/wait_state on
-# the sprayer's object.
+# logs in FAIL_LOGS (default: $T/daemon.log), start_private_bus, prop/call/wait_state on the
+# sprayer's object, and start_sim_daemon.
 # usage: . private_bus_lib.sh NAME   ($T is /tmp/weedspray-NAME-test.XXXXXX; KEEP=1 keeps it)
 T=$(mktemp -d "/tmp/weedspray-$1-test.XXXXXX")
 DAEMON_PID=
@@ -47,6 +47,15 @@ prop() {  # prop NAME -> value as busctl prints it, without the type signature
 }
 call() {  # call METHOD [SIGNATURE ARGS...]
   busctl --user call org.weedspray.Sprayer1 /org/weedspray/Sprayer1 org.weedspray.Sprayer1 "$@"
+}
+# weedsprayd --sim on $T/weedspray.toml with its state in $T/state, logging to $T/daemon.log,
+# until Idle (WEEDSPRAYD set by the script).
+start_sim_daemon() {  # start_sim_daemon [WEEDSPRAYD ARGS...]
+  mkdir -p "$T/state"
+  "$WEEDSPRAYD" --sim --user --config "$T/weedspray.toml" --state-dir "$T/state" "$@" \
+    >>"$T/daemon.log" 2>&1 &
+  DAEMON_PID=$!
+  wait_state Idle 15
 }
 wait_state() {  # wait_state STATE SECONDS
   local state
