@@ -38,9 +38,37 @@ wait_for() {  # wait_for SECONDS EXPR
 }
 
 PORT=$(free_port)
+mkdir -p "$T/state"
+cat >"$T/weedspray.toml" <<TOML
+[gnss]
+enabled = true
+host = "127.0.0.1"
+port = $PORT
+lost_fix_timeout_s = 2.0  # margin for a loaded machine (gpsfake paces in Python)
+antenna_ahead_of_nozzles_m = 2.0
+antenna_right_of_centre_m = 0.3
+first_fix_timeout_s = 30.0  # gpsfake starts after the daemon (below)
+reconnect_max_s = 0.25  # gpsfake gives up when no client watches within -W 2 s
+[speed]
+source = "gnss"
+[sim]
+speed_profile = "constant"
+speed_max_m_per_s = 1.0
+TOML
+"$WEEDSPRAYD" --sim --user --config "$T/weedspray.toml" --state-dir "$T/state" \
+  >"$T/daemon.log" 2>&1 &
+DAEMON_PID=$!
+
+# The track plays on gpsfake's clock (the turn 4-7 s in, its stop at 12 s): it starts only once
+# the daemon answers on the bus, so a slow start-up on a loaded machine cannot miss the turn.
+for _ in $(seq 1 300); do
+  "$SPRAYCTL" --user status >/dev/null 2>&1 && break
+  kill -0 "$DAEMON_PID" 2>/dev/null || fail "weedsprayd exited"
+  sleep 0.1
+done
+"$SPRAYCTL" --user status >/dev/null 2>&1 || fail "weedsprayd never answered on the bus"
 # The track once, 0.1 s a sentence (0.3 s an epoch, ~10 s in all); -W: gpsfake ends 2 s after.
 start_gpsfake "$PORT" "$T/gpsfake.log" -1 -q -c 0.1 -W 2 "$SOURCE/tests/data/gnss/field_track.nmea"
-# The daemon starts once gpsd listens: its first fix must come within the lost-fix timeout.
 $PY - "$PORT" <<'PYEOF' || fail "gpsd never listened on port $PORT"
 import socket, sys, time
 for _ in range(100):
@@ -51,27 +79,6 @@ for _ in range(100):
         time.sleep(0.1)
 sys.exit(1)
 PYEOF
-
-mkdir -p "$T/state"
-cat >"$T/weedspray.toml" <<TOML
-[gnss]
-enabled = true
-host = "127.0.0.1"
-port = $PORT
-lost_fix_timeout_s = 2.0  # margin for a loaded machine (gpsfake paces in Python)
-antenna_ahead_of_nozzles_m = 2.0
-antenna_right_of_centre_m = 0.3
-first_fix_timeout_s = 10.0
-reconnect_max_s = 0.5
-[speed]
-source = "gnss"
-[sim]
-speed_profile = "constant"
-speed_max_m_per_s = 1.0
-TOML
-"$WEEDSPRAYD" --sim --user --config "$T/weedspray.toml" --state-dir "$T/state" \
-  >"$T/daemon.log" 2>&1 &
-DAEMON_PID=$!
 
 # 1. The receiver's fix on the bus, and its speed in the rate law.
 wait_for 15 'j["GnssFix"] == "3d" and j["SpeedSource"] == "gnss" and
