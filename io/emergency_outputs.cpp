@@ -150,6 +150,10 @@ EmergencyOutputs::OrdinaryWrite::OrdinaryWrite() noexcept {
   if (!allowed_) leave();
 }
 
+bool EmergencyOutputs::OrdinaryWrite::closed_since_entry() const noexcept {
+  return allowed_ && g_triggered.load();
+}
+
 EmergencyOutputs::OrdinaryWrite::~OrdinaryWrite() {
   if (allowed_) leave();
 }

@@ -57,6 +57,12 @@ class EmergencyOutputs {
     OrdinaryWrite(const OrdinaryWrite&) = delete;
     OrdinaryWrite& operator=(const OrdinaryWrite&) = delete;
     bool allowed() const noexcept { return allowed_; }
+    // True when the gate was open going in and a fatal-exit handler has closed it since: the
+    // write just made may have landed after the handler's safe one (a writer preempted between
+    // the gate and its syscall - by the handler itself on a one-CPU board, or a virtual CPU
+    // descheduled by its host). The writer then writes its safe value at once, so such a late
+    // write holds a valve open for one syscall, not until the handler's second round.
+    bool closed_since_entry() const noexcept;
 
    private:
     void leave() noexcept;

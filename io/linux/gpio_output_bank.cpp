@@ -113,6 +113,7 @@ int GpioOutputBank::write(std::uint32_t mask) noexcept {
   } catch (...) {
     return -EIO;
   }
+  if (gate.closed_since_entry()) return force_safe();
   return 0;
 }
 

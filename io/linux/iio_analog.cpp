@@ -136,6 +136,7 @@ int IioAnalogOutput::write(double volts) noexcept {
     ++errors_;
     return errno != 0 ? -errno : -EIO;
   }
+  if (gate.closed_since_entry()) return force_safe();
   return 0;
 }
 

@@ -458,10 +458,18 @@ step broken_reload_keeps_old "$([ "$active" = active ] && [ "$(main_pid)" = "$pi
 rm -f /etc/weedspray/conf.d/90-broken.toml
 
 # --- faults while spraying: the kernel's record ----------------------------------------------------
-# trace_window_begin; fault; trace_analyse SIGNAL PID -> "unsafe_ms exit_ms rewritten_open"
-#   unsafe_ms: fatal signal -> every watched line last written 0 (-1: never within the window)
+# trace_window_begin; fault; trace_analyse SIGNAL PID ->
+#   "unsafe_ms exit_ms reopened longest_open_ms wasclosed"
+#   unsafe_ms: fatal signal -> every watched line written (a kernel 'set', not a read) since the
+#              signal and all of them at 0 (-1: never within the window)
 #   exit_ms:   fatal signal -> the main thread's exit (-1: not seen)
-#   reopened:  writes of 1 to a watched line after it was safe (until the trace was read)
+#   reopened:  writes of 1 to a watched line after that (until the trace was read), and
+#   longest_open_ms the longest any of them held a line open (one still open at the end: the
+#              time to the trace's last event, +1000 ms so it cannot pass)
+#   wasclosed: 1 when every watched line was already 0 at the signal (a valve between PWM
+#              pulses while the cross-watch had the pump off, say)
+# The events of the watched lines around the signal (writer thread, ms from the signal, line,
+# value) go to $run_dir/fault-events.txt for the step's failure report.
 trace_window_begin() {
   echo 0 >"$tracing/tracing_on"
   echo >"$tracing/trace"
@@ -471,47 +479,73 @@ trace_window_begin() {
 }
 trace_analyse() { # SIGNAL PID
   echo 0 >"$tracing/tracing_on"
-  awk -v sig="$1" -v pid="$2" -v watched="$watched" -v base="$gpio_base" -v init="$initial_mask" '
+  awk -v sig="$1" -v pid="$2" -v watched="$watched" -v base="$gpio_base" -v init="$initial_mask" \
+    -v events="$run_dir/fault-events.txt" '
     BEGIN {
       n = split(watched, w, " "); for (i = 1; i <= n; i++) watch[w[i]] = 1
       split(init, m, " ")
       for (i = 0; i < 4; i++) latch[base + i] = int(m[1] / 2 ^ i) % 2
       latch[base + 4] = m[2]
-      t0 = -1; safe = -1; gone = -1; reopened = 0
+      t0 = -1; safe = -1; gone = -1; reopened = 0; longest = 0; wasclosed = 0; last = 0; nb = 0
+      printf "" > events
     }
     function open_lines(   g, c) { c = 0; for (g in watch) if (latch[g] == 1) c++; return c }
+    function all_written(   g) { for (g in watch) if (!(g in written)) return 0; return 1 }
     {
       ts = ""; for (i = 1; i <= NF; i++) if ($i ~ /^[0-9]+\.[0-9]+:$/) { ts = substr($i, 1, length($i) - 1) + 0; break }
       if (ts == "") next
+      last = ts
     }
     / gpio_value: / {
-      for (i = 1; i <= NF; i++) if ($i == "gpio_value:") { g = $(i + 1); v = $(i + 3) }
-      if (!(g in watch)) next
+      for (i = 1; i <= NF; i++) if ($i == "gpio_value:") { g = $(i + 1); how = $(i + 2); v = $(i + 3) }
+      if (!(g in watch) || how != "set") next
+      if (t0 >= 0 && ts - t0 < 0.5) printf "%s %+.3f ms line %d=%d\n", $1, (ts - t0) * 1000, g - base, v >> events
+      if (t0 < 0) { before[nb % 6] = $1 " " ts " line " (g - base) "=" v; nb++ }
+      if (safe >= 0 && v == 1 && latch[g] == 0) { reopened++; opened[g] = ts }
+      if (safe >= 0 && v == 0 && (g in opened)) {
+        if (ts - opened[g] > longest) longest = ts - opened[g]
+        delete opened[g]
+      }
       latch[g] = v
-      if (t0 >= 0 && safe < 0 && open_lines() == 0) safe = ts
-      else if (safe >= 0 && v == 1) reopened++
+      if (t0 >= 0) written[g] = 1
+      if (t0 >= 0 && safe < 0 && all_written() && open_lines() == 0) safe = ts
       next
     }
     / signal_generate: / && t0 < 0 {
-      if ($0 ~ ("sig=" sig " ") && $0 ~ (" pid=" pid " ")) { t0 = ts; if (open_lines() == 0) { safe = ts; wasclosed = 1 } }
+      if ($0 ~ ("sig=" sig " ") && $0 ~ (" pid=" pid " ")) {
+        t0 = ts; wasclosed = (open_lines() == 0)
+        for (k = (nb > 6 ? nb - 6 : 0); k < nb; k++) {
+          split(before[k % 6], e, " ")
+          printf "%s %+.3f ms line %s\n", e[1], (e[2] - t0) * 1000, e[4] >> events
+        }
+        printf "%s +0.000 ms signal %s (lines open: %d)\n", $1, sig, open_lines() >> events
+      }
       next
     }
     / sched_process_exit: / && t0 >= 0 && gone < 0 { if ($0 ~ (" pid=" pid " ")) gone = ts }
     END {
-      printf "%s %s %d %d\n", (t0 >= 0 && safe >= 0) ? sprintf("%.3f", (safe - t0) * 1000) : -1,
-        (t0 >= 0 && gone >= 0) ? sprintf("%.3f", (gone - t0) * 1000) : -1, reopened, wasclosed
+      for (g in opened) if (last - opened[g] + 1 > longest) longest = last - opened[g] + 1
+      printf "%s %s %d %.3f %d\n", (t0 >= 0 && safe >= 0) ? sprintf("%.3f", (safe - t0) * 1000) : -1,
+        (t0 >= 0 && gone >= 0) ? sprintf("%.3f", (gone - t0) * 1000) : -1, reopened, longest * 1000, wasclosed
     }' "$tracing/trace"
   echo 1 >"$tracing/tracing_on"
 }
-# How the lines look from user space too: all of the valves and the pump written 0 (latched).
+# A valve written open again after the safe writes must be closed within kReopenLimitMs: a writer
+# preempted between the gate and its ioctl (the handler's own CPU on a one-core board, a virtual
+# CPU its host descheduled) lands its write late, and closes it again at once
+# (EmergencyOutputs::OrdinaryWrite::closed_since_entry). A solenoid needs ~20 ms to open
+# (valve_open_delay_s): a pulse under 1 ms moves no liquid; a thread still writing after the
+# handler holds it open until the process is gone and the exit watcher writes (tens of ms).
+reopen_limit_ms=1
 judge_fault() { # NAME SIGNAL PID LIMIT_MS FIGURE_KEY [exit]: prints the figure and the step
-  local result unsafe gone reopened wasclosed ok
+  local result unsafe gone reopened longest wasclosed ok
   result="$(trace_analyse "$2" "$3")"
-  read -r unsafe gone reopened wasclosed <<<"$result"
+  read -r unsafe gone reopened longest wasclosed <<<"$result"
   figure "$5" "$unsafe"
-  ok="$(awk -v u="$unsafe" -v g="$gone" -v r="$reopened" -v c="$wasclosed" -v lim="$4" -v needexit="${6:-}" \
-    'BEGIN { bad = (u < 0 || u > lim || r > 0 || c == 1); if (needexit != "" && (g < 0 || u > g)) bad = 1; print bad }')"
-  step "$1" "$ok" "signal $2 to PID $3: every valve and the pump written 0 after $unsafe ms (limit $4), main thread gone after $gone ms, lines written open afterwards $reopened, all closed already at the signal: ${wasclosed:-0}"
+  ok="$(awk -v u="$unsafe" -v g="$gone" -v r="$longest" -v lim="$4" -v rlim="$reopen_limit_ms" -v needexit="${6:-}" \
+    'BEGIN { bad = (u < 0 || u > lim || r >= rlim); if (needexit != "" && (g < 0 || u > g)) bad = 1; print bad }')"
+  step "$1" "$ok" "signal $2 to PID $3: every valve and the pump written 0 after $unsafe ms (limit $4), main thread gone after $gone ms, lines written open afterwards $reopened (longest open $longest ms, limit $reopen_limit_ms), all closed already at the signal: $wasclosed"
+  [ "$ok" = 0 ] || info "$1 events of the watched lines: $(tr '\n' '|' <"$run_dir/fault-events.txt" | head -c 3000)"
 }
 
 # kill -9: nothing runs in the daemon; ExecStopPost must write the lines safe.
@@ -553,11 +587,12 @@ trace_window_begin
 pid="$(main_pid)"
 timeout 30 systemctl stop weedsprayd
 result="$(systemctl show -p Result --value weedsprayd)"
-read -r unsafe _ reopened wasclosed <<<"$(trace_analyse 15 "$pid")" # SIGTERM
+read -r unsafe _ reopened _ wasclosed <<<"$(trace_analyse 15 "$pid")" # SIGTERM
 sleep 0.5
 dac="$(hil dac_volts)"
-step stop_safe "$(awk -v u="$unsafe" -v r="$result" -v d="$dac" -v o="$reopened" -v c="$wasclosed" 'BEGIN { print (r == "success" && u >= 0 && u <= 1000 && o == 0 && c == 0 && d >= 3.29) ? 0 : 1 }')" \
-  "systemctl stop while spraying (all closed already: $wasclosed): Result=$result, valves and pump written 0 $unsafe ms after SIGTERM, return-valve DAC $dac V (3.3 = fully open), pressure $(hil pressure_mpa) MPa"
+# An orderly stop joins the valve thread before its last safe writes: nothing may write open after.
+step stop_safe "$(awk -v u="$unsafe" -v r="$result" -v d="$dac" -v o="$reopened" 'BEGIN { print (r == "success" && u >= 0 && u <= 1000 && o == 0 && d >= 3.29) ? 0 : 1 }')" \
+  "systemctl stop while spraying (all closed already: $wasclosed): Result=$result, valves and pump written 0 $unsafe ms after SIGTERM, lines written open afterwards $reopened, return-valve DAC $dac V (3.3 = fully open), pressure $(hil pressure_mpa) MPa"
 
 
 # --- the plant's own ground truth ---------------------------------------------------------------

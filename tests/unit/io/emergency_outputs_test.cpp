@@ -217,6 +217,31 @@ TEST(EmergencyOutputs, TheGateClosesWhenTriggeredAndClearOpensIt) {
   EXPECT_TRUE(EmergencyOutputs::OrdinaryWrite().allowed());
 }
 
+// A writer past the gate when a handler closes it is told so after its write (it may have landed
+// after the handler's safe one, so the writer writes its safe value at once); one that found the
+// gate closed wrote the safe value already and is not told to write again.
+TEST(EmergencyOutputs, AWriteOverlappingTheTriggerIsToldItClosedMeanwhile) {
+  EmergencyOutputs::clear();
+  std::atomic<bool> inside{false};
+  bool closed_going_in = true;
+  bool closed_coming_out = false;
+  std::thread writer([&] {
+    const EmergencyOutputs::OrdinaryWrite write;
+    closed_going_in = write.closed_since_entry();
+    inside = true;
+    while (!EmergencyOutputs::triggered()) std::this_thread::yield();
+    closed_coming_out = write.closed_since_entry();
+  });
+  while (!inside) std::this_thread::yield();
+  EmergencyOutputs::trigger();  // waits for the writer, which leaves once the gate is closed
+  writer.join();
+  EXPECT_FALSE(closed_going_in);
+  EXPECT_TRUE(closed_coming_out);
+  EXPECT_FALSE(EmergencyOutputs::OrdinaryWrite().closed_since_entry());
+  EmergencyOutputs::clear();
+  EXPECT_FALSE(EmergencyOutputs::OrdinaryWrite().closed_since_entry());
+}
+
 // Another thread's write stuck in flight delays the dying process by at most kDrainLimitNs; the
 // handler's own thread's write (it crashed inside it) delays it not at all.
 TEST(EmergencyOutputs, TriggerWaitsForAnotherThreadsWriteOnlySoLong) {
