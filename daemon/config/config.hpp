@@ -183,6 +183,7 @@ struct CalibrationSection {
   double settle_s;                 // skipped at each point (valve, pressure, meter settling)
   double measure_s;                // counted at each point
   double min_r_squared;            // a nozzle's fit below this: the [spray] line stays in use
+  bool full_open;                  // also meter each nozzle held open (its full-open flow)
 };
 
 // Per-nozzle health from the line meter while spraying (control/nozzle_health.hpp).

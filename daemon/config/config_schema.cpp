@@ -340,6 +340,11 @@ const std::vector<KeySpec<Config>>& config_keys() {
     {WS_KEY(calibration, min_r_squared), 0.98, 0, 1, "",
      "a nozzle whose fitted line has R^2 below this keeps the [spray] line (a sticking valve, a "
      "meter too coarse for one nozzle)"},
+    {WS_KEY(calibration, full_open), true, 0, 1, "",
+     "sprayctl calibrate nozzles: also meter each nozzle held open (100 %, one point more): a "
+     "request at or above that flow holds the valve open, and the flow trim and "
+     "calibration_drift then judge windows with held-open nozzles too (without it they wait "
+     "for windows without any)"},
     // [nozzle_health]
     {WS_KEY(nozzle_health, enabled), false, 0, 1, "",
      "judge each nozzle's flow from the line meter while spraying (staggered PWM phases make "

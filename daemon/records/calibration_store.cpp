@@ -32,6 +32,9 @@ StoredCalibration load_calibration(const std::filesystem::path& file, std::strin
         fit.line.slope_l_per_min_per_pct = (*n)["slope_l_per_min_per_pct"].value_or(0.0);
         fit.line.intercept_l_per_min = (*n)["intercept_l_per_min"].value_or(0.0);
         fit.line.calibration_pressure_mpa = (*n)["pressure_mpa"].value_or(0.0);
+        // Absent in files from before stop 27 (and when not measured): unknown.
+        const double full_open = (*n)["full_open_flow_l_per_min"].value_or(0.0);
+        fit.line.full_open_flow_l_per_min = std::isfinite(full_open) && full_open > 0 ? full_open : 0.0;
         fit.r_squared = (*n)["r_squared"].value_or(0.0);
         fit.residual_rms_l_per_min = (*n)["residual_rms_l_per_min"].value_or(0.0);
         fit.points_used = static_cast<std::size_t>((*n)["points"].value_or(std::int64_t{0}));
@@ -66,6 +69,7 @@ void save_calibration(const std::filesystem::path& file, const StoredCalibration
                                   {"slope_l_per_min_per_pct", fit->line.slope_l_per_min_per_pct},
                                   {"intercept_l_per_min", fit->line.intercept_l_per_min},
                                   {"pressure_mpa", fit->line.calibration_pressure_mpa},
+                                  {"full_open_flow_l_per_min", fit->line.full_open_flow_l_per_min},
                                   {"r_squared", fit->r_squared},
                                   {"residual_rms_l_per_min", fit->residual_rms_l_per_min},
                                   {"points", static_cast<std::int64_t>(fit->points_used)}});
@@ -103,9 +107,9 @@ void choose_nozzle_lines(const control::NozzleLine& configured, const StoredCali
       out[i].source = LineSource::kPoorFit;
       continue;
     }
+    // With this nozzle's own full-open flow when the sweep metered it held open (0 = unknown:
+    // the configured one belongs to the configured line, not to this nozzle).
     out[i].line = fit.line;
-    // The configured full-open flow belongs to the configured line, not to this nozzle.
-    out[i].line.full_open_flow_l_per_min = 0.0;
     out[i].source = LineSource::kCalibration;
   }
 }

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <span>
 #include <stdexcept>
 #include <utility>
 
@@ -113,7 +115,7 @@ void CalibrationRun::update(double now_s, std::uint64_t pulses) {
     return;
   }
   if (state_ != CalibrationState::kNozzles) return;
-  const double points = static_cast<double>(plan_.duties_pct.size());
+  const double points = static_cast<double>(points_per_nozzle());
   const double steps = points * static_cast<double>(nozzles_);
   const double step_s = plan_.settle_s + plan_.measure_s;
   const double in_step =
@@ -132,31 +134,50 @@ void CalibrationRun::update(double now_s, std::uint64_t pulses) {
   if (measured_s < plan_.measure_s) return;
   // The window's true length (the main loop's ticks are not exact): flow over what was counted.
   const double litres = static_cast<double>(pulses - phase_pulses_) / plan_.pulses_per_litre;
-  points_.push_back({plan_.duties_pct[point_], litres / (measured_s / 60.0)});
+  points_.push_back({point_duty_pct(point_), litres / (measured_s / 60.0)});
   measuring_ = false;
   phase_start_s_ = now_s;
-  if (++point_ < plan_.duties_pct.size()) {
+  if (++point_ < points_per_nozzle()) {
     set_point_duty();
     return;
   }
   finish_nozzle();
 }
 
+std::size_t CalibrationRun::points_per_nozzle() const noexcept {
+  return plan_.duties_pct.size() + (plan_.full_open ? 1 : 0);
+}
+
+// The plan's duties, then (full_open) 100 %: held open.
+double CalibrationRun::point_duty_pct(std::size_t point) const noexcept {
+  return point < plan_.duties_pct.size() ? plan_.duties_pct[point] : 100.0;
+}
+
 void CalibrationRun::set_point_duty() {
   duties_.fill(0.0);
-  duties_[nozzle_] = plan_.duties_pct[point_];
+  duties_[nozzle_] = point_duty_pct(point_);
   char text[120];
-  std::snprintf(text, sizeof text, "nozzle %zu of %zu at %.0f %% duty", nozzle_ + 1, nozzles_,
-                plan_.duties_pct[point_]);
+  std::snprintf(text, sizeof text, "nozzle %zu of %zu at %.0f %% duty%s", nozzle_ + 1, nozzles_,
+                point_duty_pct(point_), point_ < plan_.duties_pct.size() ? "" : " (held open)");
   message_ = text;
 }
 
 void CalibrationRun::finish_nozzle() {
   const auto [lo, hi] = std::minmax_element(plan_.duties_pct.begin(), plan_.duties_pct.end());
+  // The held-open point lies outside [lo, hi]: fit_nozzle_line leaves it out of the line.
+  const std::span<const control::DutyFlowPoint> swept(points_.data(), plan_.duties_pct.size());
   try {
-    fits_[nozzle_] = control::fit_nozzle_line(points_, plan_.pressure_mpa, *lo, *hi);
+    fits_[nozzle_] = control::fit_nozzle_line(swept, plan_.pressure_mpa, *lo, *hi);
   } catch (const std::invalid_argument&) {
     fits_[nozzle_] = std::nullopt;  // reported as "no line" below; the configured line stays
+  }
+  // Held open, a nozzle passes at least what its line says at the highest swept duty; less is
+  // a meter or valve problem, not a full-open flow to hold the valve open at (left unknown).
+  if (fits_[nozzle_] && plan_.full_open && points_.size() > plan_.duties_pct.size()) {
+    const double held_open = points_.back().flow_l_per_min;
+    const control::NozzleLine& line = fits_[nozzle_]->line;
+    if (held_open >= line.slope_l_per_min_per_pct * *hi + line.intercept_l_per_min)
+      fits_[nozzle_]->line.full_open_flow_l_per_min = held_open;
   }
   points_.clear();
   point_ = 0;
@@ -169,14 +190,20 @@ void CalibrationRun::finish_nozzle() {
   progress_ = 1.0;
   double lowest_r2 = 1.0;
   std::size_t fitted = 0;
+  std::size_t held_open = 0;
   for (const auto& fit : fits_) {
     if (!fit) continue;
     ++fitted;
     lowest_r2 = std::min(lowest_r2, fit->r_squared);
+    if (fit->line.full_open_flow_l_per_min > 0) ++held_open;
   }
-  char text[160];
+  char text[200];
   std::snprintf(text, sizeof text, "nozzles: %zu of %zu lines fitted, lowest R^2 %.4f", fitted,
                 nozzles_, lowest_r2);
+  if (plan_.full_open) {
+    const std::size_t n = std::strlen(text);
+    std::snprintf(text + n, sizeof text - n, ", %zu full-open flows", held_open);
+  }
   message_ = text;
 }
 

@@ -31,6 +31,9 @@ struct NozzleSweepPlan {
   double measure_s = 5.0;
   double pressure_mpa = 0.4;         // the set-point the sweep runs at (the lines' P_cal)
   double pulses_per_litre = 8500.0;  // the meter's K in use
+  // One point more per nozzle, held open (100 %): the line's full_open_flow_l_per_min (not
+  // fitted: a valve held open passes more than the line through the pulsed duties says).
+  bool full_open = true;
 };
 
 class CalibrationRun {
@@ -72,6 +75,8 @@ class CalibrationRun {
  private:
   void set_point_duty();
   void finish_nozzle();
+  std::size_t points_per_nozzle() const noexcept;
+  double point_duty_pct(std::size_t point) const noexcept;
 
   std::size_t nozzles_;
   CalibrationState state_ = CalibrationState::kIdle;

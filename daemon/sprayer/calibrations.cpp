@@ -85,6 +85,7 @@ CommandResult Calibrations::calibrate_nozzles(const CalibrationContext& context)
   plan.duties_pct = section_.duties_pct;
   plan.settle_s = section_.settle_s;
   plan.measure_s = section_.measure_s;
+  plan.full_open = section_.full_open;
   plan.pressure_mpa = context.setpoint_mpa;
   plan.pulses_per_litre = meter_pulses_per_litre(configured_pulses_per_litre_, stored_);
   const std::string error = run_.start_nozzle_sweep(plan, context.now_s, context.pulses);
@@ -125,9 +126,13 @@ bool Calibrations::update(const CalibrationContext& context) {
     for (std::size_t i = 0; i < fits.size(); ++i) {
       if (fits[i]) {
         stored_.nozzles[i] = fits[i];
-        spdlog::info("nozzle {}: q = {:.5f} s + {:.4f} L/min at {:.3f} MPa, R^2 {:.4f}", i,
-                     fits[i]->line.slope_l_per_min_per_pct, fits[i]->line.intercept_l_per_min,
-                     fits[i]->line.calibration_pressure_mpa, fits[i]->r_squared);
+        spdlog::info(
+            "nozzle {}: q = {:.5f} s + {:.4f} L/min at {:.3f} MPa, R^2 {:.4f}, held open {:.4f} "
+            "L/min{}",
+            i, fits[i]->line.slope_l_per_min_per_pct, fits[i]->line.intercept_l_per_min,
+            fits[i]->line.calibration_pressure_mpa, fits[i]->r_squared,
+            fits[i]->line.full_open_flow_l_per_min,
+            fits[i]->line.full_open_flow_l_per_min > 0 ? "" : " (not measured: unknown)");
       } else {
         spdlog::warn("nozzle {}: no line could be fitted (no flow?); its previous line stays", i);
       }

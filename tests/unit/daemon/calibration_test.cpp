@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <filesystem>
 #include <fstream>
@@ -20,6 +21,8 @@ namespace fs = std::filesystem;
 struct MadeUpBoom {
   std::array<double, 3> slope{0.0080, 0.0056, 0.0088};
   std::array<double, 3> intercept{0.10, 0.07, 0.12};
+  // Held open (100 %) a valve passes more than its pulsed line says (no closing losses).
+  std::array<double, 3> held_open_gain{1.06, 1.04, 1.08};
   double k = 8670.0;
   double litres = 0.0;
 
@@ -27,12 +30,29 @@ struct MadeUpBoom {
     for (std::size_t i = 0; i < slope.size(); ++i) {
       const double s = duties[i];
       if (s <= 0) continue;
-      const double q = s >= 100 ? slope[i] * 100 + intercept[i] : slope[i] * s + intercept[i];
+      const double q = s >= 100 ? held_open_flow(i) : slope[i] * s + intercept[i];
       litres += q / 60.0 * dt_s;
     }
     return static_cast<std::uint64_t>(litres * k);
   }
+  double held_open_flow(std::size_t i) const {
+    return (slope[i] * 100 + intercept[i]) * held_open_gain[i];
+  }
 };
+
+// One tick of the daemon's 20 Hz: the run's duties for 50 ms, then its update.
+double run_until_idle_one_tick(CalibrationRun& run, MadeUpBoom& boom, double t,
+                               double* last_progress) {
+  constexpr double kTick = 0.05;
+  const std::uint64_t pulses = boom.advance(run.duties(), kTick);
+  t += kTick;
+  run.update(t, pulses);
+  if (last_progress != nullptr) {
+    EXPECT_GE(run.progress(), *last_progress) << "progress went back at t " << t;
+    *last_progress = run.progress();
+  }
+  return t;
+}
 
 // Ticks the run at the daemon's 20 Hz until it stops commanding the valves (or `limit_s`).
 double run_until_idle(CalibrationRun& run, MadeUpBoom& boom, double t, double limit_s,
@@ -87,8 +107,20 @@ TEST(CalibrationRun, TheSweepRecoversEachNozzlesOwnLine) {
   EXPECT_EQ(run.duties()[0], 20.0);
   EXPECT_EQ(run.duties()[1], 0.0) << "more than one nozzle open";
   double progress = 0;
-  const double end = run_until_idle(run, boom, 0.0, 200.0, &progress);
-  EXPECT_NEAR(end, 3 * 4 * 3.5 + CalibrationRun::kPumpLeadInS, 3 * 4 * 0.1) << "the sweep's length";
+  std::array<double, io::kMaxValves> held_open_seen{};
+  bool two_open = false;
+  double end = 0.0;
+  for (double t = 0.0; run.running() && t < 200.0;) {
+    end = t = run_until_idle_one_tick(run, boom, t, &progress);
+    for (std::size_t i = 0; i < 3; ++i)
+      if (run.duties()[i] == 100.0) held_open_seen[i] = 1;
+    two_open = two_open || std::count_if(run.duties().begin(), run.duties().end(),
+                                         [](double d) { return d > 0; }) > 1;
+  }
+  EXPECT_NEAR(end, 3 * 5 * 3.5 + CalibrationRun::kPumpLeadInS, 3 * 5 * 0.1)
+      << "the sweep's length: 4 duties and the held-open point per nozzle";
+  EXPECT_FALSE(two_open) << "more than one nozzle open at once";
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ(held_open_seen[i], 1) << "nozzle " << i;
   EXPECT_EQ(run.state(), CalibrationState::kDone);
   EXPECT_EQ(progress, 1.0);
   for (double d : run.duties()) EXPECT_EQ(d, 0.0) << "a valve left open";
@@ -100,7 +132,40 @@ TEST(CalibrationRun, TheSweepRecoversEachNozzlesOwnLine) {
         << "nozzle " << i;
     EXPECT_NEAR(fits[i]->line.intercept_l_per_min, boom.intercept[i], 0.01) << "nozzle " << i;
     EXPECT_DOUBLE_EQ(fits[i]->line.calibration_pressure_mpa, 0.3);
-    EXPECT_GT(fits[i]->r_squared, 0.999);
+    EXPECT_GT(fits[i]->r_squared, 0.999) << "the held-open point was fitted into the line";
+    EXPECT_EQ(fits[i]->points_used, 4u);
+    EXPECT_NEAR(fits[i]->line.full_open_flow_l_per_min, boom.held_open_flow(i),
+                boom.held_open_flow(i) * 0.01)
+        << "nozzle " << i;
+  }
+  EXPECT_NE(run.message().find("3 full-open flows"), std::string::npos) << run.message();
+}
+
+// full_open = false: the plan's duties only, the full-open flows unknown. A nozzle that passes
+// less held open than its line at the highest duty (a valve that does not open fully, a meter
+// that misses pulses) gets no full-open flow either.
+TEST(CalibrationRun, TheHeldOpenPointIsOptionalAndAnImplausibleOneIsNotKept) {
+  for (bool full_open : {false, true}) {
+    CalibrationRun run(3);
+    MadeUpBoom boom;
+    boom.held_open_gain[1] = 0.7;  // held open: 0.7 x the line at 100 %, below it at 80 %
+    NozzleSweepPlan plan;
+    plan.duties_pct = {20, 80};
+    plan.settle_s = 0.5;
+    plan.measure_s = 3.0;
+    plan.pulses_per_litre = boom.k;
+    plan.full_open = full_open;
+    ASSERT_EQ(run.start_nozzle_sweep(plan, 0.0, 0), "");
+    const double end = run_until_idle(run, boom, 0.0, 200.0);
+    EXPECT_NEAR(end, 3 * (full_open ? 3 : 2) * 3.5 + CalibrationRun::kPumpLeadInS, 1.0);
+    const auto fits = run.take_fits();
+    ASSERT_EQ(fits.size(), 3u);
+    for (std::size_t i = 0; i < 3; ++i) {
+      ASSERT_TRUE(fits[i]);
+      const bool kept = full_open && i != 1;
+      EXPECT_EQ(fits[i]->line.full_open_flow_l_per_min > 0, kept)
+          << "nozzle " << i << " full_open " << full_open;
+    }
   }
 }
 
@@ -135,7 +200,7 @@ TEST(CalibrationStore, SavedResultsComeBackAndTheRightOnesAreUsed) {
   stored.meter = control::calibrate_flow_meter(8670, 1.0, 8500.0);
   stored.nozzles.resize(3);
   control::NozzleLineFit good;
-  good.line = {0.0056, 0.07, 0.3, 0.0};
+  good.line = {0.0056, 0.07, 0.3, 0.71};
   good.r_squared = 0.995;
   good.points_used = 4;
   control::NozzleLineFit poor = good;
@@ -160,6 +225,7 @@ TEST(CalibrationStore, SavedResultsComeBackAndTheRightOnesAreUsed) {
   EXPECT_DOUBLE_EQ(lines[0].line.slope_l_per_min_per_pct, 0.0056);
   EXPECT_DOUBLE_EQ(lines[0].line.intercept_l_per_min, 0.07);
   EXPECT_DOUBLE_EQ(lines[0].line.calibration_pressure_mpa, 0.3);
+  EXPECT_DOUBLE_EQ(lines[0].line.full_open_flow_l_per_min, 0.71) << "its own, held open";
   EXPECT_EQ(lines[1].source, LineSource::kConfig);
   EXPECT_DOUBLE_EQ(lines[1].line.slope_l_per_min_per_pct, 0.00393);
   EXPECT_EQ(lines[2].source, LineSource::kPoorFit) << "an R^2 of 0.90 was used";
@@ -169,6 +235,14 @@ TEST(CalibrationStore, SavedResultsComeBackAndTheRightOnesAreUsed) {
   choose_nozzle_lines(configured, back, 0.85, lines);
   EXPECT_EQ(lines[2].source, LineSource::kCalibration);
   EXPECT_DOUBLE_EQ(lines[2].line.slope_l_per_min_per_pct, 0.009);
+  EXPECT_DOUBLE_EQ(lines[2].line.full_open_flow_l_per_min, 0.71);
+  // A calibrated line never takes the configured line's full-open flow.
+  choose_nozzle_lines({0.00393, 0.217, 0.4, 0.9}, back, 0.98, lines);
+  EXPECT_DOUBLE_EQ(lines[1].line.full_open_flow_l_per_min, 0.9) << "the configured line's own";
+  StoredCalibration unmeasured = back;
+  unmeasured.nozzles[0]->line.full_open_flow_l_per_min = 0.0;
+  choose_nozzle_lines({0.00393, 0.217, 0.4, 0.9}, unmeasured, 0.98, lines);
+  EXPECT_DOUBLE_EQ(lines[0].line.full_open_flow_l_per_min, 0.0) << "unknown stays unknown";
 }
 
 TEST(CalibrationStore, ACorruptFileIsNamedAndNothingIsUsed) {
