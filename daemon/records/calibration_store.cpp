@@ -34,7 +34,8 @@ StoredCalibration load_calibration(const std::filesystem::path& file, std::strin
         fit.line.calibration_pressure_mpa = (*n)["pressure_mpa"].value_or(0.0);
         // Absent in files from before stop 27 (and when not measured): unknown.
         const double full_open = (*n)["full_open_flow_l_per_min"].value_or(0.0);
-        fit.line.full_open_flow_l_per_min = std::isfinite(full_open) && full_open > 0 ? full_open : 0.0;
+        fit.line.full_open_flow_l_per_min =
+            std::isfinite(full_open) && full_open > 0 ? full_open : 0.0;
         fit.r_squared = (*n)["r_squared"].value_or(0.0);
         fit.residual_rms_l_per_min = (*n)["residual_rms_l_per_min"].value_or(0.0);
         fit.points_used = static_cast<std::size_t>((*n)["points"].value_or(std::int64_t{0}));
