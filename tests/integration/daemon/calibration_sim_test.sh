@@ -103,6 +103,18 @@ print("flows at 50 %% duty: %s L/min; nozzle 0 / nozzle 2 %.4f, nozzle 1 / healt
 PY
 echo "ok: nozzle lines: $(tr '\n' ';' <"$T/nozzles.txt")"
 [ -f "$T/state/calibration.toml" ] || fail "no calibration.toml in the state directory"
+# Each nozzle metered held open too (calibration.full_open, the default): stored with its line,
+# at least the line's flow at the highest swept duty, the blocked nozzle's lower.
+prop Calibration | grep -q "3 full-open flows" || fail "Calibration message: $(prop Calibration)"
+$PY - "$T/state/calibration.toml" <<'PY' || fail "full-open flows in calibration.toml: $(cat "$T/state/calibration.toml")"
+import sys, tomllib
+nozzles = sorted(tomllib.load(open(sys.argv[1], "rb"))["nozzle"], key=lambda n: n["index"])
+full = [n["full_open_flow_l_per_min"] for n in nozzles]
+for n, q in zip(nozzles, full):
+    assert q >= n["slope_l_per_min_per_pct"] * 80 + n["intercept_l_per_min"], (n, q)
+assert 0.6 < full[1] / ((full[0] + full[2]) / 2) < 0.8, full  # 30 % blocked
+print("held open: %s L/min" % " ".join("%.4f" % q for q in full))
+PY
 stop_daemon
 
 # 3. After a restart: both reloaded; the calibrated K counts the true volume.
