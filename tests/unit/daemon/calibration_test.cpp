@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 struct MadeUpBoom {
   std::array<double, 3> slope{0.0080, 0.0056, 0.0088};
   std::array<double, 3> intercept{0.10, 0.07, 0.12};
-  // Held open (100 %) a valve passes more than its pulsed line says (no closing losses).
+  // Held open (100 %) a valve passes other than its pulsed line at 100 % (here more).
   std::array<double, 3> held_open_gain{1.06, 1.04, 1.08};
   double k = 8670.0;
   double litres = 0.0;
