@@ -354,9 +354,7 @@ class ConfigError : public std::runtime_error {
 
 using ConfigPtr = std::shared_ptr<const Config>;
 
-#ifndef WEEDSPRAY_CONFIG_PATH  // set by CMake from the install prefix's sysconfdir
-#define WEEDSPRAY_CONFIG_PATH "/etc/weedspray/weedspray.toml"
-#endif
-inline constexpr const char* kDefaultConfigPath = WEEDSPRAY_CONFIG_PATH;
+// <sysconfdir>/weedspray/weedspray.toml of the install prefix (default_config_path.cpp).
+extern const char* const kDefaultConfigPath;
 
 }  // namespace weedspray::daemon
