@@ -7,9 +7,12 @@
 #include <stdexcept>
 
 namespace weedspray::daemon::maps {
-namespace {
 
 namespace fs = std::filesystem;
+
+// Named, not anonymous: OgrMapWriter::Impl holds these (GCC's -Wsubobject-linkage, which a
+// unity build turns on for every file but the first of a batch).
+namespace ogr_detail {
 
 std::string gdal_error() {
   const char* message = CPLGetLastErrorMsg();
@@ -46,6 +49,15 @@ struct Layer {
       throw std::runtime_error(file.string() + ": cannot write a feature: " + gdal_error());
   }
 };
+
+}  // namespace ogr_detail
+
+namespace {
+
+using ogr_detail::add_field;
+using ogr_detail::Dataset;
+using ogr_detail::gdal_error;
+using ogr_detail::Layer;
 
 std::unique_ptr<OGRPolygon> polygon(const std::vector<LatLon>& ring_points) {
   auto ring = std::make_unique<OGRLinearRing>();

@@ -8,11 +8,11 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <stdexcept>
 
 #include "io/latest_value.hpp"
 #include "io/linux/monotonic_clock.hpp"
+#include "io/linux/sysfs_text.hpp"
 
 namespace weedspray::io::hw {
 
@@ -26,13 +26,6 @@ constexpr std::uint32_t kBackwardsDelta = 1U << 31;
 
 std::string errno_text(int error) {
   return std::strerror(error);
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  std::string text;
-  if (!in || !std::getline(in, text)) return {};
-  return text;
 }
 
 // One pread from offset 0: sysfs regenerates the attribute on each read from the start.
@@ -97,7 +90,7 @@ std::string resolve_counter_device_dir(const std::string& device, const std::str
   if (fs::is_directory(direct, ec)) return direct.string();
   std::string found;
   for (const auto& entry : fs::directory_iterator(sysfs_root, ec)) {
-    if (read_text(entry.path() / "name") != device) continue;
+    if (read_first_line(entry.path() / "name") != device) continue;
     if (!found.empty())
       throw std::runtime_error("counter: both " + found + " and " + entry.path().string() +
                                " are named '" + device + "': configure the directory instead");

@@ -9,21 +9,15 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <stdexcept>
+
+#include "io/linux/sysfs_text.hpp"
 
 namespace weedspray::io::hw {
 
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  std::string text;
-  if (!in || !std::getline(in, text)) return {};
-  return text;
-}
 
 // Scale in millivolts per count: the channel's own _scale, else the shared one.
 double read_scale_mv(const fs::path& dir, const std::string& prefix, int channel) {
@@ -45,7 +39,7 @@ double read_iio_scale(const std::string& dir, const std::string& channel, const 
   for (const fs::path& p :
        {fs::path(dir) / (channel + "_scale"), fs::path(dir) / (shared + "_scale")}) {
     if (!fs::exists(p)) continue;
-    const std::string text = read_text(p);
+    const std::string text = read_first_line(p);
     char* end = nullptr;
     const double scale = std::strtod(text.c_str(), &end);
     if (text.empty() || end == text.c_str() || !(scale > 0.0) || !std::isfinite(scale))
@@ -67,7 +61,7 @@ std::string resolve_iio_device_dir(const std::string& device, const std::string&
   if (fs::is_directory(direct)) return direct.string();
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(sysfs_root, ec)) {
-    if (read_text(entry.path() / "name") == device) return entry.path().string();
+    if (read_first_line(entry.path() / "name") == device) return entry.path().string();
   }
   throw std::runtime_error("IIO: device '" + device + "' not found under " + sysfs_root +
                            " (neither a directory nor a device name)");

@@ -6,6 +6,7 @@
 
 #include "daemon/records/as_applied_log.hpp"
 #include "daemon/records/as_applied_reader.hpp"
+#include "tests/unit/daemon/local_metres.hpp"
 
 namespace weedspray::daemon {
 namespace {
@@ -24,11 +25,7 @@ class AsAppliedRowsTest : public ::testing::Test {
   fs::path dir_;
 };
 
-std::pair<double, double> metres(LatLon origin, LatLon p) {
-  double n = 0, e = 0;
-  local_offset(origin, p, n, e);
-  return {n, e};
-}
+using test::metres;
 
 TEST_F(AsAppliedRowsTest, PositionsUtcAndRatesRoundTripThroughTheLog) {
   const LatLon fix_at{52.0, 5.0};

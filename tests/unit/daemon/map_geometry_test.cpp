@@ -1,16 +1,12 @@
 #include "daemon/records/map_geometry.hpp"
 
 #include <gtest/gtest.h>
+#include "tests/unit/daemon/local_metres.hpp"
 
 namespace weedspray::daemon {
 namespace {
 
-// Metres from `origin` to `p`, north and east.
-std::pair<double, double> metres(LatLon origin, LatLon p) {
-  double n = 0, e = 0;
-  local_offset(origin, p, n, e);
-  return {n, e};
-}
+using test::metres;
 
 const LatLon kField{52.0, 5.0};
 

@@ -4,6 +4,7 @@
 
 #include "daemon/maps/density_grid.hpp"
 #include "daemon/maps/stretches.hpp"
+#include "tests/unit/daemon/local_metres.hpp"
 
 namespace weedspray::daemon::maps {
 namespace {
@@ -13,9 +14,7 @@ constexpr double kPeriod = 0.2;  // s between records
 constexpr double kWidth = 0.5;
 
 std::pair<double, double> metres(LatLon p) {
-  double n = 0, e = 0;
-  local_offset(kField, p, n, e);
-  return {n, e};
+  return test::metres(kField, p);
 }
 
 // Two nozzles driving at `speed` along `heading`; nozzle 0 sprays with `duty` (0: closed) at

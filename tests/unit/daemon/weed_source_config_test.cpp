@@ -24,13 +24,13 @@ std::string tiny_dnn(const std::string& extra = "") {
          "\"\nmodel_mean = [0, 0, 0]\nmodel_scale = 0.00392156862745098\n" + extra;
 }
 
-Config parse(const std::string& text) {
+Config parse_weed_config(const std::string& text) {
   return load_config_from_strings({{"main.toml", text}});
 }
 
 ConfigError parse_error(const std::string& text) {
   try {
-    (void)parse(text);
+    (void)parse_weed_config(text);
   } catch (const ConfigError& error) {
     return error;
   }
@@ -39,14 +39,14 @@ ConfigError parse_error(const std::string& text) {
 }
 
 TEST(WeedSourceConfig, DefaultIsVegetationAndLoadsNoModel) {
-  const Config config = parse("");
+  const Config config = parse_weed_config("");
   EXPECT_EQ(config.vision.weed_source, "vegetation");
   EXPECT_EQ(config.model, nullptr);
   // Model keys are not checked while no source uses them.
   EXPECT_NO_THROW(
-      (void)parse("[vision]\nmodel = \"/nonexistent.onnx\"\nmodel_input_width = 100\n"
-                  "weed_class = 7\n"));
-  EXPECT_EQ(parse("[vision]\nweed_source = \"inter_row\"\n").model, nullptr);
+      (void)parse_weed_config("[vision]\nmodel = \"/nonexistent.onnx\"\nmodel_input_width = 100\n"
+                              "weed_class = 7\n"));
+  EXPECT_EQ(parse_weed_config("[vision]\nweed_source = \"inter_row\"\n").model, nullptr);
 }
 
 TEST(WeedSourceConfig, ChoicesAreTheVisionLibrarysNames) {
@@ -60,17 +60,17 @@ TEST(WeedSourceConfig, ChoicesAreTheVisionLibrarysNames) {
 }
 
 TEST(WeedSourceConfig, DnnReadsTheModelOnce) {
-  const Config config = parse(tiny_dnn());
+  const Config config = parse_weed_config(tiny_dnn());
   ASSERT_NE(config.model, nullptr);
   EXPECT_EQ(config.model->path, kTinyModel);
   EXPECT_EQ(config.model->onnx.size(), fs::file_size(kTinyModel));
-  EXPECT_NE(parse(tiny_dnn()).model, nullptr);
+  EXPECT_NE(parse_weed_config(tiny_dnn()).model, nullptr);
 }
 
 // The model keys' defaults are the shipped model and its spec: one line switches to it (a
 // build tree finds it in the checkout's models/, an installed daemon in its data folder).
 TEST(WeedSourceConfig, DefaultModelIsTheShippedOne) {
-  const Config config = parse("[vision]\nweed_source = \"hybrid\"\n");
+  const Config config = parse_weed_config("[vision]\nweed_source = \"hybrid\"\n");
   ASSERT_NE(config.model, nullptr);
   EXPECT_EQ(config.model->path, fs::path(WEEDSPRAY_SOURCE_DIR) / "models" / "weed-peanut.onnx");
 }
@@ -78,9 +78,9 @@ TEST(WeedSourceConfig, DefaultModelIsTheShippedOne) {
 TEST(WeedSourceConfig, PipelineGetsTheSpecAndGroundDistancesInPixels) {
   // 4 nozzles x 0.5 m across 1280 px: 1.5625 mm per pixel.
   const Config config =
-      parse(tiny_dnn("model_rgb = false\nmodel_classes = [\"bg\", \"weed\", \"crop\"]\n"
-                     "soil_class = 0\nweed_class = 1\ncrop_class = 2\n"
-                     "crop_margin_cm = 2.0\nrow_band_cm = 30.0\n"));
+      parse_weed_config(tiny_dnn("model_rgb = false\nmodel_classes = [\"bg\", \"weed\", \"crop\"]\n"
+                                 "soil_class = 0\nweed_class = 1\ncrop_class = 2\n"
+                                 "crop_margin_cm = 2.0\nrow_band_cm = 30.0\n"));
   ASSERT_EQ(config.cameras.size(), 1U);
   EXPECT_DOUBLE_EQ(ground_m_per_px(config, config.cameras[0]), 2.0 / 1280);
   const vision::PipelineConfig c = pipeline_config(config, config.cameras[0]);
@@ -157,7 +157,8 @@ TEST(WeedSourceConfig, InputSizeIsAMultipleOf32) {
   EXPECT_EQ(e.key(), "vision.model_input_height");
   EXPECT_EQ(e.line(), 6);
   EXPECT_NE(std::string(e.what()).find("not a multiple of 32"), std::string::npos) << e.what();
-  EXPECT_NO_THROW((void)parse(tiny_dnn("model_input_width = 384\nmodel_input_height = 288\n")));
+  EXPECT_NO_THROW(
+      (void)parse_weed_config(tiny_dnn("model_input_width = 384\nmodel_input_height = 288\n")));
 }
 
 TEST(WeedSourceConfig, MeanIsThreeNumbers) {

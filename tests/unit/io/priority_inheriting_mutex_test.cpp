@@ -17,7 +17,7 @@ namespace weedspray::io::sim {
 namespace {
 
 using namespace std::chrono_literals;
-using Clock = std::chrono::steady_clock;
+using SteadyClock = std::chrono::steady_clock;
 
 bool pin_to_cpu0() {
   cpu_set_t cpus;
@@ -32,8 +32,8 @@ bool set_fifo(int priority) {
 }
 
 void spin_for(std::chrono::nanoseconds duration) {
-  const auto end = Clock::now() + duration;
-  while (Clock::now() < end) {
+  const auto end = SteadyClock::now() + duration;
+  while (SteadyClock::now() < end) {
   }
 }
 
@@ -65,9 +65,9 @@ TEST(PriorityInheritingMutex, ANormalHolderIsBoostedPastASchedFifoHog) {
   std::thread waiter([&] {
     // Priority first: pinned while still normal, it could not run on the hog's CPU to raise it.
     setup_ok = setup_ok && set_fifo(30) && pin_to_cpu0();
-    const auto start = Clock::now();
+    const auto start = SteadyClock::now();
     std::lock_guard lock(mutex);
-    waited = Clock::now() - start;
+    waited = SteadyClock::now() - start;
   });
   waiter.join();
   holder.join();
