@@ -309,7 +309,8 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
                           {"max_error_pct", &row->max_error_pct},
                           {"max_error_below_100_pct", &row->max_error_modulated_pct},
                           {"pressure_band_mpa", &row->pressure_band_mpa}},
-                         row != &r.recalibrated);
+                         true);
+    print_spread_json("held_open_floor_pct", r.held_open_floor_pct, false);
     std::printf("}\n");
   } else {
     std::printf(
@@ -325,6 +326,8 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
       print_spread_row("  ...below 100 % duty [%]", row->max_error_modulated_pct, "%12.3f");
       print_spread_row("pressure band [MPa]", row->pressure_band_mpa, "%12.4f");
     }
+    std::printf("-- floor of any controller holding 100 %% open at one pressure (plant truth)\n");
+    print_spread_row("max error [%]", r.held_open_floor_pct, "%12.3f");
   }
   return 0;
 }

@@ -182,6 +182,17 @@ struct OrthogonalResult {
 };
 OrthogonalResult run_orthogonal(const SprayRunOptions& options);
 
+// The floor of the L16 on a changed machine for any controller that holds a nozzle asked for
+// 100 % open (the L16's 100 % level) and one line pressure: from the plant's truth in steady
+// flow (no valve timing, water hammer or meter error), the other nozzles spraying exactly what
+// they are asked, and the pressure the one common knob, within the band (set-point
+// +-0.02 MPa; flow goes with its square root). Per run, the pressure that balances the
+// held-open nozzles' highest and lowest flow against the reference (each nozzle's calibrated
+// full-open flow, as in run_orthogonal) leaves the smaller of their worst errors; the floor is
+// the largest over the 16 runs [%]. Going below it needs a held-open nozzle pulsed below 100 %,
+// that is, knowing which nozzle changed.
+double orthogonal_held_open_floor_pct(const SprayRunOptions& options);
+
 // Per-nozzle full-open flow the calibrated machine believes in (metered at 100 %), shared by
 // linearity/orthogonal to define "requested".
 std::vector<double> calibrated_full_flows(const CalibrationResult& calibration);
@@ -321,6 +332,7 @@ struct OrthogonalFleetResult {
   // calibration run again on the changed machine (sprayctl calibrate meter / nozzles), then
   // the daemon's trim.
   OrthogonalFleetRow recalibrated;
+  Spread held_open_floor_pct;  // orthogonal_held_open_floor_pct() per machine
 };
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet,
                                            const SprayRunOptions& base = {});

@@ -144,6 +144,32 @@ OrthogonalResult run_orthogonal(const SprayRunOptions& options) {
   return result;
 }
 
+double orthogonal_held_open_floor_pct(const SprayRunOptions& options) {
+  const PreparedMachine m = prepare_machine(options);
+  plant::HydraulicPlant changed(options.plant, options.seed);
+  if (options.change) apply_change(changed, *options.change);
+  const double p = options.pressure_mpa;
+  const double band_mpa = 0.02;
+  const double scale_lo = std::sqrt((p - band_mpa) / p);
+  const double scale_hi = std::sqrt((p + band_mpa) / p);
+  double floor_pct = 0.0;
+  for (const auto& row : kOrthogonalL16) {
+    double lo = 0.0, hi = 0.0;  // held-open flow / reference: lowest and highest
+    for (std::size_t i = 0; i < row.size(); ++i) {
+      if (row[i] < 100.0) continue;
+      const double ratio =
+          changed.nozzle_open_flow_now_l_per_min(static_cast<int>(i), p) / m.full_flows[i];
+      lo = lo == 0.0 ? ratio : std::min(lo, ratio);
+      hi = std::max(hi, ratio);
+    }
+    if (hi == 0.0) continue;
+    const double scale = std::clamp(2.0 / (lo + hi), scale_lo, scale_hi);
+    const double worst = std::max(std::abs(scale * lo - 1.0), std::abs(scale * hi - 1.0));
+    floor_pct = std::max(floor_pct, worst * 100.0);
+  }
+  return floor_pct;
+}
+
 }  // namespace weedspray::control::experiments
 
 namespace weedspray::control::experiments {
@@ -183,6 +209,7 @@ LinearityFleetResult run_linearity_fleet(const FleetOptions& fleet, const SprayR
 
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const SprayRunOptions& base) {
   std::vector<OrthogonalResult> on, model, off, recalibrated;
+  std::vector<double> held_open_floor;
   const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
   for (std::size_t i = 0; i < machines.size(); ++i) {
     const Machine& m = machines[i];
@@ -195,6 +222,7 @@ OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const Spra
                          : no_change(m);
     options.flow_feedback = true;
     options.model_trim = false;
+    held_open_floor.push_back(orthogonal_held_open_floor_pct(options));
     on.push_back(run_orthogonal(options));
     options.model_trim = true;
     model.push_back(run_orthogonal(options));
@@ -206,7 +234,7 @@ OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const Spra
     recalibrated.push_back(run_orthogonal(options));
   }
   return {summarise(std::move(on)), summarise(std::move(model)), summarise(std::move(off)),
-          summarise(std::move(recalibrated))};
+          summarise(std::move(recalibrated)), spread_of(held_open_floor)};
 }
 
 }  // namespace weedspray::control::experiments

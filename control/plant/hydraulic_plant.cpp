@@ -421,6 +421,11 @@ double HydraulicPlant::nozzle_full_open_flow_l_per_min(int i, double pressure_mp
   return orifice_flow_l_per_s(k, pressure_mpa) * 60.0;
 }
 
+double HydraulicPlant::nozzle_open_flow_now_l_per_min(int i, double pressure_mpa) const {
+  (void)nozzle_truth(i);  // the index check
+  return orifice_flow_l_per_s(series_k(i), pressure_mpa) * 60.0;
+}
+
 double HydraulicPlant::sensor_current_ma() const {
   if (wire_broken_) return 0.0;
   if (shorted_) return 24.0;

@@ -255,6 +255,8 @@ class HydraulicPlant {
   // Flow of nozzle i fully open at pressure p (true k, its valve in series, no wear or
   // blockage): the reference for "requested" volumes.
   double nozzle_full_open_flow_l_per_min(int i, double pressure_mpa) const;
+  // ...as it is now: with its wear and blockage (what a change did to it).
+  double nozzle_open_flow_now_l_per_min(int i, double pressure_mpa) const;
 
   // --- sensors, as the controller's inputs see them ---
   double sensor_current_ma() const;      // 4-20 mA loop current (0 if wire broken)

@@ -134,6 +134,26 @@ TEST(FleetOrthogonal, RecalibratingAfterTheChangeFindsOneNozzlesOwnChange) {
               recalibrated.max_error_pct);
 }
 
+// The held-open floor prices one nozzle's own change from the plant's truth: nothing on the
+// machine as made; with one nozzle 8 % blocked, the L16 runs that hold it open beside healthy
+// nozzles cost any controller that keeps them open about half of it (the pressure balances the
+// high against the low). Counting the flows as made instead of with the blockage gives ~0.
+TEST(FleetOrthogonal, HeldOpenFloorPricesOneNozzlesOwnChange) {
+  const Machine m = draw_machine(1, 0);
+  SprayRunOptions options;
+  options.seed = m.seed;
+  options.plant = m.params;
+  options.change = no_change(m);
+  EXPECT_LT(orthogonal_held_open_floor_pct(options), 0.5);
+  MachineChange blocked = no_change(m);
+  blocked.blocked_nozzle = 1;
+  blocked.blockage = 0.08;
+  options.change = blocked;
+  const double floor_pct = orthogonal_held_open_floor_pct(options);
+  EXPECT_GT(floor_pct, 3.0);
+  EXPECT_LT(floor_pct, 5.0);
+}
+
 TEST(FleetRipple, StaggeringCutsThePressureSwingOnEveryMachine) {
   RippleOptions base;
   base.settle_s = 2.0;
