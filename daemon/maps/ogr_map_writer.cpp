@@ -10,8 +10,9 @@ namespace weedspray::daemon::maps {
 
 namespace fs = std::filesystem;
 
-// Named, not anonymous: OgrMapWriter::Impl holds these (GCC's -Wsubobject-linkage, which a
-// unity build turns on for every file but the first of a batch).
+// Named, not anonymous: OgrMapWriter::Impl holds these, and GCC's -Wsubobject-linkage flags a
+// class defined outside the main file that holds an anonymous type; in a unity build every file
+// of a batch is such a file.
 namespace ogr_detail {
 
 std::string gdal_error() {
