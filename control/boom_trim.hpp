@@ -1,14 +1,12 @@
 // Boom trim as a model: the line flow meter against what the calibrated lines promise (issue
-// 12, stop 23). LAB ONLY for now (`weedspray-lab experiment orthogonal --plants N`, row
-// "model"): the daemon keeps FlowTrim's integral law (flow_feedback.hpp). That law drives the
-// metered total to the requested total by moving only the modulated nozzles: a nozzle held
-// open that sprays 4 % more than its calibration has its excess taken out of the modulated
-// ones (a row with one modulated nozzle among three open ones moved it by 10 % on the worst
-// machine of `experiment orthogonal --plants 20`). This model is better there on every figure,
-// but on a sparse variable-rate field (`experiment savings --plants 20`) it under-doses: 20.8 %
-// of nozzle-zones below target against 9.1 % with the integral law. Valves switching all the
-// time bias the meter's windows (below), and a model fitted to each window takes that for the
-// boom; an integral law only cares that the totals match.
+// 12, stop 23). LAB ONLY (`weedspray-lab experiment orthogonal --plants N`, row "model"): the
+// daemon's FlowTrim (flow_feedback.hpp) is the gain term of this model alone, 1 / (metered over
+// promised), since stop 30. Both leave a held-open nozzle's own error where it is, where the
+// integral law of before put it on the modulated ones. With the valve-timing term this model is
+// better on the changed machine's worst max (7.80 against 9.25 %), but on a sparse variable-rate
+// field (`experiment savings --plants 20`) it under-doses: 20.8 % of nozzle-zones below target
+// against 9.1-9.6 % with the daemon's trims. Valves switching all the time bias the meter's
+// windows (below), and a model fitted to each window takes that for the boom's valve timing.
 //
 // Model of what the boom delivers after its calibration, per window:
 //   V = k P + D S + e
@@ -35,7 +33,8 @@
 // windows, a gain and an offset per nozzle with the state carried over the L16's 16 mixes, the
 // model's mix-dependent errors (pressure lost along the boom, the meter's low-flow error) were
 // taken for nozzle changes: on that machine as made 1.89 % mean error against 0.74 % for a
-// common trim, and on 6 changed machines 2.80 % mean / 8.5 % max against FlowTrim's 2.24 / 7.1.
+// common trim, and on 6 changed machines 2.80 % mean / 8.5 % max against FlowTrim's (then an
+// integrator) 2.24 / 7.1.
 //
 // Pure (no clocks, threads or I/O), fixed-size state, allocation-free.
 #pragma once

@@ -7,18 +7,20 @@
 
 namespace weedspray::control {
 
-FlowTrim::FlowTrim(const FlowTrimConfig& config) : config_(config) {
+namespace {
+
+const FlowTrimConfig& validated(const FlowTrimConfig& config) {
   auto finite = [](double x) { return std::isfinite(x); };
   if (!finite(config.min_correction) || !finite(config.max_correction) ||
       !(config.min_correction > 0.0) || !(config.min_correction <= 1.0) ||
       !(config.max_correction >= 1.0)) {
     throw std::invalid_argument("FlowTrimConfig: need 0 < min_correction <= 1 <= max_correction");
   }
-  if (!finite(config.gain_per_s) || config.gain_per_s < 0.0) {
-    throw std::invalid_argument("FlowTrimConfig.gain_per_s must be >= 0");
+  if (!finite(config.time_constant_s) || !(config.time_constant_s > 0.0)) {
+    throw std::invalid_argument("FlowTrimConfig.time_constant_s must be > 0");
   }
-  if (!finite(config.max_rate_per_s) || config.max_rate_per_s < 0.0) {
-    throw std::invalid_argument("FlowTrimConfig.max_rate_per_s must be >= 0");
+  if (!finite(config.min_observed_s) || !(config.min_observed_s >= 0.0)) {
+    throw std::invalid_argument("FlowTrimConfig.min_observed_s must be >= 0");
   }
   if (!finite(config.min_requested_flow_l_per_min) || config.min_requested_flow_l_per_min <= 0.0) {
     throw std::invalid_argument("FlowTrimConfig.min_requested_flow_l_per_min must be > 0");
@@ -27,55 +29,41 @@ FlowTrim::FlowTrim(const FlowTrimConfig& config) : config_(config) {
       config.min_open_fraction > 1.0) {
     throw std::invalid_argument("FlowTrimConfig.min_open_fraction must be in [0, 1]");
   }
-  if (!finite(config.min_trimmable_fraction) || config.min_trimmable_fraction < 0.0 ||
-      config.min_trimmable_fraction > 1.0) {
-    throw std::invalid_argument("FlowTrimConfig.min_trimmable_fraction must be in [0, 1]");
-  }
   if (!finite(config.max_pressure_error_fraction) || config.max_pressure_error_fraction <= 0.0) {
     throw std::invalid_argument("FlowTrimConfig.max_pressure_error_fraction must be > 0");
   }
+  return config;
 }
-
-double FlowTrim::update(double requested_total_l_per_min, double measured_total_l_per_min,
-                        double open_fraction, double dt_s) noexcept {
-  FlowTrimInput input;
-  input.requested_total_l_per_min = requested_total_l_per_min;
-  input.trimmable_l_per_min = requested_total_l_per_min;
-  input.measured_total_l_per_min = measured_total_l_per_min;
-  input.open_fraction = open_fraction;
-  input.dt_s = dt_s;
-  return update(input);
-}
-
-namespace {
 
 // Whether the meter over a window says anything about the lines' promise: finite, enough flow
-// and open valves, the promise known, the pressure on its set-point. FlowTrim and
-// CalibrationRatio share it; FlowTrim also needs a modulated share to move.
+// and open valves, the promise known, the pressure on its set-point.
 bool window_usable(const FlowTrimConfig& c, const FlowTrimInput& in) noexcept {
-  return std::isfinite(in.requested_total_l_per_min) &&
-         std::isfinite(in.measured_total_l_per_min) && std::isfinite(in.open_fraction) &&
-         std::isfinite(in.pressure_error_fraction) && std::isfinite(in.dt_s) && in.dt_s > 0.0 &&
-         in.promise_known && in.requested_total_l_per_min >= c.min_requested_flow_l_per_min &&
+  return std::isfinite(in.promised_l_per_min) && std::isfinite(in.measured_total_l_per_min) &&
+         std::isfinite(in.open_fraction) && std::isfinite(in.pressure_error_fraction) &&
+         std::isfinite(in.dt_s) && in.dt_s > 0.0 && in.promise_known &&
+         in.promised_l_per_min >= c.min_requested_flow_l_per_min &&
          in.open_fraction >= c.min_open_fraction &&
          std::abs(in.pressure_error_fraction) <= c.max_pressure_error_fraction;
 }
 
 }  // namespace
 
-double FlowTrim::update(const FlowTrimInput& in) noexcept {
-  frozen_ = !window_usable(config_, in) || !std::isfinite(in.trimmable_l_per_min) ||
-            in.trimmable_l_per_min < config_.min_requested_flow_l_per_min ||
-            in.trimmable_l_per_min < config_.min_trimmable_fraction * in.requested_total_l_per_min;
-  if (frozen_) return correction_;
-  const double trimmable = std::min(in.trimmable_l_per_min, in.requested_total_l_per_min);
-  const double relative_error =
-      (in.requested_total_l_per_min - in.measured_total_l_per_min) / trimmable;
-  const double max_step = config_.max_rate_per_s * in.dt_s;
-  const double step =
-      std::clamp(config_.gain_per_s * relative_error * in.dt_s, -max_step, max_step);
-  correction_ = std::clamp(correction_ + step, config_.min_correction, config_.max_correction);
-  return correction_;
+FlowTrim::FlowTrim(const FlowTrimConfig& config)
+    : config_(validated(config)),
+      ratio_(config_, config_.time_constant_s, config_.min_observed_s) {}
+
+double FlowTrim::update(const FlowTrimInput& window) noexcept {
+  frozen_ = !window_usable(config_, window);
+  ratio_.update(window);
+  return correction();
+}
+
+double FlowTrim::correction() const noexcept {
+  const double ratio = ratio_.ratio();
+  // A meter that counted nothing gives ratio 0: the largest correction, as an integrator's
+  // wind-up would (the meter's own fault is another alarm's business).
+  if (!(ratio > 0.0)) return config_.max_correction;
+  return std::clamp(1.0 / ratio, config_.min_correction, config_.max_correction);
 }
 
 double promised_flow_l_per_min(const NozzleLine& line, double duty_pct,
@@ -103,15 +91,13 @@ bool FlowTrimWindows::tick(double dt_s, const FlowTrimTick& tick, double pulses_
   }
   if (!(dt_s > 0.0) || !std::isfinite(dt_s)) return false;
   elapsed_s_ += dt_s;
-  sums_.requested_total_l_per_min += tick.promised_l_per_min * dt_s;
-  sums_.trimmable_l_per_min += tick.trimmable_l_per_min * dt_s;
+  sums_.promised_l_per_min += tick.promised_l_per_min * dt_s;
   sums_.open_fraction += tick.open_fraction * dt_s;
   sums_.pressure_error_fraction =
       std::max(sums_.pressure_error_fraction, std::abs(tick.pressure_error_fraction));
   sums_.promise_known = sums_.promise_known && tick.promise_known;
   if (elapsed_s_ < window_s_ - 1e-9) return false;
-  out.requested_total_l_per_min = sums_.requested_total_l_per_min / elapsed_s_;
-  out.trimmable_l_per_min = sums_.trimmable_l_per_min / elapsed_s_;
+  out.promised_l_per_min = sums_.promised_l_per_min / elapsed_s_;
   out.open_fraction = sums_.open_fraction / elapsed_s_;
   out.pressure_error_fraction = sums_.pressure_error_fraction;
   out.promise_known = sums_.promise_known;
@@ -126,9 +112,9 @@ bool FlowTrimWindows::tick(double dt_s, const FlowTrimTick& tick, double pulses_
   return true;
 }
 
-CalibrationRatio::CalibrationRatio(const FlowTrimConfig& freeze_rules, double time_constant_s,
+CalibrationRatio::CalibrationRatio(const FlowTrimConfig& window_rules, double time_constant_s,
                                    double min_observed_s)
-    : freeze_rules_(freeze_rules),
+    : window_rules_(window_rules),
       time_constant_s_(time_constant_s),
       min_observed_s_(min_observed_s) {
   if (!(time_constant_s > 0.0))
@@ -138,10 +124,10 @@ CalibrationRatio::CalibrationRatio(const FlowTrimConfig& freeze_rules, double ti
 }
 
 void CalibrationRatio::update(const FlowTrimInput& in) noexcept {
-  if (!window_usable(freeze_rules_, in)) return;
+  if (!window_usable(window_rules_, in)) return;
   const double keep = std::exp(-in.dt_s / time_constant_s_);
   metered_ = metered_ * keep + in.measured_total_l_per_min * in.dt_s;
-  promised_ = promised_ * keep + in.requested_total_l_per_min * in.dt_s;
+  promised_ = promised_ * keep + in.promised_l_per_min * in.dt_s;
   observed_s_ += in.dt_s;
 }
 

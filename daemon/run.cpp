@@ -637,7 +637,7 @@ class Daemon final : public CommandHandler {
             config_.alarms.calibration_drift_hold_s, c,
             c <= trim.min_correction || c >= trim.max_correction
                 ? " is at its limit: the dose is NOT held"
-                : " holds the boom's total");
+                : " corrects the modulated nozzles by the boom's common change");
       } else if (id == AlarmId::kVisionModelFailed) {
         spdlog::error(
             "alarm raised: {} ({}; that camera's nozzles stay closed until its frames "

@@ -292,7 +292,7 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
   fleet.parts = change_parts(o.change_parts);
   const ex::OrthogonalFleetResult r = ex::run_orthogonal_fleet(fleet);
   const std::array rows{
-      std::tuple{"trim_on", "ON (the daemon's: integral, FlowTrim)", &r.trim_on},
+      std::tuple{"trim_on", "ON (the daemon's: ratio, FlowTrim)", &r.trim_on},
       std::tuple{"model_trim", "ON: model (BoomTrim, lab only)", &r.model_trim},
       std::tuple{"trim_off", "OFF", &r.trim_off},
       std::tuple{"recalibrated", "ON (the daemon's), recalibrated after the change",

@@ -128,6 +128,7 @@ void ClosedLoopRig::apply_flow_requests() {
     if (config_.fixes.flow_feedback && !boom_trim_)
       duty = trimmed_duty_pct(line, duty, trim_.correction(), pressure);
     duties_[k] = std::clamp(duty, 0.0, 100.0);
+    commanded_promise_[k] = promised_flow_l_per_min(line, duties_[k], pressure);
   }
   pwm_.set_duties(std::span<const double>(duties_.data(), static_cast<std::size_t>(n)));
 }
@@ -210,14 +211,13 @@ void ClosedLoopRig::control_tick() {
   const double pressure_error =
       std::abs(filtered_pressure_mpa_ - config_.setpoint_mpa) / config_.setpoint_mpa;
   // FlowTrim decides itself whether a window is usable (pressure off set-point, too little
-  // trimmable flow); the rig only measures, through the daemon's window cutter.
+  // flow); the rig only measures, through the daemon's window cutter.
   if (config_.fixes.flow_feedback && !boom_trim_ && flows_requested_) {
     FlowTrimTick tick;
     for (int i = 0; i < plant_.nozzle_count(); ++i) {
       const auto k = static_cast<std::size_t>(i);
       // The trim compares against what the lines promise for the duties actually latched.
-      tick.promised_l_per_min += promised_flows_[k];
-      if (duties_[k] > 0.0 && duties_[k] < 100.0) tick.trimmable_l_per_min += promised_flows_[k];
+      tick.promised_l_per_min += commanded_promise_[k];
       tick.open_fraction += duties_[k] / 100.0 / plant_.nozzle_count();
     }
     tick.pressure_error_fraction = pressure_error;

@@ -38,8 +38,8 @@ struct RigFixes {
   bool pressure_compensation = true;  // duty from the calibrated line at sqrt(Pcal/P)
   bool flow_feedback = true;          // FlowTrim on the (calibrated) meter
   // With flow_feedback: BoomTrim (the meter against the lines' promise as a model: common
-  // gain and valve timing) instead of FlowTrim's integral law. Not the default: it under-doses
-  // sparse variable-rate fields (boom_trim.hpp).
+  // gain and valve timing) instead of FlowTrim (1 / the metered ratio). Not the default: it
+  // under-doses sparse variable-rate fields (boom_trim.hpp).
   bool model_trim = false;
 };
 
@@ -144,6 +144,8 @@ class ClosedLoopRig {
   std::array<double, plant::kMaxNozzles> requested_flows_{};
   std::array<double, plant::kMaxNozzles> full_open_flows_{};
   std::array<double, plant::kMaxNozzles> promised_flows_{};  // law's flow for the chosen duty
+  // The lines' promise at the duties latched (after the trim): FlowTrim's reference.
+  std::array<double, plant::kMaxNozzles> commanded_promise_{};
   std::array<double, plant::kMaxNozzles> duties_{};
   bool flows_requested_ = false;
   bool started_ = false;

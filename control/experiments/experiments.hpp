@@ -139,8 +139,8 @@ struct SprayRunOptions {
   plant::PlantParams plant{};
   std::optional<MachineChange> change{};
   bool flow_feedback = true;  // online flow trim (not raw)
-  // ...as a model (BoomTrim: common gain and valve timing) or FlowTrim's integral law (the
-  // daemon's).
+  // ...as a model (BoomTrim: common gain and valve timing) or FlowTrim, 1 / the metered ratio
+  // (the daemon's).
   bool model_trim = false;
   // Calibrate after `change`, not before it (a user recalibrating the changed machine).
   bool recalibrated = false;
@@ -325,7 +325,7 @@ struct OrthogonalFleetRow {
   std::vector<OrthogonalResult> machines;
 };
 struct OrthogonalFleetResult {
-  OrthogonalFleetRow trim_on;     // FlowTrim's integral law, the daemon's
+  OrthogonalFleetRow trim_on;     // FlowTrim (metered ratio), the daemon's
   OrthogonalFleetRow model_trim;  // BoomTrim (lab only: boom_trim.hpp says why)
   OrthogonalFleetRow trim_off;
   // The remedy the daemon offers for what no boom trim can see: the catch test and the nozzle

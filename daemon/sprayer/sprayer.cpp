@@ -483,9 +483,8 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       // or nozzle line (sprayctl calibrate) starts it afresh.
       if (!same_calibration(trim_calibration, params, nozzles)) {
         flow_trim_.reset();
-        flow_trim_windows_.reset();
+        meter_windows_.reset();
         calibration_ratio_.reset();
-        calibration_windows_.reset();
         trim_calibration = params;
       }
     }
@@ -641,10 +640,6 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
               params.law, quantisers_[n].quantise(std::clamp(decision.raw_duty_pct, 0.0, 100.0)),
               decision.target_flow_l_per_min);
         }
-        const double promised =
-            control::promised_flow_l_per_min(params.lines[n], duty, compensation_pressure);
-        trim_tick.promised_l_per_min += promised;
-        if (duty > 0 && duty < 100) trim_tick.trimmable_l_per_min += promised;
         if (duty >= 100 && !(params.lines[n].full_open_flow_l_per_min > 0))
           trim_tick.promise_known = false;
       } else if (!quantisers_.empty()) {
@@ -666,13 +661,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
           params.setpoint_mpa > 0 ? (trim_pressure_mpa - params.setpoint_mpa) / params.setpoint_mpa
                                   : 0.0;
       trim_tick.pulses = status.flow_pulses;
-      control::FlowTrimInput trim_window;
-      if (flow_trim_windows_.tick(dt, trim_tick, params.flow_pulses_per_litre, trim_window))
-        flow_trim_.update(trim_window);
       const double correction = flow_trim_.correction();
-      status.flow_trim_active = !flow_trim_.frozen();
-      control::FlowTrimTick commanded_tick = trim_tick;
-      commanded_tick.promised_l_per_min = 0;
       for (std::size_t n = 0; n < nozzles; ++n) {
         // The trim moves duties only inside the calibrated band, never into the closed one.
         const double d = command.duty_pct[n];
@@ -681,14 +670,18 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
               control::trimmed_duty_pct(params.lines[n], d, correction, compensation_pressure),
               params.law.min_duty_pct, params.law.max_duty_pct);
         }
-        commanded_tick.promised_l_per_min += control::promised_flow_l_per_min(
+        // The meter is read against what the lines promise at the duties commanded.
+        trim_tick.promised_l_per_min += control::promised_flow_l_per_min(
             params.lines[n], command.duty_pct[n], compensation_pressure);
       }
-      if (calibration_windows_.tick(dt, commanded_tick, params.flow_pulses_per_litre, trim_window))
-        calibration_ratio_.update(trim_window);
+      control::FlowTrimInput window;
+      if (meter_windows_.tick(dt, trim_tick, params.flow_pulses_per_litre, window)) {
+        flow_trim_.update(window);
+        calibration_ratio_.update(window);
+      }
+      status.flow_trim_active = !flow_trim_.frozen();
     } else {
-      flow_trim_windows_.reset();
-      calibration_windows_.reset();
+      meter_windows_.reset();
       trim_pressure_mpa = -1.0;
       status.flow_trim_active = false;
     }

@@ -162,10 +162,10 @@ class Sprayer {
   std::unique_ptr<control::PwmSchedule> schedule_;
   std::unique_ptr<io::ValvePwmDriver<control::PwmSchedule>> pwm_driver_;
   std::optional<control::Odometry> odometry_;
+  // The meter against the lines at the commanded duties, in 1 s windows (whole PWM periods at
+  // whole Hz): the trim's (fast) and calibration_drift's (slow) ratio.
+  control::FlowTrimWindows meter_windows_;
   control::FlowTrim flow_trim_;
-  control::FlowTrimWindows flow_trim_windows_;  // 1 s: whole PWM periods at whole Hz
-  // The meter against the lines at the commanded duties: calibration_drift's measure.
-  control::FlowTrimWindows calibration_windows_;
   control::CalibrationRatio calibration_ratio_;
   std::optional<control::NozzleHealth> nozzle_health_;  // [nozzle_health] enabled; control loop
   std::vector<control::DutyQuantiser> quantisers_;

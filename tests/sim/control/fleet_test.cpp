@@ -43,8 +43,7 @@ TEST(Machines, SpreadIsMeanSampleSdAndWorst) {
 // One machine calibrated as made, then all its nozzles worn 4 % and its meter unchanged: a
 // common-mode change the trim, reading the calibrated meter, can see and take out of the
 // nozzles it modulates. A nozzle held open (100 %) is out of any trim's reach (it sprays its
-// worn full flow), and the integral law moves the modulated nozzles for it as well, so the
-// whole-run mean is judged on the modulated nozzles (duty below 100 %).
+// worn full flow), so the whole-run mean is judged on the modulated nozzles (duty below 100 %).
 double modulated_mean_error_pct(const OrthogonalResult& r) {
   double sum = 0.0;
   int count = 0;

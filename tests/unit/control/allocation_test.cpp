@@ -72,9 +72,8 @@ TEST(Allocation, PerCycleFunctionsDoNotAllocate) {
     if (i % 100 == 0) scheduler.add_frame(odometry.distance_at(i * 1ms), frame);
     const double duty = scheduler.duty_at(i % 4, odometry.distance_m(), odometry.speed_m_per_s());
     const SprayDecision d = spray_decision(SprayLawConfig{}, NozzleLine{}, 0.6, 1.0, 0.4);
-    trim.update(1.0, 0.95, 0.5, 0.01);
     FlowTrimInput window;
-    const FlowTrimTick tick{promised_flow_l_per_min(NozzleLine{}, d.duty_pct, 0.4), 0.5, 0.5, 0.01,
+    const FlowTrimTick tick{promised_flow_l_per_min(NozzleLine{}, d.duty_pct, 0.4), 0.5, 0.01,
                             static_cast<std::uint64_t>(i) * 3};
     if (trim_windows.tick(0.01, tick, 8500.0, window)) trim.update(window);
     trimmed_duty_pct(NozzleLine{}, d.duty_pct, trim.correction(), 0.4);
