@@ -14,7 +14,7 @@
 // boom's common change and leaves a held-open nozzle's own error where it is. Measured on 20
 // drawn machines after a drawn change (`weedspray-lab experiment orthogonal --plants 20`, README):
 // mean / max-mean / worst-max error 1.93 / 4.93 / 9.25 % against the integrator's 2.12 / 6.50 /
-// 10.3 %; `experiment dose` and `savings` no worse.
+// 10.3 %; `experiment dose` a little better, `savings` about the same (README).
 // Windows are unusable (the ratio and the trim hold) when too little flow is promised, the
 // valves are mostly closed, a nozzle held open has no measured full-open flow
 // (FlowTrimInput::promise_known), or the pressure was off its set-point during the window:
@@ -38,7 +38,7 @@ struct FlowTrimConfig {
   // names it (`experiment blockage --plants 20`, named within 10 s, seeds 1 / 2 / 3: 5 s 19 / 20
   // / 20 of 20, 10 s 20 / 20 / 20, 20 s 19 of 20 on seed 1).
   double time_constant_s = 10.0;
-  double min_observed_s = 2.0;  // usable windows seen before the correction leaves 1
+  double min_observed_s = 2.0;  // seconds of usable windows before the correction leaves 1
   // Window rules, shared with CalibrationRatio:
   double min_requested_flow_l_per_min = 0.05;  // promised flow below: unusable
   double min_open_fraction = 0.1;              // mean valve open fraction below: unusable
