@@ -1,5 +1,7 @@
 #include "control/nozzle_health.hpp"
 
+#include "control/small_linear_system.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -63,28 +65,7 @@ void NozzleHealth::reset() noexcept {
 }
 
 bool NozzleHealth::solve(const Matrix& s, const Vector& b, Vector& x) const noexcept {
-  const std::size_t n = config_.nozzles;
-  Matrix a = s;
-  Vector y = b;
-  for (std::size_t col = 0; col < n; ++col) {
-    std::size_t pivot = col;
-    for (std::size_t r = col + 1; r < n; ++r)
-      if (std::abs(a[r][col]) > std::abs(a[pivot][col])) pivot = r;
-    if (!(std::abs(a[pivot][col]) > 1e-12)) return false;
-    std::swap(a[col], a[pivot]);
-    std::swap(y[col], y[pivot]);
-    for (std::size_t r = col + 1; r < n; ++r) {
-      const double f = a[r][col] / a[col][col];
-      for (std::size_t k = col; k < n; ++k) a[r][k] -= f * a[col][k];
-      y[r] -= f * y[col];
-    }
-  }
-  for (std::size_t i = n; i-- > 0;) {
-    double v = y[i];
-    for (std::size_t k = i + 1; k < n; ++k) v -= a[i][k] * x[k];
-    x[i] = v / a[i][i];
-  }
-  return true;
+  return solve_small_system(s, b, config_.nozzles, x);
 }
 
 void NozzleHealth::add_window(std::span<const double> open_s, double metered_l,

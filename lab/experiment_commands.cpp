@@ -310,6 +310,10 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
                           {"max_error_below_100_pct", &row->max_error_modulated_pct},
                           {"pressure_band_mpa", &row->pressure_band_mpa}},
                          true);
+    print_spreads_json("nozzle_identification_error_pct",
+                       {{"mean", &r.trim_on.mean_identification_error_pct},
+                        {"max", &r.trim_on.max_identification_error_pct}},
+                       true);
     print_spread_json("held_open_floor_pct", r.held_open_floor_pct, false);
     std::printf("}\n");
   } else {
@@ -328,6 +332,11 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
     }
     std::printf("-- floor of any controller holding 100 %% open at one pressure (plant truth)\n");
     print_spread_row("max error [%]", r.held_open_floor_pct, "%12.3f");
+    std::printf(
+        "-- each nozzle's ratio as one line meter tells it (phase-window fit over each run, "
+        "trim ON; nozzle-runs below 100 %% duty): error against the truth\n");
+    print_spread_row("mean error [%]", r.trim_on.mean_identification_error_pct, "%12.3f");
+    print_spread_row("max error [%]", r.trim_on.max_identification_error_pct, "%12.3f");
   }
   return 0;
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace weedspray::control::experiments {
@@ -65,6 +66,10 @@ ClosedLoopRig::ClosedLoopRig(const RigConfig& config)
     NozzleHealthConfig h = *config.nozzle_health;
     h.nozzles = static_cast<std::size_t>(config.plant.nozzle_count);
     health_.emplace(h);
+  }
+  if (config.identify_nozzles) fit_.emplace(static_cast<std::size_t>(config.plant.nozzle_count));
+  phase_windows_ = health_ || fit_;
+  if (phase_windows_) {
     health_window_s_ = 1.0 / (config.pwm_frequency_hz * config.plant.nozzle_count);
     if (!(config.health_flow_lag_s >= 0.0 && config.health_flow_lag_s < health_window_s_))
       throw std::invalid_argument("RigConfig.health_flow_lag_s must be in [0, one PWM phase)");
@@ -151,10 +156,11 @@ void ClosedLoopRig::start() {
   next_record_s_ = now;
   boom_trim_windows_.reset();
   trim_windows_.reset();
-  if (health_) {
+  if (phase_windows_) {
     next_health_window_s_ = now + health_window_s_;
     next_health_meter_s_ = -1.0;
     health_open_s_.fill(0.0);
+    window_promised_l_.fill(0.0);
     health_pulses_ = plant_.flow_meter_pulses();
   }
 }
@@ -162,6 +168,14 @@ void ClosedLoopRig::start() {
 void ClosedLoopRig::health_window_closed() {
   health_pending_open_s_ = health_open_s_;
   health_open_s_.fill(0.0);
+  if (fit_) {
+    const std::uint64_t pulses = plant_.flow_meter_pulses();
+    fit_->add_window(std::span<const double>(window_promised_l_.data(),
+                                             static_cast<std::size_t>(plant_.nozzle_count())),
+                     static_cast<double>(pulses - fit_pulses_) / config_.meter_pulses_per_l);
+    fit_pulses_ = pulses;
+    window_promised_l_.fill(0.0);
+  }
   next_health_meter_s_ = next_health_window_s_ + config_.health_flow_lag_s;
   next_health_window_s_ += health_window_s_;
   if (config_.health_flow_lag_s <= 0.0) health_meter_window_closed();
@@ -171,13 +185,66 @@ void ClosedLoopRig::health_meter_window_closed() {
   const std::uint64_t pulses = plant_.flow_meter_pulses();
   const double litres = static_cast<double>(pulses - health_pulses_) / config_.meter_pulses_per_l;
   health_pulses_ = pulses;
-  health_->add_window(std::span<const double>(health_pending_open_s_.data(),
-                                              static_cast<std::size_t>(plant_.nozzle_count())),
-                      litres, health_window_s_);
-  for (int i = 0; i < plant_.nozzle_count(); ++i)
-    health_max_evidence_ =
-        std::max(health_max_evidence_, health_->evidence(static_cast<std::size_t>(i)));
   next_health_meter_s_ = -1.0;
+  const auto nozzles = static_cast<std::size_t>(plant_.nozzle_count());
+  if (!health_) return;
+  health_->add_window(std::span<const double>(health_pending_open_s_.data(), nozzles), litres,
+                      health_window_s_);
+  for (std::size_t i = 0; i < nozzles; ++i)
+    health_max_evidence_ = std::max(health_max_evidence_, health_->evidence(i));
+}
+
+void ClosedLoopRig::account_open_time(double step_s) {
+  const double t0 = plant_.time_s();
+  const double t1 = t0 + step_s;
+  for (int i = 0; i < plant_.nozzle_count(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if ((applied_mask_ >> i) & 1U) health_open_s_[k] += step_s;
+    if (!fit_) continue;
+    fit_promised_l_[k] += step_s * commanded_promise_[k] / 60.0;
+    // The fit counts the time the nozzle flows by its valve's label timing (the commanded
+    // pulse moved by the mean open and close lags), at the line's flow per flowing second
+    // (its promise over the share of the period it flows).
+    double flowing_s = 0.0;
+    for (const auto& [on, off] : {flow_previous_[k], flow_current_[k]})
+      flowing_s += std::max(0.0, std::min(t1, off) - std::max(t0, on));
+    const double flowing_share =
+        duties_[k] >= 100.0
+            ? 1.0
+            : std::min(1.0, duties_[k] / 100.0 + flow_lag_stretch_s_ * config_.pwm_frequency_hz);
+    if (duties_[k] > 0.0)
+      window_promised_l_[k] += flowing_s * commanded_promise_[k] / 60.0 / flowing_share;
+  }
+}
+
+plant::NozzleParams ClosedLoopRig::valve_label() {
+  return plant::NozzleParams{};
+}
+
+void ClosedLoopRig::valve_edge(std::uint32_t mask) {
+  const double now = plant_.time_s();
+  const plant::NozzleParams label = valve_label();
+  for (int i = 0; i < plant_.nozzle_count(); ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const bool was = (applied_mask_ >> i) & 1U;
+    const bool is = (mask >> i) & 1U;
+    if (!was && is) {
+      flow_previous_[k] = flow_current_[k];
+      flow_current_[k] = {now + label.open_delay_s + label.open_travel_s / 2.0,
+                          std::numeric_limits<double>::infinity()};
+    } else if (was && !is) {
+      flow_current_[k].second = now + label.close_delay_s + label.close_travel_s / 2.0;
+    }
+  }
+  plant_.set_valves(mask);
+  applied_mask_ = mask;
+}
+
+void ClosedLoopRig::restart_identification() {
+  if (fit_) fit_->reset();
+  fit_promised_l_.fill(0.0);
+  window_promised_l_.fill(0.0);
+  fit_pulses_ = plant_.flow_meter_pulses();
 }
 
 double ClosedLoopRig::read_pressure_mpa() const {
@@ -254,25 +321,22 @@ void ClosedLoopRig::run_for(double duration_s) {
     if (config_.record_period_s > 0.0) next = std::min(next, next_record_s_);
     if (config_.converter_lead_s > 0.0) next = std::min(next, next_sample_s_);
     if (dac_due_s_ >= 0.0) next = std::min(next, dac_due_s_);
-    if (health_) {
+    if (phase_windows_) {
       next = std::min(next, next_health_window_s_);
       if (next_health_meter_s_ >= 0.0) next = std::min(next, next_health_meter_s_);
     }
     if (next > plant_.time_s()) {
-      if (health_)
-        for (int i = 0; i < plant_.nozzle_count(); ++i)
-          if ((applied_mask_ >> i) & 1U)
-            health_open_s_[static_cast<std::size_t>(i)] += next - plant_.time_s();
-      plant_.step(next - plant_.time_s());
+      const double step_s = next - plant_.time_s();
+      if (phase_windows_) account_open_time(step_s);
+      plant_.step(step_s);
     }
     const double now = plant_.time_s();
     constexpr double kEps = 1e-9;
-    if (health_ && next_health_meter_s_ >= 0.0 && next_health_meter_s_ <= now + kEps)
+    if (phase_windows_ && next_health_meter_s_ >= 0.0 && next_health_meter_s_ <= now + kEps)
       health_meter_window_closed();
-    if (health_ && next_health_window_s_ <= now + kEps) health_window_closed();
+    if (phase_windows_ && next_health_window_s_ <= now + kEps) health_window_closed();
     while (next_edge_time_s() <= now + kEps) {
-      plant_.set_valves(pending_edge_.valve_mask);
-      applied_mask_ = pending_edge_.valve_mask;
+      valve_edge(pending_edge_.valve_mask);
       pending_edge_ = pwm_.next_edge();
     }
     if (dac_due_s_ >= 0.0 && dac_due_s_ <= now + kEps) {

@@ -13,10 +13,12 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "control/boom_trim.hpp"
 #include "control/calibration.hpp"
+#include "control/experiments/phase_window_fit.hpp"
 #include "control/flow_feedback.hpp"
 #include "control/nozzle_health.hpp"
 #include "control/plant/hydraulic_plant.hpp"
@@ -79,6 +81,9 @@ struct RigConfig {
   std::optional<NozzleHealthConfig> nozzle_health{};
   double health_flow_lag_s = 0.03;
   BoomTrimConfig boom_trim{};  // fixes.model_trim
+  // Fit each nozzle's metered / promised ratio from the same phase windows (PhaseWindowFit, a
+  // lab diagnostic: it changes no duty).
+  bool identify_nozzles = false;
 };
 
 struct TraceSample {
@@ -126,11 +131,27 @@ class ClosedLoopRig {
   // The largest NozzleHealth::evidence of any nozzle after any window so far (its CUSUMs move
   // every window, between the experiment's samples).
   double health_max_evidence() const { return health_max_evidence_; }
+  // identify_nozzles: the fit, and each nozzle's promise (the lines at the latched duties) [L],
+  // both since the last restart_identification().
+  const PhaseWindowFit* nozzle_fit() const { return fit_ ? &*fit_ : nullptr; }
+  double identification_promised_l(int nozzle) const {
+    return fit_promised_l_[static_cast<std::size_t>(nozzle)];
+  }
+  void restart_identification();
 
  private:
   void control_tick();
   void health_window_closed();
   void health_meter_window_closed();
+  // Phase windows: each nozzle's commanded open time and promised volume over step_s.
+  void account_open_time(double step_s);
+  void valve_edge(std::uint32_t mask);  // applies an edge's valve states
+  // The valve's datasheet timing the fit assumes (not the machine's drawn truth).
+  static plant::NozzleParams valve_label();
+  // How much longer a pulse flows than it is commanded, by that label [s].
+  const double flow_lag_stretch_s_ =
+      (valve_label().close_delay_s + valve_label().close_travel_s / 2.0) -
+      (valve_label().open_delay_s + valve_label().open_travel_s / 2.0);
   void apply_flow_requests();
   double read_pressure_mpa() const;
   double next_edge_time_s() const;
@@ -164,6 +185,16 @@ class ClosedLoopRig {
   std::vector<TraceSample> trace_;
   std::optional<NozzleHealth> health_;
   std::optional<BoomTrim> boom_trim_;
+  std::optional<PhaseWindowFit> fit_;
+  std::array<double, plant::kMaxNozzles> fit_promised_l_{};
+  bool phase_windows_ = false;  // health_ or fit_: phase windows are cut
+  std::array<double, plant::kMaxNozzles> window_promised_l_{};  // ...in the window being cut
+  std::uint64_t fit_pulses_ = 0;  // meter pulses at the fit's last window
+  // Each nozzle's flowing interval by its valve's label timing: the pulse now and the one
+  // before it (its tail can run into the next opening).
+  using Interval = std::pair<double, double>;
+  std::array<Interval, plant::kMaxNozzles> flow_previous_{};
+  std::array<Interval, plant::kMaxNozzles> flow_current_{};
   BoomTrimWindows boom_trim_windows_{};
   std::array<double, plant::kMaxNozzles> line_slopes_{};  // dL/dd now [L/min per % duty]
   double health_window_s_ = 0.0;

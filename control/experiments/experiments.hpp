@@ -144,6 +144,8 @@ struct SprayRunOptions {
   bool model_trim = false;
   // Calibrate after `change`, not before it (a user recalibrating the changed machine).
   bool recalibrated = false;
+  // Also fit each nozzle's ratio from the phase windows (PhaseWindowFit; orthogonal only).
+  bool identify_nozzles = false;
 };
 LinearityResult run_linearity(const SprayRunOptions& options);
 
@@ -169,6 +171,9 @@ inline constexpr std::array<std::array<double, 4>, 16> kOrthogonalL16 = {{
 struct OrthogonalRun {
   std::array<DutyPoint, 4> nozzles{};
   double pressure_band_mpa = 0.0;  // largest |P - set-point| after start-up
+  // identify_nozzles: |fitted ratio / true ratio - 1| x 100 per nozzle, the true ratio being
+  // its true volume over what its line promised at the latched duties in the measured window.
+  std::array<double, 4> identification_error_pct{};
 };
 struct OrthogonalResult {
   std::vector<OrthogonalRun> runs;
@@ -179,6 +184,9 @@ struct OrthogonalResult {
   double max_error_modulated_pct = 0.0;
   double pressure_band_mpa = 0.0;
   bool raw = false;
+  // identify_nozzles: over the nozzle-runs below 100 % duty (held-open ones share one column)
+  double mean_identification_error_pct = 0.0;
+  double max_identification_error_pct = 0.0;
 };
 OrthogonalResult run_orthogonal(const SprayRunOptions& options);
 
@@ -322,6 +330,8 @@ struct OrthogonalFleetRow {
   Spread max_error_pct;            // per machine: its worst nozzle-run
   Spread max_error_modulated_pct;  // ...of those below 100 % duty
   Spread pressure_band_mpa;
+  Spread mean_identification_error_pct;  // trim_on only (identify_nozzles)
+  Spread max_identification_error_pct;
   std::vector<OrthogonalResult> machines;
 };
 struct OrthogonalFleetResult {

@@ -44,6 +44,7 @@ PreparedMachine prepare_machine(const SprayRunOptions& options) {
   if (options.recalibrated) cal_options.change = options.change;
   const CalibrationResult& cal = cached_calibration(cal_options);
   m.config.fixes = {true, true, options.flow_feedback, options.model_trim};
+  m.config.identify_nozzles = options.identify_nozzles;
   m.config.meter_pulses_per_l = cal.meter.pulses_per_litre;
   for (const auto& n : cal.nozzles) m.lines.push_back(n.fitted);
   m.full_flows = calibrated_full_flows(cal);
@@ -53,6 +54,7 @@ PreparedMachine prepare_machine(const SprayRunOptions& options) {
 struct RunOutcome {
   std::vector<DutyPoint> nozzles;
   double pressure_band_mpa = 0.0;
+  std::vector<double> identification_error_pct;  // options.identify_nozzles
 };
 
 // One fresh run: start-up, settle, then run_s measured.
@@ -72,6 +74,7 @@ RunOutcome spray_run(const PreparedMachine& m, std::span<const double> duty_pct,
   if (options.change) apply_change(rig.plant(), *options.change);
   rig.start();
   rig.run_for(options.settle_s);
+  rig.restart_identification();
   std::vector<double> v0(n);
   for (std::size_t i = 0; i < n; ++i) v0[i] = rig.plant().nozzle_delivered_l(static_cast<int>(i));
   RunOutcome out;
@@ -93,6 +96,10 @@ RunOutcome spray_run(const PreparedMachine& m, std::span<const double> duty_pct,
     p.error_pct =
         p.requested_l > 0 ? std::abs(p.delivered_l - p.requested_l) / p.requested_l * 100.0 : 0.0;
     out.nozzles.push_back(p);
+    if (const PhaseWindowFit* fit = rig.nozzle_fit()) {
+      const double truth = p.delivered_l / rig.identification_promised_l(static_cast<int>(i));
+      out.identification_error_pct.push_back(std::abs(fit->ratio(i) / truth - 1.0) * 100.0);
+    }
   }
   return out;
 }
@@ -125,11 +132,20 @@ OrthogonalResult run_orthogonal(const SprayRunOptions& options) {
   OrthogonalResult result;
   result.raw = options.raw;
   int count = 0;
+  int identified = 0;
   for (const auto& row : kOrthogonalL16) {
     const RunOutcome out = spray_run(m, row, options);
     OrthogonalRun run;
     std::copy_n(out.nozzles.begin(), 4, run.nozzles.begin());
     run.pressure_band_mpa = out.pressure_band_mpa;
+    for (std::size_t i = 0; i < out.identification_error_pct.size() && i < 4; ++i) {
+      run.identification_error_pct[i] = out.identification_error_pct[i];
+      if (run.nozzles[i].duty_pct >= 100.0) continue;
+      result.mean_identification_error_pct += out.identification_error_pct[i];
+      result.max_identification_error_pct =
+          std::max(result.max_identification_error_pct, out.identification_error_pct[i]);
+      ++identified;
+    }
     for (const auto& p : run.nozzles) {
       result.mean_error_pct += p.error_pct;
       result.max_error_pct = std::max(result.max_error_pct, p.error_pct);
@@ -141,6 +157,7 @@ OrthogonalResult run_orthogonal(const SprayRunOptions& options) {
     result.runs.push_back(run);
   }
   result.mean_error_pct /= count;
+  if (identified > 0) result.mean_identification_error_pct /= identified;
   return result;
 }
 
@@ -176,15 +193,17 @@ namespace weedspray::control::experiments {
 namespace {
 
 OrthogonalFleetRow summarise(std::vector<OrthogonalResult> machines) {
-  std::vector<double> mean, max, max_modulated, band;
+  std::vector<double> mean, max, max_modulated, band, id_mean, id_max;
   for (const auto& r : machines) {
     mean.push_back(r.mean_error_pct);
     max.push_back(r.max_error_pct);
     max_modulated.push_back(r.max_error_modulated_pct);
     band.push_back(r.pressure_band_mpa);
+    id_mean.push_back(r.mean_identification_error_pct);
+    id_max.push_back(r.max_identification_error_pct);
   }
-  return {spread_of(mean), spread_of(max), spread_of(max_modulated), spread_of(band),
-          std::move(machines)};
+  return {spread_of(mean),    spread_of(max),    spread_of(max_modulated), spread_of(band),
+          spread_of(id_mean), spread_of(id_max), std::move(machines)};
 }
 
 }  // namespace
@@ -224,6 +243,13 @@ OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const Spra
     options.model_trim = false;
     held_open_floor.push_back(orthogonal_held_open_floor_pct(options));
     on.push_back(run_orthogonal(options));
+    // The diagnostic in a pass of its own: its phase windows split the plant's steps, which
+    // draws the plant's noise differently, so the row above stays the daemon's trim alone.
+    options.identify_nozzles = true;
+    const OrthogonalResult identified = run_orthogonal(options);
+    on.back().mean_identification_error_pct = identified.mean_identification_error_pct;
+    on.back().max_identification_error_pct = identified.max_identification_error_pct;
+    options.identify_nozzles = false;
     options.model_trim = true;
     model.push_back(run_orthogonal(options));
     options.model_trim = false;
