@@ -314,6 +314,7 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
                        {{"mean", &r.trim_on.mean_identification_error_pct},
                         {"max", &r.trim_on.max_identification_error_pct}},
                        true);
+    print_spread_json("common_floor_mean_error_pct", r.common_floor_pct);
     print_spread_json("held_open_floor_pct", r.held_open_floor_pct, false);
     std::printf("}\n");
   } else {
@@ -332,6 +333,10 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
     }
     std::printf("-- floor of any controller holding 100 %% open at one pressure (plant truth)\n");
     print_spread_row("max error [%]", r.held_open_floor_pct, "%12.3f");
+    std::printf(
+        "-- floor of any boom-wide law (one factor for the modulated nozzles, the pressure for "
+        "the held-open ones; plant truth)\n");
+    print_spread_row("mean error [%]", r.common_floor_pct, "%12.3f");
     std::printf(
         "-- each nozzle's ratio as one line meter tells it (phase-window fit over each run, "
         "trim ON; nozzle-runs below 100 %% duty): error against the truth\n");

@@ -201,6 +201,14 @@ OrthogonalResult run_orthogonal(const SprayRunOptions& options);
 // that is, knowing which nozzle changed.
 double orthogonal_held_open_floor_pct(const SprayRunOptions& options);
 
+// The floor of the L16's MEAN error on a changed machine for any boom-wide law that believes
+// its meter: from the same steady plant truth, per run one common factor for the modulated
+// nozzles and the pressure within the band for the held-open ones, each chosen with hindsight
+// to minimise the run's summed |error| as the meter shows it (its drift scales every reading
+// alike and only a catch test sees it); the mean TRUE error over the 64 nozzle-runs [%].
+// Optimistic: it ignores valve timing, water hammer and the pump.
+double orthogonal_common_floor_pct(const SprayRunOptions& options);
+
 // Per-nozzle full-open flow the calibrated machine believes in (metered at 100 %), shared by
 // linearity/orthogonal to define "requested".
 std::vector<double> calibrated_full_flows(const CalibrationResult& calibration);
@@ -343,6 +351,7 @@ struct OrthogonalFleetResult {
   // the daemon's trim.
   OrthogonalFleetRow recalibrated;
   Spread held_open_floor_pct;  // orthogonal_held_open_floor_pct() per machine
+  Spread common_floor_pct;     // orthogonal_common_floor_pct() per machine
 };
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet,
                                            const SprayRunOptions& base = {});

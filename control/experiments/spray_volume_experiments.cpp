@@ -187,6 +187,47 @@ double orthogonal_held_open_floor_pct(const SprayRunOptions& options) {
   return floor_pct;
 }
 
+double orthogonal_common_floor_pct(const SprayRunOptions& options) {
+  const PreparedMachine m = prepare_machine(options);
+  plant::HydraulicPlant changed(options.plant, options.seed);
+  if (options.change) apply_change(changed, *options.change);
+  const double p = options.pressure_mpa;
+  const std::size_t n = m.full_flows.size();
+  // Each nozzle's true flow over the reference, and as the drifted meter shows it (its drift
+  // scales every reading alike: only a catch test sees it).
+  const double drift = options.change ? options.change->meter_drift : 0.0;
+  std::vector<double> ratio(n);
+  for (std::size_t i = 0; i < n; ++i)
+    ratio[i] = changed.nozzle_open_flow_now_l_per_min(static_cast<int>(i), p) / m.full_flows[i];
+  // The scale k in [lo, hi] (steps of 1e-4) minimising the summed |r (1 + drift) k - 1| of
+  // `among` (what the meter shows), and the summed TRUE error |r k - 1| at that k.
+  const auto true_error_at_best = [&](const std::vector<double>& among, double lo, double hi) {
+    double best = 1e300, best_k = 1.0;
+    for (double k = lo; k <= hi + 1e-12 && !among.empty(); k += 1e-4) {
+      double sum = 0.0;
+      for (const double r : among) sum += std::abs(r * (1.0 + drift) * k - 1.0);
+      if (sum < best) best = sum, best_k = k;
+    }
+    double error = 0.0;
+    for (const double r : among) error += std::abs(r * best_k - 1.0);
+    return error;
+  };
+  const double band_mpa = 0.02;
+  double total = 0.0;
+  int count = 0;
+  for (const auto& row : kOrthogonalL16) {
+    std::vector<double> held, modulated;
+    for (std::size_t i = 0; i < n && i < row.size(); ++i)
+      (row[i] >= 100.0 ? held : modulated).push_back(ratio[i]);
+    // Held open: only the pressure, within the band; modulated: one common factor.
+    total +=
+        true_error_at_best(held, std::sqrt((p - band_mpa) / p), std::sqrt((p + band_mpa) / p)) +
+        true_error_at_best(modulated, 0.7, 1.3);
+    count += static_cast<int>(held.size() + modulated.size());
+  }
+  return count > 0 ? total / count * 100.0 : 0.0;
+}
+
 }  // namespace weedspray::control::experiments
 
 namespace weedspray::control::experiments {
@@ -228,7 +269,7 @@ LinearityFleetResult run_linearity_fleet(const FleetOptions& fleet, const SprayR
 
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const SprayRunOptions& base) {
   std::vector<OrthogonalResult> on, model, off, recalibrated;
-  std::vector<double> held_open_floor;
+  std::vector<double> held_open_floor, common_floor;
   const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
   for (std::size_t i = 0; i < machines.size(); ++i) {
     const Machine& m = machines[i];
@@ -242,6 +283,7 @@ OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const Spra
     options.flow_feedback = true;
     options.model_trim = false;
     held_open_floor.push_back(orthogonal_held_open_floor_pct(options));
+    common_floor.push_back(orthogonal_common_floor_pct(options));
     on.push_back(run_orthogonal(options));
     // The diagnostic in a pass of its own: its phase windows split the plant's steps, which
     // draws the plant's noise differently, so the row above stays the daemon's trim alone.
@@ -259,8 +301,9 @@ OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const Spra
     options.recalibrated = true;
     recalibrated.push_back(run_orthogonal(options));
   }
-  return {summarise(std::move(on)), summarise(std::move(model)), summarise(std::move(off)),
-          summarise(std::move(recalibrated)), spread_of(held_open_floor)};
+  return {summarise(std::move(on)),   summarise(std::move(model)),
+          summarise(std::move(off)),  summarise(std::move(recalibrated)),
+          spread_of(held_open_floor), spread_of(common_floor)};
 }
 
 }  // namespace weedspray::control::experiments

@@ -133,24 +133,43 @@ TEST(FleetOrthogonal, RecalibratingAfterTheChangeFindsOneNozzlesOwnChange) {
               recalibrated.max_error_pct);
 }
 
-// The held-open floor prices one nozzle's own change from the plant's truth: nothing on the
-// machine as made; with one nozzle 8 % blocked, the L16 runs that hold it open beside healthy
-// nozzles cost any controller that keeps them open about half of it (the pressure balances the
-// high against the low). Counting the flows as made instead of with the blockage gives ~0.
-TEST(FleetOrthogonal, HeldOpenFloorPricesOneNozzlesOwnChange) {
+// The first drawn machine as made, and the same with one nozzle 8 % blocked.
+SprayRunOptions first_machine(bool blocked) {
   const Machine m = draw_machine(1, 0);
   SprayRunOptions options;
   options.seed = m.seed;
   options.plant = m.params;
   options.change = no_change(m);
-  EXPECT_LT(orthogonal_held_open_floor_pct(options), 0.5);
-  MachineChange blocked = no_change(m);
-  blocked.blocked_nozzle = 1;
-  blocked.blockage = 0.08;
-  options.change = blocked;
-  const double floor_pct = orthogonal_held_open_floor_pct(options);
+  if (blocked) {
+    options.change->blocked_nozzle = 1;
+    options.change->blockage = 0.08;
+  }
+  return options;
+}
+
+// The held-open floor prices one nozzle's own change from the plant's truth: nothing on the
+// machine as made; with one nozzle 8 % blocked, the L16 runs that hold it open beside healthy
+// nozzles cost any controller that keeps them open about half of it (the pressure balances the
+// high against the low). Counting the flows as made instead of with the blockage gives ~0.
+TEST(FleetOrthogonal, HeldOpenFloorPricesOneNozzlesOwnChange) {
+  EXPECT_LT(orthogonal_held_open_floor_pct(first_machine(false)), 0.5);
+  const double floor_pct = orthogonal_held_open_floor_pct(first_machine(true));
   EXPECT_GT(floor_pct, 3.0);
   EXPECT_LT(floor_pct, 5.0);
+}
+
+// The boom-wide floor of the mean error prices what one meter cannot see: nothing as made; a
+// 1 % meter drift alone costs every nozzle about 1 % (the law believes its meter; ignoring the
+// drift gives ~0); one nozzle 8 % blocked costs about a quarter of that where it sprays beside
+// three healthy ones (one common factor cannot single it out).
+TEST(FleetOrthogonal, CommonFloorPricesTheMeterDriftAndOneNozzlesChange) {
+  SprayRunOptions options = first_machine(false);
+  EXPECT_LT(orthogonal_common_floor_pct(options), 0.3);
+  options.change->meter_drift = 0.01;
+  EXPECT_NEAR(orthogonal_common_floor_pct(options), 1.0, 0.3);
+  const double floor_pct = orthogonal_common_floor_pct(first_machine(true));
+  EXPECT_GT(floor_pct, 1.0);
+  EXPECT_LT(floor_pct, 3.0);
 }
 
 TEST(FleetRipple, StaggeringCutsThePressureSwingOnEveryMachine) {
