@@ -4,8 +4,10 @@
 // With staggered PWM phases each phase window's metered volume is a different mix of nozzles
 // (control/nozzle_health.hpp):
 //   V(w) = sum_i e_i(w) r_i + noise,
-// e_i(w) the volume nozzle i's calibrated line promises in window w (its commanded open time in
-// the window x the line's flow per open second at its duty), r_i its metered / promised ratio.
+// e_i(w) the volume nozzle i's calibrated line promises in window w, r_i its metered / promised
+// ratio. The rig (closed_loop_rig.hpp, identify_nozzles) counts e_i(w) as the time the valve
+// flows in the window by its label timing (the commanded pulse moved by the mean open and close
+// lags) x the line's flow per flowing second at the latched duty.
 // The r_i are the least-squares fit over the run; where the mix does not tell nozzles apart
 // (several held open together) a small ridge pulls them to the common ratio (ratio of sums,
 // what FlowTrim uses). A per-nozzle trim would be fed these r_i, so their error against each
