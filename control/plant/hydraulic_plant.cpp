@@ -326,7 +326,10 @@ void HydraulicPlant::substep(double dt) {
   for (int i = 0; i < params_.nozzle_count; ++i) {
     Valve& v = valves_[static_cast<std::size_t>(i)];
     if (r_section > 0.0 && i > 0) tap_p -= r_section * downstream * downstream;
+    const bool was_open = v.position >= 0.5;
     const double opening = advance_valve(v, t0, dt);
+    if (record_crossings_ && was_open != (v.position >= 0.5))
+      crossings_.push_back({i, v.position >= 0.5, t0 + dt, distance_m_ + speed_m_per_s_ * dt});
     const double previous = v.flow_l_per_s;
     v.flow_l_per_s = orifice_flow_l_per_s(series_k(i) * opening, tap_p);
     v.delivered_l += v.flow_l_per_s * dt;
@@ -391,6 +394,17 @@ double HydraulicPlant::total_nozzle_flow_l_per_min() const {
 
 double HydraulicPlant::nozzle_flow_l_per_min(int i) const {
   return valves_.at(static_cast<std::size_t>(i)).flow_l_per_s * 60.0;
+}
+
+void HydraulicPlant::record_valve_crossings(bool on) {
+  record_crossings_ = on;
+  crossings_.clear();
+}
+
+std::vector<ValveCrossing> HydraulicPlant::take_valve_crossings() {
+  std::vector<ValveCrossing> taken;
+  taken.swap(crossings_);
+  return taken;
 }
 
 double HydraulicPlant::valve_opening(int i) const {

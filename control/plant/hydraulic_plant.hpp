@@ -26,6 +26,7 @@
 #include <array>
 #include <cstdint>
 #include <random>
+#include <vector>
 
 namespace weedspray::control::plant {
 
@@ -208,6 +209,14 @@ struct PlantParams {
 // Every realism effect on at its documented value (see each field above).
 PlantParams realistic_plant_params();
 
+// A valve's opening crossing 50 % (HydraulicPlant::record_valve_crossings).
+struct ValveCrossing {
+  int nozzle = 0;
+  bool opened = false;  // upward (else it closed)
+  double time_s = 0.0;
+  double distance_m = 0.0;  // ground travelled by then
+};
+
 // Per-nozzle values drawn from the seed: the "true" machine the calibrations must find.
 struct NozzleTruth {
   double k_l_per_min_sqrt_mpa = 0.0;
@@ -229,6 +238,7 @@ class HydraulicPlant {
   void set_return_valve_volts(double volts);  // clamped to [0, 10]
   void set_valves(std::uint32_t mask);        // bit i = solenoid valve i energised
   void set_ground_speed(double m_per_s);
+  double ground_speed_m_per_s() const { return speed_m_per_s_; }
 
   // Advance simulated time by dt_s (>= 0), sub-stepping at params.integration_step_s.
   void step(double dt_s);
@@ -248,6 +258,11 @@ class HydraulicPlant {
   double nozzle_delivered_l(int i) const;  // TRUE volume through nozzle i since start
   double total_delivered_l() const;
   double distance_m() const { return distance_m_; }
+  // Truth for placement tests: when on, each valve's opening crossing 50 % is logged with the
+  // distance travelled then (to the integration step), until taken. Off by default: a long
+  // simulation would grow the log without bound.
+  void record_valve_crossings(bool on);
+  std::vector<ValveCrossing> take_valve_crossings();
   double tank_level_l() const { return tank_level_l_; }
   const NozzleTruth& nozzle_truth(int i) const;
   int nozzle_count() const { return params_.nozzle_count; }
@@ -333,6 +348,8 @@ class HydraulicPlant {
   double pump_angle_rad_ = 0.0;
   double supply_volts_ = 24.0;
   double meter_drift_ = 0.0;
+  bool record_crossings_ = false;
+  std::vector<ValveCrossing> crossings_;
   double wheel_slip_ = 0.0;
   double meter_phase_ = 0.0;       // pulses accumulated (fractional)
   double next_pulse_at_ = 1.0;     // jittered threshold of the next pulse
