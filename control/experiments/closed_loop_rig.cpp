@@ -16,6 +16,12 @@ PwmConfig pwm_config(const RigConfig& c) {
   return p;
 }
 
+// The valve's datasheet timing the phase-window fit assumes (not the machine's drawn truth),
+// and how much longer a pulse flows than it is commanded by it [s].
+const plant::NozzleParams kValveLabel{};
+const double kFlowLagStretchS = (kValveLabel.close_delay_s + kValveLabel.close_travel_s / 2.0) -
+                                (kValveLabel.open_delay_s + kValveLabel.open_travel_s / 2.0);
+
 double seconds(std::chrono::nanoseconds t) {
   return static_cast<double>(t.count()) * 1e-9;
 }
@@ -176,8 +182,10 @@ void ClosedLoopRig::health_window_closed() {
     fit_pulses_ = pulses;
     window_promised_l_.fill(0.0);
   }
-  next_health_meter_s_ = next_health_window_s_ + config_.health_flow_lag_s;
+  const double closed_at_s = next_health_window_s_;
   next_health_window_s_ += health_window_s_;
+  if (!health_) return;  // the fit reads the meter at the window's own end (above)
+  next_health_meter_s_ = closed_at_s + config_.health_flow_lag_s;
   if (config_.health_flow_lag_s <= 0.0) health_meter_window_closed();
 }
 
@@ -187,7 +195,6 @@ void ClosedLoopRig::health_meter_window_closed() {
   health_pulses_ = pulses;
   next_health_meter_s_ = -1.0;
   const auto nozzles = static_cast<std::size_t>(plant_.nozzle_count());
-  if (!health_) return;
   health_->add_window(std::span<const double>(health_pending_open_s_.data(), nozzles), litres,
                       health_window_s_);
   for (std::size_t i = 0; i < nozzles; ++i)
@@ -211,19 +218,15 @@ void ClosedLoopRig::account_open_time(double step_s) {
     const double flowing_share =
         duties_[k] >= 100.0
             ? 1.0
-            : std::min(1.0, duties_[k] / 100.0 + flow_lag_stretch_s_ * config_.pwm_frequency_hz);
+            : std::min(1.0, duties_[k] / 100.0 + kFlowLagStretchS * config_.pwm_frequency_hz);
     if (duties_[k] > 0.0)
       window_promised_l_[k] += flowing_s * commanded_promise_[k] / 60.0 / flowing_share;
   }
 }
 
-plant::NozzleParams ClosedLoopRig::valve_label() {
-  return plant::NozzleParams{};
-}
-
 void ClosedLoopRig::valve_edge(std::uint32_t mask) {
   const double now = plant_.time_s();
-  const plant::NozzleParams label = valve_label();
+  const plant::NozzleParams label = kValveLabel;
   for (int i = 0; i < plant_.nozzle_count(); ++i) {
     const auto k = static_cast<std::size_t>(i);
     const bool was = (applied_mask_ >> i) & 1U;

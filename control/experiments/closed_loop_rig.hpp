@@ -146,12 +146,6 @@ class ClosedLoopRig {
   // Phase windows: each nozzle's commanded open time and promised volume over step_s.
   void account_open_time(double step_s);
   void valve_edge(std::uint32_t mask);  // applies an edge's valve states
-  // The valve's datasheet timing the fit assumes (not the machine's drawn truth).
-  static plant::NozzleParams valve_label();
-  // How much longer a pulse flows than it is commanded, by that label [s].
-  const double flow_lag_stretch_s_ =
-      (valve_label().close_delay_s + valve_label().close_travel_s / 2.0) -
-      (valve_label().open_delay_s + valve_label().open_travel_s / 2.0);
   void apply_flow_requests();
   double read_pressure_mpa() const;
   double next_edge_time_s() const;

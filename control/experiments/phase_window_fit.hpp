@@ -11,7 +11,8 @@
 // The r_i are the least-squares fit over the run; where the mix does not tell nozzles apart
 // (several held open together) a small ridge pulls them to the common ratio (ratio of sums,
 // what FlowTrim uses). A per-nozzle trim would be fed these r_i, so their error against each
-// nozzle's true ratio bounds what such a trim can correct (README, experiment orthogonal).
+// nozzle's true ratio says how well such a trim could correct it (README, experiment
+// orthogonal).
 //
 // Pure, fixed-size state.
 #pragma once
