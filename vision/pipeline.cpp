@@ -85,6 +85,7 @@ void validate(const PipelineConfig& config) {
   }
   if (needs_model(config.weed_source)) {
     if (auto problem = validate_dnn_spec(config.dnn)) require(false, *problem);
+    require(config.frame_mm_per_px >= 0.0, "frame_mm_per_px must be >= 0 (0 = unknown)");
   }
   require(config.crop_margin_px >= 0 && config.crop_margin_px <= 1000,
           "crop_margin_px must lie in [0, 1000]");

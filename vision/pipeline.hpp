@@ -40,6 +40,7 @@ struct PipelineConfig {
   WeedSource weed_source = WeedSource::kVegetation;
   InterRowRule inter_row_rule{};  // kInterRow
   DnnModelSpec dnn{};             // kDnn, kHybrid
+  double frame_mm_per_px = 0.0;   // kDnn, kHybrid: the camera's ground scale; 0 = unknown
   int crop_margin_px = 0;         // kHybrid: crop mask dilated by this many frame pixels
 };
 

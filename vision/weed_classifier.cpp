@@ -84,7 +84,8 @@ WeedClassifier::WeedClassifier(const PipelineConfig& config,
                                std::span<const std::uint8_t> model_onnx_bytes)
     : config_(config), tracker_(config.inter_row_rule), masks_(std::make_unique<Masks>()) {
   if (needs_model(config_.weed_source)) {
-    network_ = std::make_unique<WeedNetwork>(config_.dnn, model_onnx_bytes);
+    network_ =
+        std::make_unique<WeedNetwork>(config_.dnn, model_onnx_bytes, config_.frame_mm_per_px);
   }
   if (config_.crop_margin_px > 0) {
     const int side = 2 * config_.crop_margin_px + 1;

@@ -16,11 +16,15 @@ class WeedNetwork {
   // Loads the ONNX model from its bytes and checks it with one forward pass: throws
   // std::invalid_argument when the bytes are not a loadable model, the spec is invalid, or
   // the output is not one score map per class of spec.classes.
-  WeedNetwork(const DnnModelSpec& spec, std::span<const std::uint8_t> onnx_bytes);
+  // frame_mm_per_px: the ground size of one pixel of the images segment() gets (0 = unknown;
+  // see network_input_size).
+  WeedNetwork(const DnnModelSpec& spec, std::span<const std::uint8_t> onnx_bytes,
+              double frame_mm_per_px = 0.0);
 
-  // Classes of `image` (CV_8UC3, B G R when !image_is_rgb) at the network's output
-  // resolution: kClassSoil, kClassCrop or kClassWeed (argmax of the scores; classes that are
-  // neither crop nor weed count as soil). Throws cv::Exception when the network fails.
+  // Classes of `image` (CV_8UC3, B G R when !image_is_rgb), resampled to the model's ground
+  // scale (network_input_size), at the network's output resolution: kClassSoil, kClassCrop or
+  // kClassWeed (argmax of the scores; classes that are neither crop nor weed count as soil). Throws
+  // cv::Exception when the network fails.
   const cv::Mat& segment(const cv::Mat& image, bool image_is_rgb);
 
   // The last segment()'s classes.
@@ -29,6 +33,9 @@ class WeedNetwork {
 
  private:
   DnnModelSpec spec_;
+  double frame_mm_per_px_ = 0.0;
+  cv::Size image_size_;  // the last image's size and the network input it maps to
+  cv::Size input_size_;
   cv::dnn::Net net_;
   cv::Mat resized_;
   cv::Mat blob_;

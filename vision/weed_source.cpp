@@ -1,6 +1,8 @@
 #include "vision/weed_source.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 
 namespace weedspray::vision {
 namespace {
@@ -38,6 +40,17 @@ std::optional<std::string> validate_dnn_spec(const DnnModelSpec& spec) {
            std::to_string(spec.input_width) + "x" + std::to_string(spec.input_height) + ")";
   }
   if (!(spec.scale > 0.0)) return "dnn scale must be > 0";
+  if (spec.stride < 1 || spec.stride > 256) return "dnn stride must lie in [1, 256]";
+  if (spec.input_width % spec.stride != 0 || spec.input_height % spec.stride != 0) {
+    return "dnn input size " + std::to_string(spec.input_width) + "x" +
+           std::to_string(spec.input_height) + " is not a multiple of the network's stride " +
+           std::to_string(spec.stride);
+  }
+  if (spec.input_channels != 3) {
+    return "dnn input_channels = " + std::to_string(spec.input_channels) +
+           ": the pipeline feeds 3 colour channels";
+  }
+  if (!(spec.ground_mm_per_px >= 0.0)) return "dnn ground_mm_per_px must be >= 0 (0 = unknown)";
   const int classes = static_cast<int>(spec.classes.size());
   if (classes < 2) return "dnn classes must list at least 2 classes";
   const std::array<std::pair<const char*, int>, 3> ids = {{{"soil_class", spec.soil_class},
@@ -54,6 +67,23 @@ std::optional<std::string> validate_dnn_spec(const DnnModelSpec& spec) {
     return "dnn soil_class, crop_class and weed_class must be different class ids";
   }
   return std::nullopt;
+}
+
+NetworkInputSize network_input_size(const DnnModelSpec& spec, double frame_mm_per_px,
+                                    int region_width, int region_height) {
+  if (spec.fixed_input || !(spec.ground_mm_per_px > 0.0) || !(frame_mm_per_px > 0.0) ||
+      region_width < 1 || region_height < 1) {
+    const double scale =
+        region_width > 0 ? static_cast<double>(spec.input_width) / region_width : 1.0;
+    return {spec.input_width, spec.input_height, scale};
+  }
+  const double scale = frame_mm_per_px / spec.ground_mm_per_px;
+  const int stride = std::max(1, spec.stride);
+  const auto side = [&](int frame_px) {
+    const long steps = std::lround(frame_px * scale / stride);
+    return static_cast<int>(std::max(1L, steps) * stride);
+  };
+  return {side(region_width), side(region_height), scale};
 }
 
 std::optional<std::string> validate_inter_row_rule(const InterRowRule& rule) {

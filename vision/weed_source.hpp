@@ -32,7 +32,8 @@ inline constexpr std::uint8_t kClassSoil = 0;
 inline constexpr std::uint8_t kClassCrop = 1;
 inline constexpr std::uint8_t kClassWeed = 2;
 
-// How a segmentation network is fed and read. The input is the region of interest resized to
+// How a segmentation network is fed and read. The input is the region of interest resampled to
+// the model's ground scale (network_input_size) or, where either scale is unknown, resized to
 // input_width x input_height; each channel becomes (value - mean) * scale, in R, G, B order
 // when rgb (else B, G, R). The output is one score map per class; the class of a pixel is the
 // argmax over classes[...] at the network's output resolution.
@@ -46,10 +47,30 @@ struct DnnModelSpec {
   int soil_class = 0;
   int crop_class = 1;
   int weed_class = 2;
+  // Ground size of one network-input pixel the model learnt at, in mm; 0 = not stated.
+  double ground_mm_per_px = 0.0;
+  int stride = 32;           // input sides must be multiples of this (the network's downsampling)
+  int input_channels = 3;    // colour channels the network takes
+  bool fixed_input = false;  // always input_width x input_height, whatever the scales
 };
 
 // nullopt when usable; otherwise what is wrong, naming the field.
 std::optional<std::string> validate_dnn_spec(const DnnModelSpec& spec);
+
+struct NetworkInputSize {
+  int width = 0;
+  int height = 0;
+  double scale = 1.0;  // network pixels per frame pixel
+  [[nodiscard]] long pixels() const { return static_cast<long>(width) * height; }
+};
+
+// The network input for a region of region_width x region_height frame pixels, each
+// frame_mm_per_px on the ground: the region resampled so that one network pixel covers the
+// model's ground_mm_per_px, each side rounded to the nearest multiple of the stride (at least
+// one stride). Where either scale is unknown (0) or the spec is fixed_input, the spec's
+// input_width x input_height.
+NetworkInputSize network_input_size(const DnnModelSpec& spec, double frame_mm_per_px,
+                                    int region_width, int region_height);
 
 // The 2018 paper's inter-row rule with crop rows tracked from frame to frame. Rows are peaks
 // of the (smoothed) column histogram of the vegetation mask; vegetation within a band of

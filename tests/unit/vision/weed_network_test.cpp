@@ -6,6 +6,7 @@
 #include <iterator>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "test_images.hpp"
@@ -164,6 +165,65 @@ TEST(DnnModel, FramesOfOtherSizesAndFormatsAreResizedToTheInput) {
   ImageView rgb = frame.view();
   rgb.format = PixelFormat::kRgb24;
   EXPECT_LT(pipeline.process(rgb).zone_density[0], 0.1);
+}
+
+TEST(GroundScale, TheNetworkInputMatchesTheModelsGroundScale) {
+  DnnModelSpec spec;
+  spec.ground_mm_per_px = 2.0;
+  // 1280 x 800 frame pixels of 1 mm: 640 x 400 model pixels of 2 mm, 400 -> 416 (13 x 32).
+  NetworkInputSize input = network_input_size(spec, 1.0, 1280, 800);
+  EXPECT_EQ(input.width, 640);
+  EXPECT_EQ(input.height, 416);
+  EXPECT_DOUBLE_EQ(input.scale, 0.5);
+  // A coarser camera is enlarged; the smallest side is one stride.
+  input = network_input_size(spec, 3.0, 100, 5);
+  EXPECT_EQ(input.width, 160);
+  EXPECT_EQ(input.height, 32);
+  // Unknown scales or a fixed input: the spec's own size.
+  for (const auto& [model_mm, frame_mm, fixed] :
+       {std::tuple{0.0, 1.0, false}, std::tuple{2.0, 0.0, false}, std::tuple{2.0, 1.0, true}}) {
+    spec.ground_mm_per_px = model_mm;
+    spec.fixed_input = fixed;
+    input = network_input_size(spec, frame_mm, 1280, 800);
+    EXPECT_EQ(input.width, spec.input_width);
+    EXPECT_EQ(input.height, spec.input_height);
+  }
+}
+
+// The class map is at the network's resolution, so its size shows the input the frame became.
+TEST(GroundScale, ThePipelineResamplesEachFrameToTheModelsScale) {
+  PipelineConfig config = dnn_config();
+  config.dnn.stride = 32;
+  config.dnn.ground_mm_per_px = 2.0;
+  config.frame_mm_per_px = 0.5;
+  Pipeline pipeline(config, tiny_model());
+  BgrFrame frame(512, 256, kRed);
+  for (int y = 0; y < 256; ++y) {
+    for (int x = 0; x < 128; ++x) frame.set(x, y, kBlue);
+  }
+  const FrameResult& result = pipeline.process(frame.view());
+  ASSERT_TRUE(pipeline.last_frame_ok()) << pipeline.last_error();
+  const ImageView map = pipeline.class_map();
+  EXPECT_EQ(map.width, 128);
+  EXPECT_EQ(map.height, 64);
+  EXPECT_GT(result.zone_density[0], 0.9);  // blue is class 2, weed
+  EXPECT_LT(result.zone_density[1], 0.1);
+  // Without the camera's scale the spec's fixed 64 x 64 input is used.
+  config.frame_mm_per_px = 0.0;
+  Pipeline squeezed(config, tiny_model());
+  squeezed.process(frame.view());
+  EXPECT_EQ(squeezed.class_map().width, 64);
+  EXPECT_EQ(squeezed.class_map().height, 64);
+}
+
+TEST(GroundScale, ASpecWhoseSizeIsNotAMultipleOfItsStrideIsRefused) {
+  PipelineConfig config = dnn_config();
+  config.dnn.stride = 48;
+  EXPECT_NE(load_error(config, tiny_model()).find("not a multiple of the network's stride 48"),
+            std::string::npos);
+  config.dnn.stride = 32;
+  config.dnn.input_channels = 1;
+  EXPECT_NE(load_error(config, tiny_model()).find("input_channels = 1"), std::string::npos);
 }
 
 // Hybrid: a green crop stripe (bright, the network's crop) and two small weeds of a duller
