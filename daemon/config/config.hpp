@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "vision/weed_source.hpp"
+
 namespace weedspray::daemon {
 
 struct DaemonSection {
@@ -42,6 +44,7 @@ struct CameraSection {
   double tilt_deg;  // optical axis from vertical, looking forward
   double vfov_deg;
   double distance_to_nozzles_m;  // nozzle line behind the camera's nadir
+  double ground_mm_per_px;       // 0 = from mount_height_m, tilt_deg, vfov_deg and height
   int first_nozzle;
   int nozzle_count;
 };
@@ -64,6 +67,7 @@ struct VisionSection {
   int soil_class;
   int crop_class;
   int weed_class;
+  int max_network_pixels;  // largest network input the ground scale may ask for
 };
 
 // The weed model a configuration uses (dnn, hybrid), read once at load: the file found and its
@@ -71,6 +75,9 @@ struct VisionSection {
 struct LoadedModel {
   std::filesystem::path path;
   std::vector<std::uint8_t> onnx;
+  std::filesystem::path description_path;  // NAME.json beside NAME.onnx
+  vision::DnnModelSpec spec;  // the JSON's spec with the configuration's overrides applied
+  std::string licence;        // as the JSON states it
 };
 
 struct SpraySection {
@@ -276,7 +283,8 @@ struct SimSection {
   double speed_min_m_per_s;
   double speed_max_m_per_s;
   double speed_period_s;
-  std::string images_dir;  // "" = the bundled field images
+  std::string images_dir;   // "" = the bundled field images
+  double images_mm_per_px;  // 0 = each image is a frame as it is, of unknown ground scale
   int seed;
   double wheel_slip_pct;  // the simulated wheel's slip (calibrate-wheel's truth)
 };

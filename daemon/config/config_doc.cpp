@@ -58,7 +58,9 @@ void document_key(std::ostringstream& out, const KeySpec<Root>& spec) {
     for (auto choice : spec.choices) out << " \"" << choice << "\"";
   }
   out << "; default " << format_value(spec.default_value) << "\n";
-  out << spec.name << " = " << format_value(spec.default_value) << "\n\n";
+  // A key that overrides the weed model's JSON is the model's own while unset.
+  const char* unset = overrides_model_spec(spec.full_name()) ? "# " : "";
+  out << unset << spec.name << " = " << format_value(spec.default_value) << "\n\n";
 }
 
 }  // namespace

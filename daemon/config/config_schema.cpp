@@ -1,5 +1,8 @@
 #include "daemon/config/config_schema.hpp"
 
+#include <algorithm>
+#include <array>
+
 #include <climits>
 
 // GCC 12 reports a false -Wmaybe-uninitialized inside std::variant<..., std::string> when the
@@ -128,29 +131,42 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "its nozzle_count x boom.nozzle_width_m)"},
     {WS_KEY(vision, model), std::string("weed-peanut.onnx"), 0, 0, "path",
      "dnn, hybrid: the segmentation network, an ONNX file OpenCV DNN loads (checked with one "
-     "forward pass at load). A relative path is looked up beside the configuration file that "
-     "sets it, then among the installed models (/usr/share/weedspray/models from the package; "
-     "a build tree also looks in its checkout's models/). The default is "
-     "the shipped crop/weed/soil model trained on peanut fields; the model_* keys below are its "
-     "spec (models/weed-peanut.json); retrain for another crop with tools/train"},
+     "forward pass at load), with its spec in NAME.json beside it (input size, normalisation, "
+     "channel order, classes, the ground scale it learnt at, training data and licence; "
+     "tools/train/train.py writes it). A relative path is looked up beside the configuration "
+     "file that sets it, then among the installed models (/usr/share/weedspray/models from the "
+     "package; a build tree also looks in its checkout's models/). The default is the shipped "
+     "crop/weed/soil model trained on peanut fields; train one for your crop with "
+     "tools/train/train.py (docs/vision.md). The model_* and *_class keys below are optional: "
+     "left unset they are the model's own; set, they must agree with its JSON"},
     {WS_KEY(vision, model_input_width), 320, 32, 4096, "px",
-     "dnn, hybrid: the frame is resized to this network input width (a multiple of 32)"},
+     "dnn, hybrid: override of the network input width (a multiple of the model's stride): the "
+     "whole region is squeezed to it whatever the ground scale; unset = the region resampled to "
+     "the model's ground scale (camera ground_mm_per_px)"},
     {WS_KEY(vision, model_input_height), 256, 32, 4096, "px",
-     "dnn, hybrid: network input height (a multiple of 32)"},
+     "dnn, hybrid: override of the network input height (see model_input_width)"},
     {WS_KEY(vision, model_mean), std::vector<double>{123.675, 116.28, 103.53}, 0, 255, "",
-     "dnn, hybrid: per-channel mean subtracted from the 0..255 R, G, B values (3 numbers)"},
+     "dnn, hybrid: per-channel mean subtracted from the 0..255 R, G, B values (3 numbers); "
+     "must agree with the model's JSON"},
     {WS_KEY(vision, model_scale), 1.0 / 58.0, 1e-6, 1000, "",
-     "dnn, hybrid: network input = (value - mean) x this"},
+     "dnn, hybrid: network input = (value - mean) x this; must agree with the model's JSON"},
     {WS_KEY(vision, model_rgb), true, 0, 1, "",
-     "dnn, hybrid: the network takes R, G, B channel order (false: B, G, R)"},
+     "dnn, hybrid: the network takes R, G, B channel order (false: B, G, R); must agree with the "
+     "model's JSON"},
     {WS_KEY(vision, model_classes), std::vector<std::string>{"soil", "crop", "weed"}, 0, 0, "",
-     "dnn, hybrid: the network's output classes in channel order; its output must have one "
-     "channel per class"},
+     "dnn, hybrid: the network's output classes in channel order; must agree with the model's "
+     "JSON"},
     {WS_KEY(vision, soil_class), 0, 0, 255, "",
      "dnn, hybrid: index in model_classes of soil (classes other than crop and weed count as "
-     "soil)"},
-    {WS_KEY(vision, crop_class), 1, 0, 255, "", "dnn, hybrid: index in model_classes of the crop"},
-    {WS_KEY(vision, weed_class), 2, 0, 255, "", "dnn, hybrid: index in model_classes of weeds"},
+     "soil); must agree with the model's JSON"},
+    {WS_KEY(vision, crop_class), 1, 0, 255, "",
+     "dnn, hybrid: index in model_classes of the crop; must agree with the model's JSON"},
+    {WS_KEY(vision, weed_class), 2, 0, 255, "",
+     "dnn, hybrid: index in model_classes of weeds; must agree with the model's JSON"},
+    {WS_KEY(vision, max_network_pixels), 1500000, 1024, 16777216, "px",
+     "dnn, hybrid: the largest network input (width x height) a camera's region may need at the "
+     "model's ground scale; a camera that needs more is refused at load (inference time grows "
+     "with it: weedspray-lab bench-vision)"},
     // [spray]
     {WS_KEY(spray, nominal_flow_l_per_min), 0.615, 0.01, 20, "L/min",
      "q_nom: nozzle flow that gives the nominal dose at the nominal speed"},
@@ -496,6 +512,11 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "period of the sine/ramp speed profile"},
     {WS_KEY(sim, images_dir), std::string(""), 0, 0, "path",
      "field images used as the simulated camera (empty = the bundled ones)"},
+    {WS_KEY(sim, images_mm_per_px), 0.0, 0, 100, "mm",
+     "ground size of one pixel of images_dir's images: each simulated frame is then the ground "
+     "as the [[camera]] sees it (its frame size and ground_mm_per_px), consecutive images "
+     "resampled and laid edge to edge; 0 = each image is one frame as it is, of unknown ground "
+     "scale (the weed model then takes it squeezed to the model's own input size)"},
     {WS_KEY(sim, seed), 1, 0, INT_MAX, "", "random seed of the simulation"},
     {WS_KEY(sim, wheel_slip_pct), 0.0, -20, 45, "%",
      "the simulated wheel sensor turns this much more than the ground it covers (a driven "
@@ -523,6 +544,10 @@ const std::vector<KeySpec<CameraSection>>& camera_keys() {
     {WS_CAM(mount_height_m), 1.0, 0.1, 10, "m", "lens height above ground"},
     {WS_CAM(tilt_deg), 30.0, 0, 80, "deg", "optical axis from vertical, looking forward"},
     {WS_CAM(vfov_deg), 40.0, 1, 170, "deg", "vertical (along travel) field of view"},
+    {WS_CAM(ground_mm_per_px), 0.0, 0, 100, "mm",
+     "ground size of one pixel at the image centre, across travel; 0 = from mount_height_m, "
+     "tilt_deg and vfov_deg (square pixels). The weed model's input is resampled to the ground "
+     "scale it learnt at"},
     {WS_CAM(distance_to_nozzles_m), 1.2, 0, 50, "m",
      "nozzle line behind the camera's nadir (ground point under the lens), along travel"},
     {WS_CAM(first_nozzle), 0, 0, 31, "", "first nozzle (0-based) this camera steers"},
@@ -530,6 +555,14 @@ const std::vector<KeySpec<CameraSection>>& camera_keys() {
   };
   // clang-format on
   return keys;
+}
+
+bool overrides_model_spec(std::string_view full_name) {
+  static constexpr std::array<std::string_view, 9> kKeys = {
+      "vision.model_input_width", "vision.model_input_height", "vision.model_mean",
+      "vision.model_scale",       "vision.model_rgb",          "vision.model_classes",
+      "vision.soil_class",        "vision.crop_class",         "vision.weed_class"};
+  return std::find(kKeys.begin(), kKeys.end(), full_name) != kKeys.end();
 }
 
 }  // namespace weedspray::daemon

@@ -59,6 +59,10 @@ const std::vector<KeySpec<CameraSection>>& camera_keys();
 
 [[nodiscard]] std::string_view key_type_name(KeyType type);
 
+// The [vision] keys that override a weed model's own spec (its NAME.json): unset, the model's
+// value holds, so the default file leaves them commented out.
+[[nodiscard]] bool overrides_model_spec(std::string_view full_name);
+
 }  // namespace weedspray::daemon
 
 namespace weedspray::daemon {

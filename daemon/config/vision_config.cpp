@@ -1,11 +1,14 @@
 #include "daemon/config/vision_config.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <fstream>
 #include <iterator>
 #include <sstream>
+#include <tuple>
 
+#include "daemon/config/model_description.hpp"
 #include "vision/threshold.hpp"
 #include "vision/vegetation_index.hpp"
 #include "vision/weed_source.hpp"
@@ -47,14 +50,6 @@ vision::DnnModelSpec dnn_spec(const VisionSection& vision) {
 // The spec's own rules, each reported against the key that breaks it.
 void check_model_spec(const Config& config) {
   const VisionSection& v = config.vision;
-  for (const auto& [key, size] : {std::pair{"vision.model_input_width", v.model_input_width},
-                                  std::pair{"vision.model_input_height", v.model_input_height}}) {
-    if (size % 32 != 0) {
-      throw VisionKeyError(key, std::to_string(size) +
-                                    " is not a multiple of 32 (the network halves its input "
-                                    "5 times)");
-    }
-  }
   if (v.model_mean.size() != 3) {
     throw VisionKeyError("vision.model_mean", "expected 3 numbers (R, G, B), got " +
                                                   std::to_string(v.model_mean.size()));
@@ -85,9 +80,88 @@ void check_model_spec(const Config& config) {
       }
     }
   }
-  if (auto problem = vision::validate_dnn_spec(dnn_spec(v))) {
-    throw VisionKeyError("vision.model", *problem);
+}
+
+std::string format_number(double value) {
+  std::ostringstream out;
+  out.precision(6);
+  out << value;
+  return out.str();
+}
+
+std::string format_mean(const std::array<double, 3>& mean) {
+  std::ostringstream out;
+  out.precision(6);
+  out << '[' << mean[0] << ", " << mean[1] << ", " << mean[2] << ']';
+  return out.str();
+}
+
+std::string format_classes(const std::vector<std::string>& classes) {
+  std::string text = "[";
+  for (std::size_t i = 0; i < classes.size(); ++i) text += (i ? ", \"" : "\"") + classes[i] + "\"";
+  return text + "]";
+}
+
+bool close(double a, double b) {
+  return std::abs(a - b) <= 1e-6 * std::max({1.0, std::abs(a), std::abs(b)});
+}
+
+// The model's own spec with the configuration's overrides: an input size set in a file
+// squeezes the region to it (a multiple of the model's stride); every other key set in a file
+// must agree with the JSON, since the network was trained to be fed one way only.
+vision::DnnModelSpec merged_spec(const Config& config, const ModelDescription& model) {
+  const VisionSection& v = config.vision;
+  vision::DnnModelSpec spec = model.spec;
+  const auto set = [&](const char* key) { return config.sources.count(key) > 0; };
+  const auto refuse = [&](const char* key, const std::string& ours, const std::string& theirs) {
+    throw VisionKeyError(key, "= " + ours + ", but the model's " + model.path.string() + " says " +
+                                  theirs +
+                                  "; remove the key (a model's JSON is its spec) or use a model "
+                                  "trained that way");
+  };
+  for (const auto& [key, size, side] :
+       {std::tuple{"vision.model_input_width", v.model_input_width, &spec.input_width},
+        std::tuple{"vision.model_input_height", v.model_input_height, &spec.input_height}}) {
+    if (!set(key)) continue;
+    if (size % spec.stride != 0) {
+      throw VisionKeyError(key, std::to_string(size) + " is not a multiple of " +
+                                    std::to_string(spec.stride) + " (the network's stride, " +
+                                    "spec.stride in " + model.path.string() + ")");
+    }
+    *side = size;
+    spec.fixed_input = true;
   }
+  std::array<double, 3> mean{};
+  for (std::size_t i = 0; i < 3 && i < v.model_mean.size(); ++i) mean[i] = v.model_mean[i];
+  if (set("vision.model_mean") &&
+      !(close(mean[0], spec.mean_rgb[0]) && close(mean[1], spec.mean_rgb[1]) &&
+        close(mean[2], spec.mean_rgb[2]))) {
+    refuse("vision.model_mean", format_mean(mean), "spec.mean_rgb = " + format_mean(spec.mean_rgb));
+  }
+  if (set("vision.model_scale") && !close(v.model_scale, spec.scale)) {
+    refuse("vision.model_scale", format_number(v.model_scale),
+           "spec.scale = " + format_number(spec.scale));
+  }
+  if (set("vision.model_rgb") && v.model_rgb != spec.rgb) {
+    refuse("vision.model_rgb", v.model_rgb ? "true" : "false",
+           spec.rgb ? "spec.rgb = true (R, G, B order)" : "spec.rgb = false (B, G, R order)");
+  }
+  if (set("vision.model_classes") && v.model_classes != spec.classes) {
+    refuse("vision.model_classes",
+           format_classes(v.model_classes) + " (" + std::to_string(v.model_classes.size()) +
+               " classes)",
+           "spec.classes = " + format_classes(spec.classes) + " (" +
+               std::to_string(spec.classes.size()) + " classes)");
+  }
+  for (const auto& [key, ours, theirs, name] :
+       {std::tuple{"vision.soil_class", v.soil_class, spec.soil_class, "spec.soil_class"},
+        std::tuple{"vision.crop_class", v.crop_class, spec.crop_class, "spec.crop_class"},
+        std::tuple{"vision.weed_class", v.weed_class, spec.weed_class, "spec.weed_class"}}) {
+    if (set(key) && ours != theirs) {
+      refuse(key, std::to_string(ours), std::string(name) + " = " + std::to_string(theirs));
+    }
+  }
+  return spec;
 }
 
 std::filesystem::path find_model(const Config& config) {
@@ -129,7 +203,82 @@ std::shared_ptr<LoadedModel> read_model(const Config& config) {
   model->onnx.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   if (in.bad()) throw VisionKeyError("vision.model", model->path.string() + " cannot be read");
   if (model->onnx.empty()) throw VisionKeyError("vision.model", model->path.string() + " is empty");
+  model->description_path = description_path(model->path);
+  std::optional<ModelDescription> description;
+  try {
+    description = read_model_description(model->description_path);
+  } catch (const std::runtime_error& error) {
+    throw VisionKeyError("vision.model", error.what());
+  }
+  if (!description) {
+    throw VisionKeyError("vision.model",
+                         model->path.string() + " has no description beside it (" +
+                             model->description_path.string() +
+                             ": the spec the network is fed by, its classes and the ground "
+                             "scale it learnt at; tools/train/train.py writes it)");
+  }
+  model->spec = merged_spec(config, *description);
+  model->licence = description->licence;
   return model;
+}
+
+vision::PipelineConfig pipeline_config_with(const Config& config, const CameraSection& camera,
+                                            const vision::DnnModelSpec& spec);
+
+constexpr double kPi = 3.14159265358979323846;
+
+// How a camera's view meets the model's ground scale: a GREY camera cannot feed a colour
+// network, a camera much coarser than the model hides the weeds it learnt, and a view that
+// needs a larger input than vision.max_network_pixels costs more than a frame's time.
+void check_camera_against_model(const Config& config, std::size_t i,
+                                const vision::DnnModelSpec& spec, const std::string& model) {
+  const CameraSection& camera = config.cameras[i];
+  const std::string which = "camera[" + std::to_string(i) + "]";
+  if (camera.format == "GREY") {
+    throw VisionKeyError(which + ".format",
+                         "GREY gives one channel, but " + model + " takes " +
+                             std::to_string(spec.input_channels) +
+                             " colour channels: use YUYV, MJPG or RGB3, or a weed source without "
+                             "a model (vegetation with index = \"mono\")");
+  }
+  if (spec.fixed_input || !(spec.ground_mm_per_px > 0.0)) return;
+  const double frame_mm = camera_ground_mm_per_px(camera);
+  const vision::RegionOfInterest roi = vision::default_pipeline_config().roi;
+  const int region_w = static_cast<int>(std::lround((roi.right - roi.left) * camera.width));
+  const int region_h = static_cast<int>(std::lround((roi.bottom - roi.top) * camera.height));
+  const vision::NetworkInputSize input =
+      vision::network_input_size(spec, frame_mm, region_w, region_h);
+  const std::string geometry = config.sources.count(which + ".ground_mm_per_px")
+                                   ? which + ".ground_mm_per_px"
+                                   : which + ".mount_height_m";
+  // Upsampling adds no detail: past twice the model's scale, plants are smaller than any it
+  // learnt from (its zoom augmentation spans well under 2x).
+  constexpr double kMaxCoarser = 2.0;
+  if (input.scale > kMaxCoarser) {
+    throw VisionKeyError(geometry, which + " sees " + format_number(frame_mm) +
+                                       " mm per pixel on the ground, " +
+                                       format_number(input.scale) + "x coarser than the " +
+                                       format_number(spec.ground_mm_per_px) + " mm/px " + model +
+                                       " learnt at (more than 2x): mount it lower, narrow its "
+                                       "view, or train for this scale (tools/train/train.py "
+                                       "--target-mm-per-px " +
+                                       format_number(frame_mm) + ")");
+  }
+  if (input.pixels() > config.vision.max_network_pixels) {
+    throw VisionKeyError(geometry,
+                         which + "'s " + std::to_string(region_w) + "x" + std::to_string(region_h) +
+                             " px at " + format_number(frame_mm) + " mm/px needs a " +
+                             std::to_string(input.width) + "x" + std::to_string(input.height) +
+                             " network input to match "
+                             "the " +
+                             format_number(spec.ground_mm_per_px) + " mm/px " + model +
+                             " learnt at, more than "
+                             "vision.max_network_pixels (" +
+                             std::to_string(config.vision.max_network_pixels) +
+                             "): raise that if the board keeps up (weedspray-lab "
+                             "bench-vision), use a model trained coarser "
+                             "(--target-mm-per-px), or a smaller frame");
+  }
 }
 
 }  // namespace
@@ -138,7 +287,25 @@ double ground_m_per_px(const Config& config, const CameraSection& camera) {
   return camera_ground_width_m(config, camera) / camera.width;
 }
 
-vision::PipelineConfig pipeline_config(const Config& config, const CameraSection& camera) {
+double camera_ground_mm_per_px(const CameraSection& camera) {
+  if (camera.ground_mm_per_px > 0.0) return camera.ground_mm_per_px;
+  // The optical axis meets the ground at range h / cos(tilt); one pixel subtends vfov / height
+  // (square pixels), so across travel it covers range x that angle.
+  const double range_m = camera.mount_height_m / std::cos(camera.tilt_deg * kPi / 180.0);
+  const double pixel_rad = camera.vfov_deg * kPi / 180.0 / camera.height;
+  return range_m * pixel_rad * 1000.0;
+}
+
+vision::PipelineConfig pipeline_config(const Config& config, const CameraSection& camera,
+                                       const LoadedModel* model) {
+  if (!model) model = config.model.get();
+  return pipeline_config_with(config, camera, model ? model->spec : dnn_spec(config.vision));
+}
+
+namespace {
+
+vision::PipelineConfig pipeline_config_with(const Config& config, const CameraSection& camera,
+                                            const vision::DnnModelSpec& spec) {
   const VisionSection& v = config.vision;
   vision::PipelineConfig c = vision::default_pipeline_config();
   // "default" keeps the library's measured choice; other names are validated by the config.
@@ -150,11 +317,14 @@ vision::PipelineConfig pipeline_config(const Config& config, const CameraSection
   c.weed_source = vision::parse_weed_source(v.weed_source).value_or(c.weed_source);
   c.inter_row_rule.row_band_fraction =
       v.row_band_cm / 100.0 / camera_ground_width_m(config, camera);
-  c.dnn = dnn_spec(v);
+  c.dnn = spec;
+  c.frame_mm_per_px = camera_ground_mm_per_px(camera);
   c.crop_margin_px =
       static_cast<int>(std::lround(v.crop_margin_cm / 100.0 / ground_m_per_px(config, camera)));
   return c;
 }
+
+}  // namespace
 
 std::vector<std::filesystem::path> model_search_dirs(const std::string& set_in_file) {
   std::vector<std::filesystem::path> dirs;
@@ -175,7 +345,12 @@ std::shared_ptr<const LoadedModel> check_weed_source(const Config& config) {
     throw VisionKeyError("vision.weed_source", "\"" + config.vision.weed_source +
                                                    "\" is not a weed source of the vision library");
   }
-  if (vision::needs_model(*source)) check_model_spec(config);
+  std::shared_ptr<LoadedModel> model;
+  if (vision::needs_model(*source)) {
+    check_model_spec(config);
+    model = read_model(config);
+  }
+  const vision::DnnModelSpec spec = model ? model->spec : dnn_spec(config.vision);
   for (std::size_t i = 0; i < config.cameras.size(); ++i) {
     const auto& camera = config.cameras[i];
     const std::string which = "camera[" + std::to_string(i) + "]";
@@ -185,26 +360,29 @@ std::shared_ptr<const LoadedModel> check_weed_source(const Config& config) {
                                                      centimetres(view_m) +
                                                      ": nozzle_count x boom.nozzle_width_m)");
     }
+    if (model) check_camera_against_model(config, i, spec, model->path.filename().string());
     try {
-      vision::validate(pipeline_config(config, camera));
+      vision::validate(pipeline_config_with(config, camera, spec));
     } catch (const std::invalid_argument& error) {
       const std::string key =
           *source == vision::WeedSource::kHybrid ? "vision.crop_margin_cm" : "vision.weed_source";
       throw VisionKeyError(key, which + ": " + error.what());
     }
   }
-  if (!vision::needs_model(*source)) return nullptr;
-  auto model = read_model(config);
+  if (!model) return nullptr;
   try {
     // Loads the network and runs it once: an unloadable file or an output that is not one
-    // score map per class of model_classes fails here, at load, not in the field.
-    const vision::Pipeline probe(pipeline_config(config, config.cameras.front()), model->onnx);
+    // score map per class fails here, at load, not in the field.
+    const vision::Pipeline probe(pipeline_config_with(config, config.cameras.front(), spec),
+                                 model->onnx);
   } catch (const std::invalid_argument& error) {
     std::string what = error.what();
     while (!what.empty() && std::isspace(static_cast<unsigned char>(what.back()))) what.pop_back();
     // The vision library reports a wrong number of output channels as the output's shape.
     const bool shape = what.find("output shape") != std::string::npos;
-    throw VisionKeyError(shape ? "vision.model_classes" : "vision.model",
+    throw VisionKeyError(shape && config.sources.count("vision.model_classes")
+                             ? "vision.model_classes"
+                             : "vision.model",
                          model->path.string() + ": " + what);
   }
   return model;

@@ -19,10 +19,17 @@ namespace weedspray::daemon {
 // nozzles it steers (one zone column per nozzle), nozzle_count x boom.nozzle_width_m.
 [[nodiscard]] double ground_m_per_px(const Config& config, const CameraSection& camera);
 
+// Ground size of one pixel of a camera's frame at the image centre, across travel, in mm:
+// camera.ground_mm_per_px, or from its mount height, tilt and vertical field of view.
+[[nodiscard]] double camera_ground_mm_per_px(const CameraSection& camera);
+
 // The vision pipeline of `camera`: index, threshold, zone grid and weed source, with the
-// ground distances of [vision] (row_band_cm, crop_margin_cm) converted for this camera.
+// ground distances of [vision] (row_band_cm, crop_margin_cm) converted for this camera, and
+// the loaded model's spec (config.model) with the camera's ground scale.
+// `model` null: config.model; both null: the spec of the model_* keys.
 [[nodiscard]] vision::PipelineConfig pipeline_config(const Config& config,
-                                                     const CameraSection& camera);
+                                                     const CameraSection& camera,
+                                                     const LoadedModel* model = nullptr);
 
 // Folders a relative vision.model is looked up in, in order: the folder of the file that set
 // it (when it was set in a file), the installed models, and a build tree's models/.

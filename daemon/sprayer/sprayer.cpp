@@ -189,7 +189,8 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
     worker.camera = io_.cameras[i];
     worker.first_nozzle = c.first_nozzle;
     worker.nozzle_count = c.nozzle_count;
-    const vision::PipelineConfig vision = pipeline_config(config, c);
+    vision::PipelineConfig vision = pipeline_config(config, c, model.get());
+    if (!io_.frames_at_camera_scale) vision.frame_mm_per_px = 0.0;
     worker.uses_model = vision::needs_model(vision.weed_source);
     worker.pipeline = std::make_unique<vision::Pipeline>(
         vision,

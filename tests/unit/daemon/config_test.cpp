@@ -469,9 +469,14 @@ TEST(DefaultConfigFile, ParsesAndDocumentsEveryKey) {
       section = line.substr(2, line.find("]]") - 2);
     } else if (line.starts_with("[")) {
       section = line.substr(1, line.find(']') - 1);
-    } else if (const auto eq = line.find(" = ");
-               eq != std::string::npos && !line.starts_with("#")) {
-      if (previous.starts_with("#")) documented.insert(section + "." + line.substr(0, eq));
+    } else if (const auto eq = line.find(" = "); eq != std::string::npos) {
+      // A key that overrides the weed model's JSON is written commented out (unset).
+      const bool commented = line.starts_with("# ");
+      const std::string key =
+          section + "." + line.substr(commented ? 2 : 0, eq - (commented ? 2 : 0));
+      if (previous.starts_with("#") && (!commented || overrides_model_spec(key))) {
+        documented.insert(key);
+      }
     }
     previous = line;
   }

@@ -75,13 +75,40 @@ TEST(WeedSourceConfig, DefaultModelIsTheShippedOne) {
   EXPECT_EQ(config.model->path, fs::path(WEEDSPRAY_SOURCE_DIR) / "models" / "weed-peanut.onnx");
 }
 
-TEST(WeedSourceConfig, PipelineGetsTheSpecAndGroundDistancesInPixels) {
-  // 4 nozzles x 0.5 m across 1280 px: 1.5625 mm per pixel.
-  const Config config =
-      parse_weed_config(tiny_dnn("model_rgb = false\nmodel_classes = [\"bg\", \"weed\", \"crop\"]\n"
-                                 "soil_class = 0\nweed_class = 1\ncrop_class = 2\n"
-                                 "crop_margin_cm = 2.0\nrow_band_cm = 30.0\n"));
+// A model folder of its own: the tiny network with a description written by the test.
+class OwnModel : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("weedspray-own-model-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    fs::copy_file(kTinyModel, model());
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path model() const { return dir_ / "own.onnx"; }
+  // The description with `spec` inside "spec": {...}.
+  void describe(const std::string& spec) {
+    std::ofstream(dir_ / "own.json") << "{\"spec\": {" << spec << "}, \"licence\": \"MIT\"}\n";
+  }
+  std::string dnn(const std::string& extra = "") const {
+    return "[vision]\nweed_source = \"dnn\"\nmodel = \"" + model().string() + "\"\n" + extra;
+  }
+  static constexpr const char* kBgrSpec =
+      "\"input_width\": 64, \"input_height\": 64, \"mean_rgb\": [0, 0, 0], "
+      "\"scale\": 0.00392156862745098, \"rgb\": false, \"classes\": [\"bg\", \"weed\", \"crop\"], "
+      "\"soil_class\": 0, \"weed_class\": 1, \"crop_class\": 2, \"ground_mm_per_px\": 2.0";
+  fs::path dir_;
+};
+
+TEST_F(OwnModel, PipelineGetsTheModelsSpecAndGroundDistancesInPixels) {
+  describe(kBgrSpec);
+  // 4 nozzles x 0.5 m across 1280 px: 1.5625 mm per pixel for the zones' ground distances.
+  const Config config = parse_weed_config(dnn("crop_margin_cm = 2.0\nrow_band_cm = 30.0\n"));
   ASSERT_EQ(config.cameras.size(), 1U);
+  ASSERT_NE(config.model, nullptr);
+  EXPECT_EQ(config.model->licence, "MIT");
   EXPECT_DOUBLE_EQ(ground_m_per_px(config, config.cameras[0]), 2.0 / 1280);
   const vision::PipelineConfig c = pipeline_config(config, config.cameras[0]);
   EXPECT_EQ(c.weed_source, vision::WeedSource::kDnn);
@@ -93,6 +120,95 @@ TEST(WeedSourceConfig, PipelineGetsTheSpecAndGroundDistancesInPixels) {
   EXPECT_EQ(c.dnn.crop_class, 2);
   EXPECT_DOUBLE_EQ(c.dnn.mean_rgb[1], 0.0);
   EXPECT_EQ(c.dnn.classes[2], "crop");
+  EXPECT_DOUBLE_EQ(c.dnn.ground_mm_per_px, 2.0);
+  EXPECT_FALSE(c.dnn.fixed_input);
+  EXPECT_DOUBLE_EQ(c.frame_mm_per_px, camera_ground_mm_per_px(config.cameras[0]));
+}
+
+TEST_F(OwnModel, KeysThatDisagreeWithTheModelAreRefusedByName) {
+  describe(kBgrSpec);
+  const std::vector<std::tuple<std::string, std::string, int>> cases = {
+      {"model_rgb = true\n", "vision.model_rgb", 4},
+      {"model_scale = 0.5\n", "vision.model_scale", 4},
+      {"model_mean = [1.0, 2.0, 3.0]\n", "vision.model_mean", 4},
+      {"model_classes = [\"soil\", \"crop\", \"weed\"]\n", "vision.model_classes", 4},
+      {"weed_class = 2\ncrop_class = 1\n", "vision.crop_class", 5},
+  };
+  for (const auto& [line, key, number] : cases) {
+    const auto e = parse_error(dnn(line));
+    EXPECT_EQ(e.key(), key) << line;
+    EXPECT_EQ(e.line(), number) << line;
+    EXPECT_NE(std::string(e.what()).find("own.json says"), std::string::npos) << e.what();
+  }
+  // Keys that agree with it are fine.
+  EXPECT_NO_THROW(
+      (void)parse_weed_config(dnn("model_rgb = false\nweed_class = 1\ncrop_class = 2\n")));
+}
+
+TEST_F(OwnModel, AModelWithoutItsDescriptionIsRefused) {
+  const auto e = parse_error(dnn());
+  EXPECT_EQ(e.key(), "vision.model");
+  EXPECT_NE(std::string(e.what()).find("own.json"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("no description"), std::string::npos) << e.what();
+  describe("\"input_width\": 64");
+  const auto partial = parse_error(dnn());
+  EXPECT_NE(std::string(partial.what()).find("spec.input_height: missing"), std::string::npos)
+      << partial.what();
+  describe(std::string(kBgrSpec) + ", \"stride\": 48");
+  const auto stride = parse_error(dnn());
+  EXPECT_NE(std::string(stride.what()).find("not a multiple of the network's stride 48"),
+            std::string::npos)
+      << stride.what();
+}
+
+TEST_F(OwnModel, ADescriptionWithMoreClassesThanTheOutputIsRefused) {
+  describe(
+      "\"input_width\": 64, \"input_height\": 64, \"mean_rgb\": [0, 0, 0], \"scale\": 1, "
+      "\"rgb\": true, \"classes\": [\"soil\", \"crop\", \"weed\", \"rock\"], "
+      "\"soil_class\": 0, \"crop_class\": 1, \"weed_class\": 2");
+  const auto e = parse_error(dnn());
+  EXPECT_EQ(e.key(), "vision.model");
+  EXPECT_NE(std::string(e.what()).find("output shape 1x3x64x64 is not 1 x 4 classes"),
+            std::string::npos)
+      << e.what();
+}
+
+TEST_F(OwnModel, AGreyCameraCannotFeedAColourModel) {
+  describe(kBgrSpec);
+  const auto e = parse_error(dnn("[[camera]]\nformat = \"GREY\"\n"));
+  EXPECT_EQ(e.key(), "camera[0].format");
+  EXPECT_EQ(e.line(), 5);
+  EXPECT_NE(std::string(e.what()).find("takes 3 colour channels"), std::string::npos) << e.what();
+  // Without a model a GREY camera is fine.
+  EXPECT_NO_THROW((void)parse_weed_config("[[camera]]\nformat = \"GREY\"\n"));
+}
+
+TEST_F(OwnModel, TheCamerasGroundScaleMustSuitTheModel) {
+  describe(kBgrSpec);  // learnt at 2 mm per network pixel
+  // 1 m up, looking 30 deg forward, 40 deg over 800 rows: 1.155 m x 0.873 mrad = 1.008 mm/px.
+  const Config config = parse_weed_config(dnn());
+  EXPECT_NEAR(camera_ground_mm_per_px(config.cameras[0]), 1.0077, 1e-3);
+  const auto coarse = parse_error(dnn("[[camera]]\nground_mm_per_px = 4.5\n"));
+  EXPECT_EQ(coarse.key(), "camera[0].ground_mm_per_px");
+  EXPECT_NE(std::string(coarse.what()).find("more than 2x"), std::string::npos) << coarse.what();
+  const auto high = parse_error(dnn("[[camera]]\nmount_height_m = 5.0\n"));
+  EXPECT_EQ(high.key(), "camera[0].mount_height_m");
+  // 0.5 mm/px over 1280x800 needs 320x200 -> 320x192 at 2 mm/px; 0.1 mm/px needs 64x40.
+  EXPECT_NO_THROW((void)parse_weed_config(dnn("[[camera]]\nground_mm_per_px = 0.5\n")));
+  // 4 mm/px against a 0.1 mm/px model: 51200 x 32000 network pixels, over the budget.
+  describe(std::string(kBgrSpec).replace(std::string(kBgrSpec).find("2.0"), 3, "0.1"));
+  const auto big = parse_error(dnn("[[camera]]\nground_mm_per_px = 0.15\n"));
+  EXPECT_EQ(big.key(), "camera[0].ground_mm_per_px");
+  EXPECT_NE(std::string(big.what()).find("vision.max_network_pixels"), std::string::npos)
+      << big.what();
+  EXPECT_NO_THROW((void)parse_weed_config(
+      dnn("max_network_pixels = 4000000\n[[camera]]\nground_mm_per_px = 0.15\n")));
+  // An input size set in the file squeezes the region to it, whatever the scales.
+  const Config fixed = parse_weed_config(
+      dnn("model_input_width = 96\nmodel_input_height = 64\n[[camera]]\nground_mm_per_px = 9\n"));
+  const vision::PipelineConfig c = pipeline_config(fixed, fixed.cameras[0]);
+  EXPECT_TRUE(c.dnn.fixed_input);
+  EXPECT_EQ(c.dnn.input_width, 96);
 }
 
 TEST(WeedSourceConfig, MissingModelNamesKeyFileAndLine) {
@@ -111,11 +227,15 @@ TEST(WeedSourceConfig, MissingModelNamesKeyFileAndLine) {
 }
 
 TEST(WeedSourceConfig, UnloadableModelIsNamed) {
-  const fs::path junk = fs::temp_directory_path() / ("weedspray-junk-" + std::to_string(getpid()));
+  const fs::path junk =
+      fs::temp_directory_path() / ("weedspray-junk-" + std::to_string(getpid()) + ".onnx");
   std::ofstream(junk) << "not an ONNX model";
+  fs::copy_file(fs::path(kTinyModel).replace_extension(".json"),
+                fs::path(junk).replace_extension(".json"), fs::copy_options::overwrite_existing);
   const auto e =
       parse_error("[vision]\nweed_source = \"dnn\"\n\nmodel = \"" + junk.string() + "\"\n");
   fs::remove(junk);
+  fs::remove(fs::path(junk).replace_extension(".json"));
   EXPECT_EQ(e.key(), "vision.model");
   EXPECT_EQ(e.line(), 4);
   EXPECT_NE(std::string(e.what()).find("not a loadable ONNX model"), std::string::npos) << e.what();
@@ -187,6 +307,7 @@ class WeedModelFiles : public ::testing::Test {
     fs::create_directories(dir_ / "conf.d");
     fs::create_directories(dir_ / "models");
     fs::copy_file(kTinyModel, dir_ / "models" / "tiny.onnx");
+    fs::copy_file(fs::path(kTinyModel).replace_extension(".json"), dir_ / "models" / "tiny.json");
   }
   void TearDown() override { fs::remove_all(dir_); }
   void write(const fs::path& relative, const std::string& text) {
