@@ -49,6 +49,10 @@ struct Backends {
   io::CurrentLoopSensorConfig sensor{};
   io::ValveDriveConfig drive{};
   std::string mode;  // "hw" | "sim"
+  // False when the cameras' frames are not at their configured ground scale (simulated
+  // frames that are images as they are): the weed model then takes each frame squeezed to its
+  // own input size.
+  bool frames_at_camera_scale = true;
 
   // Sim only: advances the simulated world that no device drives (the vehicle's speed).
   std::function<void(double t_s)> drive_world;

@@ -10,6 +10,7 @@
 #include "control/nozzle_scheduler.hpp"
 #include "control/plant/hydraulic_plant.hpp"
 #include "daemon/backends/backends.hpp"
+#include "daemon/config/vision_config.hpp"
 #include "daemon/sprayer/geometry.hpp"
 #include "io/sim/hydraulic_rig.hpp"
 #include "io/sim/memory_output_bank.hpp"
@@ -159,6 +160,14 @@ Backends make_sim_backends(const Config& config, const Options& options) {
     // do, so speed changes between two frames leave no unseen ground.
     replay.footprint_length_m = 0.8 * (footprint.far_m - footprint.near_m);
     replay.ground_speed_m_per_s = [speed]() { return speed->load(); };
+    if (config.sim.images_mm_per_px > 0.0) {
+      replay.source_mm_per_px = config.sim.images_mm_per_px;
+      replay.frame_mm_per_px = camera_ground_mm_per_px(camera_config);
+      replay.frame_width = camera_config.width;
+      replay.frame_height = camera_config.height;
+    } else {
+      b.frames_at_camera_scale = false;
+    }
     auto camera = std::make_shared<io::sim::ReplayCamera>(replay, *clock);
     b.cameras.push_back(camera.get());
     b.owned.push_back(camera);

@@ -1,5 +1,7 @@
 #include "io/sim/replay_camera.hpp"
 
+#include "io/sim/ground_mosaic.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <cctype>
@@ -84,6 +86,7 @@ struct ReplayCamera::Impl {
       if (!config.loop) return FrameStatus::kEnd;
       next_index = 0;
     }
+    if (config.source_mm_per_px > 0.0) return lay_next_ground();
     const fs::path& path = images[next_index++];
     current = cv::imread(path.string(), cv::IMREAD_COLOR);
     if (current.empty()) {
@@ -91,6 +94,26 @@ struct ReplayCamera::Impl {
       return FrameStatus::kError;
     }
     current_name = path.filename().string();
+    return FrameStatus::kOk;
+  }
+
+  // The frame as the camera sees the ground the next images show.
+  FrameStatus lay_next_ground() {
+    const GroundScale scale{config.source_mm_per_px, config.frame_mm_per_px,
+                            cv::Size(config.frame_width, config.frame_height)};
+    std::string failed;
+    current = lay_ground(scale, [&]() {
+      if (next_index >= images.size()) next_index = 0;
+      const fs::path& path = images[next_index++];
+      cv::Mat photo = cv::imread(path.string(), cv::IMREAD_COLOR);
+      if (photo.empty() && failed.empty()) failed = path.string();
+      current_name = path.filename().string();
+      return photo.empty() ? cv::Mat(1, 1, CV_8UC3, cv::Scalar::all(0)) : photo;
+    });
+    if (!failed.empty()) {
+      error = "replay camera: cannot decode image " + failed;
+      return FrameStatus::kError;
+    }
     return FrameStatus::kOk;
   }
 };
@@ -105,6 +128,13 @@ bool ReplayCamera::start() {
   m.images.clear();
   m.use_video = false;
   m.error.clear();
+  if (m.config.source_mm_per_px > 0.0 && (!(m.config.frame_mm_per_px > 0.0) ||
+                                          m.config.frame_width < 1 || m.config.frame_height < 1)) {
+    m.error =
+        "replay camera: laying the ground at the camera's scale needs frame_mm_per_px > 0 "
+        "and the frame size";
+    return false;
+  }
   if (!(m.config.footprint_length_m > 0.0) ||
       (!m.config.ground_speed_m_per_s && !(m.config.fps > 0.0))) {
     m.error = "replay camera: footprint_length_m and fps must be > 0";
