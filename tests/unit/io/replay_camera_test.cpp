@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 
+#include "io/sim/ground_mosaic.hpp"
 #include "io/sim/manual_clock.hpp"
 
 #include <opencv2/core.hpp>
@@ -109,6 +110,46 @@ TEST(ReplayCamera, ReplaysAVideoFileFrameByFrame) {
   EXPECT_EQ(status, FrameStatus::kEnd);
   EXPECT_EQ(frames, 5);
   std::filesystem::remove_all(tmpl);
+}
+
+TEST(ReplayCamera, LaysImagesOfKnownScaleAtTheCamerasScale) {
+  ManualClock clock(1s);
+  ReplayCameraConfig config;
+  config.source = images_dir();  // 350 x 350 px each
+  config.fps = 10.0;
+  config.source_mm_per_px = 0.5;
+  config.frame_mm_per_px = 1.0;  // each image becomes 175 x 175 px
+  config.frame_width = 400;
+  config.frame_height = 200;
+  ReplayCamera camera(config, clock);
+  ASSERT_TRUE(camera.start()) << camera.last_error();
+  Frame f;
+  ASSERT_EQ(camera.next_frame(f, 1s), FrameStatus::kOk) << camera.last_error();
+  EXPECT_EQ(f.view.width, 400);
+  EXPECT_EQ(f.view.height, 200);
+  // Three images across (175 + 175 + 50 px) in each of two rows (175 + 25 px).
+  ASSERT_EQ(camera.next_frame(f, 1s), FrameStatus::kOk);
+  config.frame_mm_per_px = 0.0;
+  ReplayCamera without_scale(config, clock);
+  EXPECT_FALSE(without_scale.start());
+  EXPECT_NE(without_scale.last_error().find("frame_mm_per_px"), std::string::npos);
+}
+
+TEST(GroundMosaic, ImagesAreResampledAndLaidRowByRow) {
+  int next = 0;
+  // 40 x 20 photos of value 10, 20, 30 ... at 2 mm/px shown at 4 mm/px: 20 x 10 tiles.
+  const GroundScale scale{2.0, 4.0, cv::Size(50, 15)};
+  const cv::Mat ground = lay_ground(
+      scale, [&] { return cv::Mat(20, 40, CV_8UC1, cv::Scalar(10 * ++next)); }, true);
+  ASSERT_EQ(ground.size(), cv::Size(50, 15));
+  EXPECT_EQ(ground.at<std::uint8_t>(0, 0), 10);
+  EXPECT_EQ(ground.at<std::uint8_t>(0, 19), 10);
+  EXPECT_EQ(ground.at<std::uint8_t>(0, 20), 20);
+  EXPECT_EQ(ground.at<std::uint8_t>(0, 49), 30);  // the third tile, cut at the frame's edge
+  EXPECT_EQ(ground.at<std::uint8_t>(10, 0), 40);  // the second row
+  EXPECT_EQ(next, 6);
+  EXPECT_THROW((void)lay_ground({0.0, 1.0, cv::Size(4, 4)}, [] { return cv::Mat(); }),
+               std::invalid_argument);
 }
 
 TEST(ReplayCamera, MissingSourceIsAClearError) {
