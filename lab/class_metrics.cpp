@@ -58,8 +58,10 @@ void add_zone_samples(const cv::Mat& truth, std::span<const double> weed_density
   for (int row = 0; row < rows; ++row) {
     for (int col = 0; col < cols; ++col) {
       const cv::Rect zone = zone_rect(row, col, rows, cols, truth.size());
-      const double share = static_cast<double>(cv::countNonZero(truth(zone) == 2)) / zone.area();
-      samples.push_back({share, weed_density[static_cast<std::size_t>(row * cols + col)]});
+      const double area = zone.area();
+      const double weed = cv::countNonZero(truth(zone) == 2) / area;
+      const double crop = cv::countNonZero(truth(zone) == 1) / area;
+      samples.push_back({weed, weed_density[static_cast<std::size_t>(row * cols + col)], crop});
     }
   }
 }
@@ -74,6 +76,13 @@ ZoneTally tally_zones(std::span<const ZoneSample> samples, const ZoneRule& rule)
     } else {
       ++tally.clean;
       tally.clean_dry += !sprayed;
+      if (zone.true_crop_share >= rule.weedy_share) {
+        ++tally.crop_only;
+        tally.crop_only_dry += !sprayed;
+      } else {
+        ++tally.bare;
+        tally.bare_dry += !sprayed;
+      }
     }
   }
   return tally;

@@ -29,8 +29,10 @@ struct ClassScores {
 ClassScores class_scores(const ConfusionMatrix& confusion);
 
 // Zones of a rows x cols grid: weedy when at least weedy_share of the zone is weed in the
-// truth, clean (weed-free for the sprayer) otherwise; sprayed when the pipeline's weed density
-// reaches the decision threshold (the rate law's rule: density > 0 and density >= threshold).
+// truth, clean (weed-free for the sprayer) otherwise; a clean zone is crop-only when at least
+// weedy_share of it is crop (what a sprayer that hits the crop wastes herbicide on), bare
+// otherwise. Sprayed when the pipeline's weed density reaches the decision threshold (the rate
+// law's rule: density > 0 and density >= threshold).
 struct ZoneRule {
   int rows = 2;
   int cols = 4;
@@ -43,9 +45,18 @@ struct ZoneTally {
   int weedy_sprayed = 0;
   int clean = 0;
   int clean_dry = 0;
-  double recall() const { return weedy == 0 ? 1.0 : static_cast<double>(weedy_sprayed) / weedy; }
-  double clean_left_dry() const {
-    return clean == 0 ? 1.0 : static_cast<double>(clean_dry) / clean;
+  int crop_only = 0;  // clean zones with crop
+  int crop_only_dry = 0;
+  int bare = 0;  // clean zones without crop
+  int bare_dry = 0;
+  double recall() const { return share(weedy_sprayed, weedy); }
+  double clean_left_dry() const { return share(clean_dry, clean); }
+  double crop_only_left_dry() const { return share(crop_only_dry, crop_only); }
+  double bare_left_dry() const { return share(bare_dry, bare); }
+
+ private:
+  static double share(int part, int whole) {
+    return whole == 0 ? 1.0 : static_cast<double>(part) / whole;
   }
 };
 
@@ -55,6 +66,7 @@ bool would_spray(double weed_density, double decision_threshold);
 struct ZoneSample {
   double true_weed_share = 0;
   double weed_density = 0;
+  double true_crop_share = 0;
 };
 
 // The zones of one image: truth (class ids over the zones' region) and the pipeline's weed

@@ -135,6 +135,10 @@ void add_vision_commands(CLI::App& app) {
                    "spray.decision_threshold)");
   eval->add_flag("--sweep", weeds.sweep,
                  "With --classes: also the zone trade-off over a range of decision thresholds");
+  eval->add_option("--image-mm-per-px", weeds.image_mm_per_px,
+                   "Ground mm per pixel of the images (default: the model's training photos', "
+                   "its JSON's training.dataset_mm_per_px); frames are resampled to the model's "
+                   "ground scale as the daemon does");
   eval->add_option("--weedy-share", weeds.weedy_share,
                    "A zone is weedy when at least this share of it is weed")
       ->capture_default_str();

@@ -1,6 +1,8 @@
 #include "lab/weed_eval.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <random>
 #include <stdexcept>
 #include <string>
 
@@ -31,6 +33,7 @@ WeedEvalRow evaluate_weed_source(const std::vector<LabelledImage>& images,
   vision::Pipeline pipeline(config, model_onnx);
   WeedEvalRow row;
   row.source = config.weed_source;
+  row.rule = rule;
   ConfusionMatrix confusion;
   for (const LabelledImage& image : images) {
     pipeline.reset_tracking();
@@ -57,6 +60,7 @@ WeedEvalRow evaluate_weed_source(const std::vector<LabelledImage>& images,
     if (class_masks) {
       const cv::Mat truth = image.mask(region);
       try {
+        row.image_confusion.emplace_back().add(truth, predicted);
         confusion.add(truth, predicted);
       } catch (const std::invalid_argument& error) {
         throw std::runtime_error(image.name + ": mask is not class ids 0 soil, 1 crop, 2 weed (" +
@@ -73,6 +77,55 @@ WeedEvalRow evaluate_weed_source(const std::vector<LabelledImage>& images,
     row.zones = tally_zones(row.zone_samples, rule);
   }
   return row;
+}
+
+ImageIntervals image_intervals(const WeedEvalRow& row) {
+  constexpr int kDraws = 1000;
+  const std::size_t images = row.image_confusion.size();
+  const std::size_t zones = static_cast<std::size_t>(row.rule.rows * row.rule.cols);
+  ImageIntervals out;
+  if (images == 0 || row.zone_samples.size() != images * zones) return out;
+  std::mt19937 random(20261127);
+  std::uniform_int_distribution<std::size_t> pick(0, images - 1);
+  std::array<std::vector<double>, 6> draws;
+  std::vector<ZoneSample> samples;
+  for (int d = 0; d < kDraws; ++d) {
+    ConfusionMatrix confusion;
+    samples.clear();
+    for (std::size_t i = 0; i < images; ++i) {
+      const std::size_t image = pick(random);
+      for (int t = 0; t < kClassCount; ++t) {
+        for (int p = 0; p < kClassCount; ++p) {
+          confusion.counts[t][p] += row.image_confusion[image].counts[t][p];
+        }
+      }
+      const auto first = row.zone_samples.begin() + static_cast<std::ptrdiff_t>(image * zones);
+      samples.insert(samples.end(), first, first + static_cast<std::ptrdiff_t>(zones));
+    }
+    const ClassScores scores = class_scores(confusion);
+    const ZoneTally tally = tally_zones(samples, row.rule);
+    const std::array<double, 6> figures = {scores.miou,
+                                           scores.iou[1],
+                                           scores.iou[2],
+                                           tally.recall(),
+                                           tally.crop_only_left_dry(),
+                                           tally.bare_left_dry()};
+    for (std::size_t f = 0; f < figures.size(); ++f) draws[f].push_back(figures[f]);
+  }
+  const auto interval = [](std::vector<double>& values) {
+    std::sort(values.begin(), values.end());
+    const auto at = [&](double q) {
+      return values[static_cast<std::size_t>(q * static_cast<double>(values.size() - 1))];
+    };
+    return std::array<double, 2>{at(0.025), at(0.975)};
+  };
+  out.miou = interval(draws[0]);
+  out.crop_iou = interval(draws[1]);
+  out.weed_iou = interval(draws[2]);
+  out.recall = interval(draws[3]);
+  out.crop_only_left_dry = interval(draws[4]);
+  out.bare_left_dry = interval(draws[5]);
+  return out;
 }
 
 }  // namespace weedspray::lab

@@ -2,6 +2,7 @@
 // class metrics and the zone trade-off against class-id masks, vegetation IoU against any.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -19,7 +20,17 @@ struct WeedEvalRow {
   std::vector<ZoneSample> zone_samples;  // with class masks: every zone of every image
   double vegetation_iou = 0;  // mean over images of (crop or weed) against plant (non-zero)
   double ms_per_image = 0;    // Pipeline::process, index to zone densities
+  std::vector<ConfusionMatrix> image_confusion;  // with class masks: one per image
+  ZoneRule rule;                                 // zone_samples hold rows x cols per image
 };
+
+// 95 % intervals of the figures over images: the images resampled with replacement (a seeded
+// bootstrap of 1000 draws), each draw scored whole as the row is; [low, high].
+struct ImageIntervals {
+  std::array<double, 2> miou{}, crop_iou{}, weed_iou{};
+  std::array<double, 2> recall{}, crop_only_left_dry{}, bare_left_dry{};
+};
+ImageIntervals image_intervals(const WeedEvalRow& row);
 
 // Runs `config` (its weed_source, with the rule's zone grid) over every image, each one a
 // fresh start for the row tracker (the photos are not a sequence). With class_masks, the

@@ -1,5 +1,6 @@
 #include "lab/weed_eval_command.hpp"
 
+#include <array>
 #include <cstdio>
 #include <stdexcept>
 #include <vector>
@@ -17,6 +18,7 @@ struct Setup {
   std::vector<std::uint8_t> onnx;
   std::vector<vision::WeedSource> sources;
   ZoneRule zones;
+  double dataset_mm_per_px = 0;
 };
 
 Setup setup_from(const WeedEvalOptions& options) {
@@ -30,12 +32,18 @@ Setup setup_from(const WeedEvalOptions& options) {
     setup.zones.decision_threshold = daemon.decision_threshold;
     setup.zones.rows = setup.base.rows;
     setup.zones.cols = setup.base.cols;
+    setup.dataset_mm_per_px = daemon.dataset_mm_per_px;
   }
   if (!options.model.empty()) {
     WeedModel model = read_weed_model(options.model);
     setup.base.dnn = model.spec;
     setup.onnx = std::move(model.onnx);
+    setup.dataset_mm_per_px = model.dataset_mm_per_px;
   }
+  if (options.image_mm_per_px < 0) throw std::runtime_error("--image-mm-per-px must be >= 0");
+  // The images are photos, not the configured camera's frames: their own scale.
+  setup.base.frame_mm_per_px =
+      options.image_mm_per_px > 0 ? options.image_mm_per_px : setup.dataset_mm_per_px;
   if (!options.grid.empty()) {
     parse_grid_option("--grid", options.grid, setup.zones.rows, setup.zones.cols);
   }
@@ -70,6 +78,22 @@ Setup setup_from(const WeedEvalOptions& options) {
   return setup;
 }
 
+void print_interval(const char* name, const std::array<double, 2>& interval, bool last = false) {
+  std::printf("\"%s\": [%.4f, %.4f]%s", name, interval[0], interval[1], last ? "" : ", ");
+}
+
+void print_intervals(const WeedEvalRow& row) {
+  const ImageIntervals ci = image_intervals(row);
+  std::printf("\"intervals\": {\"level\": 0.95, ");
+  print_interval("miou", ci.miou);
+  print_interval("crop_iou", ci.crop_iou);
+  print_interval("weed_iou", ci.weed_iou);
+  print_interval("recall", ci.recall);
+  print_interval("crop_only_left_dry", ci.crop_only_left_dry);
+  print_interval("bare_left_dry", ci.bare_left_dry, true);
+  std::printf("}, ");
+}
+
 void print_json(std::size_t images, const std::vector<WeedEvalRow>& rows, const ZoneRule& zones,
                 bool class_masks) {
   std::printf("{\"images\": %zu, \"pipelines\": [", images);
@@ -81,9 +105,13 @@ void print_json(std::size_t images, const std::vector<WeedEvalRow>& rows, const 
       std::printf(
           "\"iou\": {\"soil\": %.4f, \"crop\": %.4f, \"weed\": %.4f}, \"miou\": %.4f, "
           "\"mpa\": %.4f, \"zones\": {\"grid\": \"%dx%d\", \"weedy\": %d, \"recall\": %.4f, "
-          "\"clean_left_dry\": %.4f}, ",
+          "\"clean_left_dry\": %.4f, \"crop_only\": %d, \"crop_only_left_dry\": %.4f, "
+          "\"bare\": %d, \"bare_left_dry\": %.4f}, ",
           row.scores.iou[0], row.scores.iou[1], row.scores.iou[2], row.scores.miou, row.scores.mpa,
-          zones.rows, zones.cols, row.zones.weedy, row.zones.recall(), row.zones.clean_left_dry());
+          zones.rows, zones.cols, row.zones.weedy, row.zones.recall(), row.zones.clean_left_dry(),
+          row.zones.crop_only, row.zones.crop_only_left_dry(), row.zones.bare,
+          row.zones.bare_left_dry());
+      print_intervals(row);
     } else {
       std::printf("\"vegetation_iou\": %.4f, ", row.vegetation_iou);
     }
@@ -103,15 +131,23 @@ void print_table(const WeedEvalOptions& options, std::size_t images,
         ">= %.4f (decision threshold); hybrid margin %d px; one thread\n\n",
         zones.rows, zones.cols, 100.0 * zones.weedy_share, zones.decision_threshold,
         setup.base.crop_margin_px);
-    std::printf("%-11s %7s %7s %7s %7s %7s %8s %6s %7s %10s %9s\n", "weed_source", "IoU_soil",
-                "crop", "weed", "MIoU", "MPA", "veg_IoU", "weedy", "recall", "clean_dry",
-                "ms/image");
+    std::printf("%-11s %7s %7s %7s %7s %7s %8s %6s %7s %10s %9s %9s %9s\n", "weed_source",
+                "IoU_soil", "crop", "weed", "MIoU", "MPA", "veg_IoU", "weedy", "recall",
+                "clean_dry", "crop_dry", "bare_dry", "ms/image");
     for (const WeedEvalRow& row : rows) {
-      std::printf("%-11s %7.4f %7.4f %7.4f %7.4f %7.4f %8.4f %6d %7.4f %10.4f %9.2f\n",
+      std::printf("%-11s %7.4f %7.4f %7.4f %7.4f %7.4f %8.4f %6d %7.4f %10.4f %9.4f %9.4f %9.2f\n",
                   std::string(to_string(row.source)).c_str(), row.scores.iou[0], row.scores.iou[1],
                   row.scores.iou[2], row.scores.miou, row.scores.mpa, row.vegetation_iou,
                   row.zones.weedy, row.zones.recall(), row.zones.clean_left_dry(),
-                  row.ms_per_image);
+                  row.zones.crop_only_left_dry(), row.zones.bare_left_dry(), row.ms_per_image);
+    }
+    std::printf("\n95 %% intervals over images (bootstrap): MIoU, weed IoU, recall, crop_dry\n");
+    for (const WeedEvalRow& row : rows) {
+      const ImageIntervals ci = image_intervals(row);
+      std::printf("%-11s %.3f-%.3f  %.3f-%.3f  %.3f-%.3f  %.3f-%.3f\n",
+                  std::string(to_string(row.source)).c_str(), ci.miou[0], ci.miou[1],
+                  ci.weed_iou[0], ci.weed_iou[1], ci.recall[0], ci.recall[1],
+                  ci.crop_only_left_dry[0], ci.crop_only_left_dry[1]);
     }
     return;
   }
@@ -136,15 +172,18 @@ void print_sweep(const std::vector<WeedEvalRow>& rows, const ZoneRule& zones) {
     rule.decision_threshold = threshold;
     return tally_zones(row.zone_samples, rule);
   };
-  std::printf("\nzone trade-off by decision threshold (recall / clean_left_dry)\n%-11s",
-              "weed_source");
-  for (double threshold : kThresholds) std::printf(" %13.4f", threshold);
-  std::printf("   most dry with recall >= %.2f\n", kRecallTarget);
+  std::printf(
+      "\nzone trade-off by decision threshold (recall / crop-only zones left dry / bare zones "
+      "left dry)\n%-11s",
+      "weed_source");
+  for (double threshold : kThresholds) std::printf(" %19.4f", threshold);
+  std::printf("   most crop-only zones dry with recall >= %.2f\n", kRecallTarget);
   for (const WeedEvalRow& row : rows) {
     std::printf("%-11s", std::string(to_string(row.source)).c_str());
     for (double threshold : kThresholds) {
       const ZoneTally tally = tally_at(row, threshold);
-      std::printf("   %.3f/%.3f", tally.recall(), tally.clean_left_dry());
+      std::printf("   %.3f/%.3f/%.3f", tally.recall(), tally.crop_only_left_dry(),
+                  tally.bare_left_dry());
     }
     double best_threshold = -1;
     ZoneTally best;
@@ -152,7 +191,7 @@ void print_sweep(const std::vector<WeedEvalRow>& rows, const ZoneRule& zones) {
       const double threshold = step * 0.0001;
       const ZoneTally tally = tally_at(row, threshold);
       if (tally.recall() >= kRecallTarget &&
-          (best_threshold < 0 || tally.clean_left_dry() > best.clean_left_dry())) {
+          (best_threshold < 0 || tally.crop_only_left_dry() > best.crop_only_left_dry())) {
         best_threshold = threshold;
         best = tally;
       }
@@ -160,7 +199,8 @@ void print_sweep(const std::vector<WeedEvalRow>& rows, const ZoneRule& zones) {
     if (best_threshold < 0) {
       std::printf("   none\n");
     } else {
-      std::printf("   %.4f: %.3f/%.3f\n", best_threshold, best.recall(), best.clean_left_dry());
+      std::printf("   %.4f: %.3f/%.3f/%.3f\n", best_threshold, best.recall(),
+                  best.crop_only_left_dry(), best.bare_left_dry());
     }
   }
 }

@@ -18,7 +18,10 @@ struct WeedEvalOptions {
   double weedy_share = 0.005;
   int crop_margin_px = -1;        // < 0: the configuration's, else kDefaultCropMarginPx
   double row_band_fraction = -1;  // < 0: the configuration's, else InterRowRule's default
-  bool sweep = false;             // also the zone trade-off at a range of decision thresholds
+  // Ground size of one pixel of the images; 0: the model's training photos' (its JSON's
+  // training.dataset_mm_per_px), else unknown (frames squeezed to the network's input size).
+  double image_mm_per_px = 0;
+  bool sweep = false;  // also the zone trade-off at a range of decision thresholds
   bool json = false;
 };
 

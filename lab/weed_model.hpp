@@ -17,11 +17,11 @@ struct WeedModel {
   std::vector<std::uint8_t> onnx;
   vision::DnnModelSpec spec;  // from the .json sibling; DnnModelSpec's defaults without one
   bool spec_from_json = false;
+  double dataset_mm_per_px = 0.0;  // the training photos' ground scale; 0 = not stated
 };
 
-// Reads FILE and, when there is one, FILE with the extension .json (its "spec" object: input_width,
-// input_height, mean_rgb, scale, rgb, classes, soil_class, crop_class, weed_class). Throws
-// std::runtime_error naming the file.
+// Reads FILE and, when there is one, FILE with the extension .json as the daemon reads it
+// (daemon/config/model_description.hpp). Throws std::runtime_error naming the file.
 WeedModel read_weed_model(const std::filesystem::path& onnx_path);
 
 // A daemon configuration file as the lab runs it: the first camera's pipeline (index,
@@ -31,6 +31,7 @@ struct DaemonVisionSetup {
   vision::PipelineConfig pipeline;
   std::vector<std::uint8_t> onnx;
   double decision_threshold = 0;
+  double dataset_mm_per_px = 0;  // the model's training photos' ground scale; 0 = not stated
 };
 DaemonVisionSetup read_daemon_vision_setup(const std::filesystem::path& config_file);
 

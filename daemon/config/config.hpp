@@ -76,8 +76,9 @@ struct LoadedModel {
   std::filesystem::path path;
   std::vector<std::uint8_t> onnx;
   std::filesystem::path description_path;  // NAME.json beside NAME.onnx
-  vision::DnnModelSpec spec;  // the JSON's spec with the configuration's overrides applied
-  std::string licence;        // as the JSON states it
+  vision::DnnModelSpec spec;       // the JSON's spec with the configuration's overrides applied
+  std::string licence;             // as the JSON states it
+  double dataset_mm_per_px = 0.0;  // its training photos' ground scale; 0 = not stated
 };
 
 struct SpraySection {

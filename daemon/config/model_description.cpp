@@ -75,6 +75,13 @@ std::optional<ModelDescription> read_model_description(const std::filesystem::pa
       licence != document.end() && licence->is_string()) {
     model.licence = licence->get<std::string>();
   }
+  if (const auto training = document.find("training");
+      training != document.end() && training->is_object()) {
+    if (const auto mm = training->find("dataset_mm_per_px");
+        mm != training->end() && mm->is_number() && mm->get<double>() > 0.0) {
+      model.dataset_mm_per_px = mm->get<double>();
+    }
+  }
   return model;
 }
 

@@ -219,6 +219,7 @@ std::shared_ptr<LoadedModel> read_model(const Config& config) {
   }
   model->spec = merged_spec(config, *description);
   model->licence = description->licence;
+  model->dataset_mm_per_px = description->dataset_mm_per_px;
   return model;
 }
 

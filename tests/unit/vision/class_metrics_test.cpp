@@ -89,6 +89,14 @@ TEST(ZoneTally, WeedyZonesSprayedAndCleanZonesLeftDry) {
   EXPECT_EQ(tally.clean_dry, 5);
   EXPECT_DOUBLE_EQ(tally.recall(), 0.5);
   EXPECT_DOUBLE_EQ(tally.clean_left_dry(), 5.0 / 6.0);
+  // Of the clean zones, zone 2 holds crop (1 %) and was sprayed: the crop hit; the 5 bare ones
+  // stayed dry.
+  EXPECT_DOUBLE_EQ(samples[2].true_crop_share, 0.01);
+  EXPECT_EQ(tally.crop_only, 1);
+  EXPECT_EQ(tally.crop_only_dry, 0);
+  EXPECT_DOUBLE_EQ(tally.crop_only_left_dry(), 0.0);
+  EXPECT_EQ(tally.bare, 5);
+  EXPECT_DOUBLE_EQ(tally.bare_left_dry(), 1.0);
 
   // A zone under the weedy share is clean: 1 px of 100 is not 2 %.
   rule.weedy_share = 0.02;

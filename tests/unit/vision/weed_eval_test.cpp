@@ -80,5 +80,36 @@ TEST(WeedEval, MasksThatAreNotClassIdsNameTheImage) {
   }
 }
 
+TEST(ImageIntervals, BracketTheFiguresAndCollapseForIdenticalImages) {
+  WeedEvalRow row;
+  row.rule.rows = 1;
+  row.rule.cols = 1;
+  row.rule.decision_threshold = 0.01;
+  ConfusionMatrix perfect;
+  perfect.counts[0][0] = 90;
+  perfect.counts[2][2] = 10;
+  ConfusionMatrix missed;  // every weed pixel called soil
+  missed.counts[0][0] = 90;
+  missed.counts[2][0] = 10;
+  for (int i = 0; i < 10; ++i) {
+    row.image_confusion.push_back(perfect);
+    row.zone_samples.push_back({0.1, 0.1, 0.0});  // weedy and sprayed
+  }
+  ImageIntervals same = image_intervals(row);
+  EXPECT_DOUBLE_EQ(same.weed_iou[0], 1.0);
+  EXPECT_DOUBLE_EQ(same.weed_iou[1], 1.0);
+  EXPECT_DOUBLE_EQ(same.recall[0], 1.0);
+  for (int i = 0; i < 10; ++i) {
+    row.image_confusion.push_back(missed);
+    row.zone_samples.push_back({0.1, 0.0, 0.0});  // weedy and left dry
+  }
+  const ImageIntervals mixed = image_intervals(row);
+  EXPECT_LT(mixed.weed_iou[0], 0.5);  // the whole set scores 0.5
+  EXPECT_GT(mixed.weed_iou[1], 0.5);
+  EXPECT_LT(mixed.recall[0], 0.5);
+  EXPECT_GT(mixed.recall[1], 0.5);
+  EXPECT_GT(mixed.recall[0], 0.1);
+}
+
 }  // namespace
 }  // namespace weedspray::lab
