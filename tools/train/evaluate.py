@@ -1,15 +1,28 @@
 #!/usr/bin/python3
 """Evaluates a segmentation ONNX model through OpenCV DNN on a list of images + class-id masks.
 
-Preprocessing is the one the daemon's DnnModelSpec describes: the whole frame resized to the
-input size with INTER_AREA (no aspect kept), channels swapped to RGB when spec.rgb, then
-(pixel - mean_rgb) * scale. The argmax is taken at the network's resolution and scaled to the
-mask's size with nearest neighbour (what the daemon sees).
+Masks hold one class id per pixel; 255 marks unlabelled pixels, which no figure counts.
 
-Figures: IoU per class, MIoU, MPA (mean per-class pixel accuracy) as the wheat paper defines
-them, and the sprayer's zone trade-off: each image cut into a rows x cols grid, a zone is weedy
-when its true weed pixels are >= 0.5 % of it; for each decision threshold on the predicted weed
-share, recall = weedy zones sprayed, clean_left_dry = weed-free zones left dry.
+Preprocessing is the one the daemon applies (vision/weed_source.cpp network_input_size): the
+whole frame resized with INTER_AREA, channels swapped to RGB when spec.rgb, then
+(pixel - mean_rgb) * scale. When both the model's ground scale (spec.ground_mm_per_px) and the
+photos' (--dataset-mm-per-px) are known, the frame is resampled so that one input pixel covers
+ground_mm_per_px (each side rounded to a multiple of spec.stride, aspect kept); otherwise it is
+squeezed to the spec's input size. The argmax is taken at the network's resolution and scaled
+to the mask's size with nearest neighbour (what the daemon sees).
+
+Figures: IoU per class, MIoU, MPA (mean per-class pixel accuracy), each image's own IoU per
+class (per_image; null where a class is neither in the image's labels nor predicted), and the
+sprayer's zone figures. Each image is cut into a rows x cols grid (2 x 4); a zone is
+- weedy when its true weed pixels are >= 0.5 % of its labelled pixels,
+- crop_only when not weedy and its true crop pixels are >= 0.5 %,
+- bare otherwise;
+zones less than half labelled are left out. For each decision threshold on the predicted weed
+share of a zone: recall (weedy zones sprayed), crop_only_left_dry, bare_left_dry and
+clean_left_dry (all weed-free zones left dry); null where no zone is of that kind. The best
+threshold leaves most crop_only zones dry while keeping recall >= 0.95 (what a farmer pays
+for: weeds hit, herbicide kept off the crop). intervals: 95 % percentile bootstrap over images
+(1000 resamples, seeded) of the IoU per class, MIoU and the zone figures at the best threshold.
 
     /usr/bin/python3 tools/train/evaluate.py --model models/weed-peanut.onnx \
         --spec models/weed-peanut.json --images ../shared/data/peanut/images \
@@ -25,10 +38,16 @@ import time
 import cv2
 import numpy as np
 
+IGNORE = 255
 WEEDY_ZONE_SHARE = 0.005
+CROP_ZONE_SHARE = 0.005
+MIN_LABELLED_ZONE_SHARE = 0.5
 ZONE_THRESHOLDS = (0.001, 0.0025, 0.005, 0.01, 0.02)
 ZONE_RECALL_TARGET = 0.95
 ZONE_GRID = (2, 4)  # rows, columns
+ZONE_FIGURES = ("recall", "crop_only_left_dry", "bare_left_dry", "clean_left_dry")
+BOOTSTRAP_RESAMPLES = 1000
+IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".JPG", ".JPEG", ".PNG", ".bmp", ".tif", ".tiff")
 
 
 def read_list(path):
@@ -40,7 +59,7 @@ def read_list(path):
 
 
 def find_image(folder, stem):
-    for suffix in (".jpg", ".jpeg", ".png", ".JPG", ".JPEG", ".PNG", ".bmp", ".tif", ".tiff"):
+    for suffix in IMAGE_SUFFIXES:
         path = os.path.join(folder, stem + suffix)
         if os.path.exists(path):
             return path
@@ -48,7 +67,8 @@ def find_image(folder, stem):
 
 
 def load_pair(images, masks, stem, classes):
-    """(BGR image, class-id mask) of one stem; clear errors on missing files or bad ids."""
+    """(BGR image, class-id mask) of one stem; 255 in the mask = unlabelled. Clear errors on
+    missing files, size mismatches or ids that are not classes."""
     image = cv2.imread(find_image(images, stem), cv2.IMREAD_COLOR)
     mask_path = os.path.join(masks, stem + ".png")
     mask = cv2.imread(mask_path, cv2.IMREAD_UNCHANGED)
@@ -58,99 +78,210 @@ def load_pair(images, masks, stem, classes):
         raise SystemExit(f"--masks: cannot read {mask_path}")
     if mask.ndim != 2 or mask.shape != image.shape[:2]:
         raise SystemExit(f"{mask_path}: must be one channel of class ids, {image.shape[1]}x{image.shape[0]}")
-    if int(mask.max()) >= classes:
-        raise SystemExit(f"{mask_path}: class id {int(mask.max())} but only {classes} classes")
+    ids = np.unique(mask)
+    bad = ids[(ids >= classes) & (ids != IGNORE)]
+    if bad.size:
+        raise SystemExit(f"{mask_path}: class id {int(bad[0])} but only {classes} classes (255 = unlabelled)")
     return image, mask
 
 
-def to_blob(bgr, spec):
-    """N=1 x 3 x H x W float blob of a BGR frame, as the daemon prepares it."""
-    size = (spec["input_width"], spec["input_height"])
+def network_input_size(spec, frame_mm_per_px, width, height):
+    """(width, height) of the network input for a width x height frame, as the daemon picks it."""
+    model_mm = spec.get("ground_mm_per_px")
+    if not model_mm or not frame_mm_per_px:
+        return spec["input_width"], spec["input_height"]
+    scale = frame_mm_per_px / model_mm
+    stride = spec.get("stride", 32)
+    return tuple(max(1, int(np.floor(side * scale / stride + 0.5))) * stride for side in (width, height))
+
+
+def to_blob(bgr, spec, size=None):
+    """N=1 x 3 x H x W float blob of a BGR frame at size (default: the spec's input size)."""
+    size = size or (spec["input_width"], spec["input_height"])
     resized = cv2.resize(bgr, size, interpolation=cv2.INTER_AREA)
     return cv2.dnn.blobFromImage(resized, spec["scale"], size, tuple(spec["mean_rgb"]), swapRB=spec["rgb"])
 
 
-def predict_labels(net, bgr, spec):
-    net.setInput(to_blob(bgr, spec))
+def predict_labels(net, bgr, spec, frame_mm_per_px=None):
+    size = network_input_size(spec, frame_mm_per_px, bgr.shape[1], bgr.shape[0])
+    net.setInput(to_blob(bgr, spec, size))
     labels = net.forward()[0].argmax(axis=0).astype(np.uint8)
     return cv2.resize(labels, (bgr.shape[1], bgr.shape[0]), interpolation=cv2.INTER_NEAREST)
 
 
-class Scores:
-    """Accumulates a confusion matrix and zone weed shares over images."""
-
-    def __init__(self, classes, weed_class):
-        self.classes = classes
-        self.weed_class = weed_class
-        self.confusion = np.zeros((classes, classes), np.int64)  # [truth, predicted]
-        self.zone_truth = []
-        self.zone_predicted = []
-
-    def add(self, truth, predicted):
-        index = truth.astype(np.int64).ravel() * self.classes + predicted.astype(np.int64).ravel()
-        self.confusion += np.bincount(index, minlength=self.classes**2).reshape(self.classes, self.classes)
-        self.zone_truth += zone_shares(truth == self.weed_class)
-        self.zone_predicted += zone_shares(predicted == self.weed_class)
-
-    def summary(self, names):
-        tp = np.diag(self.confusion).astype(float)
-        truth_total = self.confusion.sum(axis=1)
-        predicted_total = self.confusion.sum(axis=0)
-        iou = tp / np.maximum(truth_total + predicted_total - tp, 1)
-        accuracy = tp / np.maximum(truth_total, 1)
-        return {
-            "iou": {name: round(float(v), 4) for name, v in zip(names, iou)},
-            "miou": round(float(iou.mean()), 4),
-            "pixel_accuracy": {name: round(float(v), 4) for name, v in zip(names, accuracy)},
-            "mpa": round(float(accuracy.mean()), 4),
-            "zones": zone_tradeoff(np.array(self.zone_truth), np.array(self.zone_predicted)),
-        }
+def confusion_matrix(truth, predicted, classes):
+    """classes x classes pixel counts [truth, predicted] over the labelled pixels."""
+    labelled = truth != IGNORE
+    index = truth[labelled].astype(np.int64) * classes + predicted[labelled].astype(np.int64)
+    return np.bincount(index, minlength=classes**2).reshape(classes, classes)
 
 
-def zone_shares(flags):
+def iou_per_class(confusion):
+    """IoU per class; nan where the class is neither labelled nor predicted."""
+    tp = np.diag(confusion).astype(float)
+    union = confusion.sum(axis=0) + confusion.sum(axis=1) - tp
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(union > 0, tp / np.maximum(union, 1), np.nan)
+
+
+def zone_cells(truth, predicted, crop_class, weed_class):
+    """Per grid zone: (true weed share, true crop share, predicted weed share, counted); shares
+    of the truth are over the zone's labelled pixels, the prediction's over all of them."""
     rows, cols = ZONE_GRID
-    height, width = flags.shape
-    shares = []
+    height, width = truth.shape
+    cells = np.zeros((rows * cols, 4))
     for r in range(rows):
         for c in range(cols):
-            zone = flags[r * height // rows : (r + 1) * height // rows, c * width // cols : (c + 1) * width // cols]
-            shares.append(float(zone.mean()))
-    return shares
+            window = (slice(r * height // rows, (r + 1) * height // rows),
+                      slice(c * width // cols, (c + 1) * width // cols))
+            zone, guess = truth[window], predicted[window]
+            labelled = int((zone != IGNORE).sum())
+            cells[r * cols + c] = (
+                (zone == weed_class).sum() / max(labelled, 1),
+                (zone == crop_class).sum() / max(labelled, 1),
+                float((guess == weed_class).mean()) if guess.size else 0.0,
+                labelled >= MIN_LABELLED_ZONE_SHARE * max(zone.size, 1),
+            )
+    return cells
 
 
-def zone_tradeoff(truth_shares, predicted_shares):
-    weedy = truth_shares >= WEEDY_ZONE_SHARE
-    table = []
-    for threshold in ZONE_THRESHOLDS:
-        sprayed = predicted_shares >= threshold
-        table.append(
-            {
-                "threshold": threshold,
-                "recall": round(float(sprayed[weedy].mean()) if weedy.any() else 1.0, 4),
-                "clean_left_dry": round(float((~sprayed[~weedy]).mean()) if (~weedy).any() else 1.0, 4),
-            }
-        )
-    meeting = [row for row in table if row["recall"] >= ZONE_RECALL_TARGET]
-    best = max(meeting, key=lambda row: row["clean_left_dry"]) if meeting else max(
-        table, key=lambda row: row["recall"] + row["clean_left_dry"]
-    )
+def zone_kinds(cells):
+    counted = cells[:, 3] > 0
+    weedy = counted & (cells[:, 0] >= WEEDY_ZONE_SHARE)
+    crop_only = counted & ~weedy & (cells[:, 1] >= CROP_ZONE_SHARE)
+    bare = counted & ~weedy & ~crop_only
+    return weedy, crop_only, bare
+
+
+def _share(flags):
+    return round(float(flags.mean()), 4) if flags.size else None
+
+
+def zone_figures(cells, threshold):
+    weedy, crop_only, bare = zone_kinds(cells)
+    sprayed = cells[:, 2] >= threshold
     return {
-        "grid": f"{ZONE_GRID[0]}x{ZONE_GRID[1]}",
-        "weedy_zone_share": WEEDY_ZONE_SHARE,
-        "weedy": int(weedy.sum()),
-        "clean": int((~weedy).sum()),
-        "thresholds": table,
-        "best": dict(best, rule=f"most zones left dry with recall >= {ZONE_RECALL_TARGET}"
-                     if meeting else "highest recall + clean_left_dry (no threshold reaches the recall target)"),
+        "threshold": threshold,
+        "recall": _share(sprayed[weedy]),
+        "crop_only_left_dry": _share(~sprayed[crop_only]),
+        "bare_left_dry": _share(~sprayed[bare]),
+        "clean_left_dry": _share(~sprayed[crop_only | bare]),
     }
 
 
-def evaluate(net, spec, images, masks, stems):
-    scores = Scores(len(spec["classes"]), spec["weed_class"])
+def _or(value, fallback):
+    return fallback if value is None else value
+
+
+def zone_tradeoff(cells):
+    """The zone table over all thresholds and the best threshold by the farmer's rule."""
+    weedy, crop_only, bare = zone_kinds(cells)
+    table = [zone_figures(cells, threshold) for threshold in ZONE_THRESHOLDS]
+    meeting = [row for row in table if _or(row["recall"], 1.0) >= ZONE_RECALL_TARGET]
+    if meeting:
+        best = max(meeting, key=lambda row: (_or(row["crop_only_left_dry"], _or(row["clean_left_dry"], 0.0)),
+                                             _or(row["clean_left_dry"], 0.0)))
+        rule = f"most crop_only zones left dry with recall >= {ZONE_RECALL_TARGET}"
+    else:
+        best = max(table, key=lambda row: (_or(row["recall"], 1.0), _or(row["crop_only_left_dry"], 0.0)))
+        rule = "highest recall, then most crop_only zones left dry (no threshold reaches the recall target)"
+    return {
+        "grid": f"{ZONE_GRID[0]}x{ZONE_GRID[1]}",
+        "weedy_zone_share": WEEDY_ZONE_SHARE,
+        "crop_zone_share": CROP_ZONE_SHARE,
+        "weedy": int(weedy.sum()),
+        "crop_only": int(crop_only.sum()),
+        "bare": int(bare.sum()),
+        "clean": int((crop_only | bare).sum()),
+        "not_counted": int((cells[:, 3] == 0).sum()),
+        "thresholds": table,
+        "best": dict(best, rule=rule),
+    }
+
+
+def _rounded(values, names):
+    return {name: (None if np.isnan(v) else round(float(v), 4)) for name, v in zip(names, values)}
+
+
+class Scores:
+    """Per-image confusion matrices and zone cells, and the figures drawn from them."""
+
+    def __init__(self, names, crop_class, weed_class):
+        self.names = list(names)
+        self.crop_class = crop_class
+        self.weed_class = weed_class
+        self.stems = []
+        self.confusions = []
+        self.cells = []
+
+    def add(self, stem, truth, predicted):
+        self.stems.append(stem)
+        self.confusions.append(confusion_matrix(truth, predicted, len(self.names)))
+        self.cells.append(zone_cells(truth, predicted, self.crop_class, self.weed_class))
+
+    def per_image(self):
+        rows = []
+        for stem, confusion in zip(self.stems, self.confusions):
+            iou = iou_per_class(confusion)
+            rows.append({"image": stem, "iou": _rounded(iou, self.names),
+                         "miou": None if np.all(np.isnan(iou)) else round(float(np.nanmean(iou)), 4)})
+        return rows
+
+    def summary(self):
+        confusion = np.sum(self.confusions, axis=0)
+        tp = np.diag(confusion).astype(float)
+        iou = tp / np.maximum(confusion.sum(axis=1) + confusion.sum(axis=0) - tp, 1)
+        accuracy = tp / np.maximum(confusion.sum(axis=1), 1)
+        zones = zone_tradeoff(np.concatenate(self.cells))
+        return {
+            "iou": _rounded(iou, self.names),
+            "miou": round(float(iou.mean()), 4),
+            "pixel_accuracy": _rounded(accuracy, self.names),
+            "mpa": round(float(accuracy.mean()), 4),
+            "zones": zones,
+            "images": len(self.stems),
+            "per_image": self.per_image(),
+            "intervals": self.intervals(zones["best"]["threshold"]),
+        }
+
+    def intervals(self, threshold, resamples=BOOTSTRAP_RESAMPLES, seed=0):
+        """95 % percentile bootstrap over images of IoU per class, MIoU and the zone figures at
+        threshold."""
+        rng = np.random.default_rng(seed)
+        confusions = np.stack(self.confusions)
+        cells = np.stack(self.cells)
+        ious, mious, zones = [], [], []
+        for _ in range(resamples):
+            pick = rng.integers(0, len(self.stems), len(self.stems))
+            iou = iou_per_class(confusions[pick].sum(axis=0))
+            ious.append(iou)
+            mious.append(np.nan if np.all(np.isnan(iou)) else np.nanmean(iou))
+            figures = zone_figures(cells[pick].reshape(-1, 4), threshold)
+            zones.append([np.nan if figures[k] is None else figures[k] for k in ZONE_FIGURES])
+        ious, zones = np.array(ious), np.array(zones)
+        return {
+            "method": f"95 % percentile bootstrap over the {len(self.stems)} images, {resamples} resamples",
+            "iou": {name: _interval(ious[:, i]) for i, name in enumerate(self.names)},
+            "miou": _interval(np.array(mious)),
+            "zones": dict({k: _interval(zones[:, i]) for i, k in enumerate(ZONE_FIGURES)}, threshold=threshold),
+        }
+
+
+def _interval(samples):
+    samples = samples[~np.isnan(samples)]
+    if not samples.size:
+        return None
+    low, high = np.percentile(samples, [2.5, 97.5])
+    return [round(float(low), 4), round(float(high), 4)]
+
+
+def evaluate(net, spec, images, masks, stems, dataset_mm_per_px=None):
+    """All figures of net on the stems (see the module's docstring)."""
+    scores = Scores(spec["classes"], spec["crop_class"], spec["weed_class"])
     for stem in stems:
         image, mask = load_pair(images, masks, stem, len(spec["classes"]))
-        scores.add(mask, predict_labels(net, image, spec))
-    return dict(scores.summary(spec["classes"]), images=len(stems))
+        scores.add(stem, mask, predict_labels(net, image, spec, dataset_mm_per_px))
+    return scores.summary()
 
 
 def median_forward_ms(net, spec, repeats=30):
@@ -175,12 +306,16 @@ def main():
     parser.add_argument("--images", required=True)
     parser.add_argument("--masks", required=True)
     parser.add_argument("--list", required=True, help="image stems to evaluate, one per line")
+    parser.add_argument("--dataset-mm-per-px", type=float, help="ground mm per pixel of the photos as stored")
+    parser.add_argument("--per-image", action="store_true", help="also print each image's IoU per class")
     parser.add_argument("--bench", action="store_true", help="also time one forward pass, one thread")
     args = parser.parse_args()
     with open(args.spec) as spec_file:
         spec = json.load(spec_file)["spec"]
     net = cv2.dnn.readNet(args.model)
-    result = evaluate(net, spec, args.images, args.masks, read_list(args.list))
+    result = evaluate(net, spec, args.images, args.masks, read_list(args.list), args.dataset_mm_per_px)
+    if not args.per_image:
+        del result["per_image"]
     if args.bench:
         result["forward_ms_1_thread"] = median_forward_ms(net, spec)
     print(json.dumps(result, indent=2))

@@ -6,6 +6,11 @@ Decoder: at /16, /8, /4, /2 a bilinear x2 upsampling, concatenation with the enc
 a depthwise-separable block (3x3 depthwise + 1x1 pointwise, BN, ReLU); a 1x1 classifier and a
 last bilinear x2 give logits at the input size. About 0.5 M parameters, 2 MB as ONNX.
 Input sizes must be multiples of 32.
+
+Checkpoints (NAME.pt, torch.save of a dict): state_dict, classes, width and meta (ground scale,
+training data, licence: what a model built on it must carry on). load_checkpoint_into copies a
+checkpoint's encoder and decoder into a network with other classes and starts its 1x1 class
+head afresh (kept when the class names are the same).
 """
 
 import torch
@@ -16,6 +21,7 @@ from torchvision.models import mobilenet_v2
 SKIP_ENDS = (2, 4, 7, 14)
 ENCODER_END = 18
 DECODER_CHANNELS = (64, 32, 24, 16)
+HEAD_PREFIX = "classify."
 
 
 def _relu6_to_relu(module: nn.Module) -> None:
@@ -70,3 +76,32 @@ class SegmentationNet(nn.Module):
         for block in self.decoder:
             x = block(torch.cat([self.up(x), skips.pop()], dim=1))
         return self.up(self.classify(x))
+
+
+def save_checkpoint(path: str, model: SegmentationNet, classes, meta: dict, width: float = 0.5) -> None:
+    torch.save({"state_dict": model.state_dict(), "classes": list(classes), "width": width, "meta": meta}, path)
+
+
+def read_checkpoint(path: str) -> dict:
+    try:
+        checkpoint = torch.load(path, map_location="cpu")
+    except (OSError, RuntimeError) as error:
+        raise ValueError(f"{path}: cannot read a checkpoint ({error})")
+    if not isinstance(checkpoint, dict) or "state_dict" not in checkpoint or "classes" not in checkpoint:
+        raise ValueError(f"{path}: not a checkpoint of train.py or train_base.py (no state_dict/classes)")
+    return checkpoint
+
+
+def load_checkpoint_into(model: SegmentationNet, checkpoint: dict, classes) -> bool:
+    """Copies the checkpoint's weights into model; True when the class head was kept too."""
+    keep_head = list(checkpoint["classes"]) == list(classes)
+    weights = {k: v for k, v in checkpoint["state_dict"].items() if keep_head or not k.startswith(HEAD_PREFIX)}
+    try:
+        missing, unexpected = model.load_state_dict(weights, strict=False)
+    except RuntimeError as error:
+        raise ValueError(f"checkpoint does not fit the network (width {checkpoint.get('width')}): {error}")
+    body_missing = [k for k in missing if not k.startswith(HEAD_PREFIX)]
+    if body_missing or unexpected:
+        raise ValueError(f"checkpoint does not fit the network (width {checkpoint.get('width')}): "
+                         f"missing {body_missing[:3]}, unexpected {unexpected[:3]}")
+    return keep_head

@@ -1,300 +1,454 @@
 #!/usr/bin/python3
 """Trains a small crop/weed/soil segmentation network on CPU and exports it for OpenCV 4.6 DNN.
 
-Any folder of images + same-named class-id PNG masks (0 soil, 1 crop, 2 weed by default) works:
+Made for a field's own model from 25-40 labelled photos on a 2-core CPU in under 30 minutes:
+label the photos (tools/train/import_labels.py turns CVAT, LabelMe, COCO or palette exports
+into masks), split them (split.py keeps near-duplicate photos on one side), then fine-tune the
+plant/soil base network (train_base.py) for your classes:
 
-    /usr/bin/python3 tools/train/train.py --images ../shared/data/peanut/images \
-        --masks ../shared/data/peanut/masks --train-list tools/train/splits/peanut-train.txt \
-        --val-list tools/train/splits/peanut-val.txt --out models --name weed-peanut \
-        --epochs 48 --seed 9 --threads 1
+    /usr/bin/python3 tools/train/split.py --images ~/carrots/images --masks ~/carrots/masks \
+        --val-fraction 0.25 --seed 9 --train-out ~/carrots/train.txt --val-out ~/carrots/val.txt
+    /usr/bin/python3 tools/train/train.py --images ~/carrots/images --masks ~/carrots/masks \
+        --train-list ~/carrots/train.txt --val-list ~/carrots/val.txt --out ~/carrots/model \
+        --name weed-carrot --base models/base-plant-soil.pt --dataset-mm-per-px 0.4 \
+        --data-licence "own photos, Farm X" --install /etc/weedspray
 
-Writes OUT/NAME.onnx and OUT/NAME.json (the spec the daemon needs, validation metrics through
-OpenCV DNN, the training command, seed, versions, wall time). No downloaded weights; the run
-length is a number of epochs, so a run is repeatable (as far as torch's CPU kernels are).
-The augmentation is strong on purpose: the model has to work on other fields, crops and cameras
-than the ones it saw (colour, brightness, gamma, hue, saturation, white balance, blur, noise,
-scale, aspect, rotation, flips). The last epoch's weights are exported; the validation split is
-only measured, never used to pick a checkpoint.
+Masks: STEM.png beside each STEM.jpg in --masks, one class id per pixel (0 soil, 1 crop, 2 weed
+by default: --classes), 255 = unlabelled (no loss, no figure). The validation list is only
+measured, never used to pick anything; the last step's weights are exported.
+
+Training: --steps optimiser steps (default 2500: 9 min at the ~4.8 steps/s of the project's
+2-core x86 machine when idle; a laptop CPU or a busy machine is slower, so each progress line
+shows steps/s and the time left, and --steps trades time for accuracy), or --epochs (converted
+to epochs x max(1, photos // batch) steps). Each step draws --batch crops from the training
+photos with replacement, so a handful of photos works.
+Loss: class-weighted cross-entropy + Dice over the labelled pixels; --class-weights auto (the
+default) weighs each class by sqrt(share of the most frequent class / its share), clipped to
+[1, 20], and prints the weights. Augmentation aims at other fields and cameras: zoom, aspect,
+rotation, flips, hue, saturation, white balance, exposure, contrast, gamma, blur, noise
+(sampling.py).
+
+Ground scale: --dataset-mm-per-px X is the ground size of one pixel of the photos as stored;
+--target-mm-per-px Y the ground size of one pixel at the network input (default X x photo
+width / input width: the photo squeezed to --input). Every photo is resampled to Y and crops are
+drawn at Y times a zoom in --zoom (0.7-1.4); spec.ground_mm_per_px = Y lets the daemon resample
+each camera's frames to the scale the model learnt. Without X the scale is unknown:
+ground_mm_per_px is null and the daemon squeezes frames to the input size whatever their scale.
+
+--base PATH.pt starts from a checkpoint's encoder and decoder (train_base.py's plant/soil
+network learnt from all shared photo sets) with a new class head (kept when the class names
+are the same, as when going on from a train.py NAME.pt).
+
+Writes into --out:
+- NAME.onnx, checked against torch through OpenCV DNN, and NAME.pt (a checkpoint --base takes);
+- NAME.json: spec (what the daemon feeds the network, classes, ground_mm_per_px, stride,
+  input_channels), licence, training_data (each photo folder with its count, licence and
+  attribution, from datasets.json or --data-licence/--data-attribution; a base's data too),
+  validation (IoU per class, MIoU, MPA, zones, per_image, intervals: evaluate.py), training_set,
+  report, export, inference, training (command, seed, steps, class weights, scales, versions);
+- NAME-report/: the --report-worst validation photos with the lowest crop/weed IoU as overlays
+  (report.py).
+--install DIR copies NAME.onnx and NAME.json into DIR and writes DIR/conf.d/50-model-NAME.toml.
 """
 
 import argparse
 import json
-import math
 import os
 import platform
+import re
 import shlex
+import statistics
 import sys
 import time
 
 import cv2
 import numpy as np
 import torch
-import torch.nn.functional as F
 import torchvision
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from evaluate import evaluate, load_pair, median_forward_ms, read_list, to_blob  # noqa: E402
-from model import SegmentationNet  # noqa: E402
-from onnx_export import export_onnx, load_opencv_net, max_abs_diff_vs_opencv  # noqa: E402
+from datasets import model_licence, training_data_entry  # noqa: E402
+from evaluate import evaluate, find_image, load_pair, median_forward_ms, read_list, to_blob  # noqa: E402
+from loss import auto_class_weights, parse_class_weights  # noqa: E402
+from model import SegmentationNet, load_checkpoint_into, read_checkpoint, save_checkpoint  # noqa: E402
+from onnx_export import OPSET, export_onnx, load_opencv_net, max_abs_diff_vs_opencv  # noqa: E402
+from report import LEGEND, install, worst_images, write_overlays  # noqa: E402
+from sampling import MEAN_RGB, SCALE, Sampler, ScaledPhoto, class_frequencies  # noqa: E402
+from trainer import format_seconds, quick_iou, train_steps  # noqa: E402
 
-MEAN_RGB = (123.675, 116.28, 103.53)  # ImageNet means; scale 1/58 ~ 1/std
-SCALE = 1.0 / 58.0
-CACHE_FACTOR = 2  # training images are kept at twice the input size, so zooming in stays sharp
+DEFAULT_STEPS = 2500
+DEFAULT_ZOOM = (0.7, 1.4)
+STRIDE = 32
+WIDTH = 0.5
+BASE_SCALE_MISMATCH = 1.4
+NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 
 
 def parse_size(text):
     try:
         width, height = (int(v) for v in text.lower().split("x"))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"--input '{text}': expected WxH, e.g. 320x256")
-    if width % 32 or height % 32 or width <= 0 or height <= 0:
-        raise argparse.ArgumentTypeError(f"--input '{text}': width and height must be multiples of 32")
+        raise argparse.ArgumentTypeError(f"'{text}': expected WxH, e.g. 320x256")
+    if width % STRIDE or height % STRIDE or width <= 0 or height <= 0:
+        raise argparse.ArgumentTypeError(f"'{text}': width and height must be multiples of {STRIDE}")
     return width, height
 
 
-def parse_args():
+def parse_range(text):
+    try:
+        low, high = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}': expected MIN,MAX, e.g. 0.7,1.4")
+    if not 0 < low <= high:
+        raise argparse.ArgumentTypeError(f"'{text}': need 0 < MIN <= MAX")
+    return low, high
+
+
+def positive(kind):
+    def check(text):
+        value = kind(text)
+        if value <= 0:
+            raise argparse.ArgumentTypeError(f"{text}: must be > 0")
+        return value
+
+    return check
+
+
+def build_parser():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--images", required=True, help="folder of images (jpg/png)")
-    parser.add_argument("--masks", required=True, help="folder of STEM.png class-id masks")
+    parser.add_argument("--masks", required=True, help="folder of STEM.png class-id masks (255 = unlabelled)")
     parser.add_argument("--train-list", required=True, help="image stems to train on, one per line")
     parser.add_argument("--val-list", required=True, help="image stems to measure on, one per line")
-    parser.add_argument("--out", required=True, help="folder for NAME.onnx and NAME.json")
-    parser.add_argument("--name", default="weed-model")
-    parser.add_argument("--epochs", type=int, default=48)
+    parser.add_argument("--out", required=True, help="folder for NAME.onnx, NAME.json, NAME.pt, NAME-report/")
+    parser.add_argument("--name", default="weed-model", help="model name (letters, digits, . _ -)")
+    length = parser.add_mutually_exclusive_group()
+    length.add_argument("--steps", type=positive(int), help=f"optimiser steps (default {DEFAULT_STEPS})")
+    length.add_argument("--epochs", type=positive(int), help="passes over the training photos, converted to steps")
     parser.add_argument("--seed", type=int, default=9)
     parser.add_argument("--input", type=parse_size, default=(320, 256), help="network input WxH")
-    parser.add_argument("--crop", type=parse_size, default=(256, 192), help="training crop WxH (at input scale)")
-    parser.add_argument("--batch", type=int, default=8)
-    parser.add_argument("--lr", type=float, default=4e-3)
+    parser.add_argument("--crop", type=parse_size, default=(256, 192), help="training crop WxH (at the target scale)")
+    parser.add_argument("--batch", type=positive(int), default=8)
+    parser.add_argument("--lr", type=positive(float), default=4e-3)
     parser.add_argument("--classes", default="soil,crop,weed", help="class names in class-id order")
     parser.add_argument("--soil-class", type=int, default=0)
     parser.add_argument("--crop-class", type=int, default=1)
     parser.add_argument("--weed-class", type=int, default=2)
-    parser.add_argument("--class-weights", default="1,1.5,4", help="cross-entropy weight per class")
-    parser.add_argument("--threads", type=int, default=2, help="torch threads (1 beats 2 on a busy machine)")
-    parser.add_argument("--log-every", type=int, default=5, help="epochs between validation log lines")
-    args = parser.parse_args()
+    parser.add_argument("--class-weights", default="auto", help="'auto' or one cross-entropy weight per class")
+    parser.add_argument("--dataset-mm-per-px", type=positive(float), help="ground mm per pixel of the photos as stored")
+    parser.add_argument("--target-mm-per-px", type=positive(float),
+                        help="ground mm per pixel at the network input (default: the photo squeezed to --input)")
+    parser.add_argument("--zoom", type=parse_range, default=DEFAULT_ZOOM, help="random zoom around the target scale")
+    parser.add_argument("--base", help="checkpoint to start from (train_base.py's NAME.pt, or a train.py NAME.pt)")
+    parser.add_argument("--threads", type=positive(int), default=2, help="torch threads (1 beats 2 on a busy machine)")
+    parser.add_argument("--log-every", type=positive(int), default=25, help="steps between progress lines")
+    parser.add_argument("--val-every", type=positive(int), default=300, help="steps between quick validation figures")
+    parser.add_argument("--report-worst", type=int, default=6, help="validation photos drawn as overlays")
+    parser.add_argument("--data-licence", help="licence of --images when datasets.json does not know the folder")
+    parser.add_argument("--data-attribution", help="attribution of --images (who took and labelled them)")
+    parser.add_argument("--install", metavar="DIR",
+                        help="copy the model into DIR and write DIR/conf.d/50-model-NAME.toml")
+    return parser
+
+
+def parse_args(argv=None):
+    parser = build_parser()
+    args = parser.parse_args(argv)
     args.class_names = args.classes.split(",")
-    args.weights = [float(v) for v in args.class_weights.split(",")]
-    if len(args.weights) != len(args.class_names):
-        parser.error(f"--class-weights has {len(args.weights)} values for {len(args.class_names)} --classes")
+    try:
+        args.weights = parse_class_weights(args.class_weights, len(args.class_names))
+    except ValueError as error:
+        parser.error(str(error))
     for key in ("soil_class", "crop_class", "weed_class"):
         if not 0 <= getattr(args, key) < len(args.class_names):
             parser.error(f"--{key.replace('_', '-')} {getattr(args, key)}: not a class id of --classes")
+    if not NAME_PATTERN.match(args.name):
+        parser.error(f"--name '{args.name}': use letters, digits, '.', '_' and '-'")
+    if args.target_mm_per_px and not args.dataset_mm_per_px:
+        parser.error("--target-mm-per-px needs --dataset-mm-per-px (the photos' own ground scale)")
     return args
 
 
-def load_cache(args, stems):
-    """Images and masks resized to CACHE_FACTOR x the input size (squeezed as at inference)."""
-    width, height = args.input[0] * CACHE_FACTOR, args.input[1] * CACHE_FACTOR
-    images, masks = [], []
+def photo_width(images, stem):
+    path = find_image(images, stem)
+    try:
+        from PIL import Image
+
+        with Image.open(path) as image:
+            return image.size[0]
+    except ImportError:
+        return cv2.imread(path, cv2.IMREAD_COLOR).shape[1]
+
+
+def ground_scale(args, stems):
+    """(photo mm/px, target mm/px, ground_mm_per_px for the spec or None); with the scale
+    unknown, 'mm' is a photo pixel and the target squeezes the photo to the input width."""
+    width = statistics.median(photo_width(args.images, s) for s in stems)
+    if args.dataset_mm_per_px:
+        target = args.target_mm_per_px or args.dataset_mm_per_px * width / args.input[0]
+        return args.dataset_mm_per_px, target, target
+    return 1.0, width / args.input[0], None
+
+
+def load_photos(args, stems, photo_mm, target_mm):
+    photos = []
     for stem in stems:
         image, mask = load_pair(args.images, args.masks, stem, len(args.class_names))
-        images.append(cv2.resize(image, (width, height), interpolation=cv2.INTER_AREA))
-        masks.append(cv2.resize(mask, (width, height), interpolation=cv2.INTER_NEAREST))
-    return images, masks
+        photos.append(ScaledPhoto(image, mask, photo_mm, target_mm))
+    return photos
 
 
-def random_geometry(rng, image, mask, out_size):
-    """A crop of out_size at a random zoom (0.6-1.7 x the inference scale), aspect, rotation,
-    flip and position."""
-    out_w, out_h = out_size
-    cache_h, cache_w = image.shape[:2]
-    zoom = math.exp(rng.uniform(math.log(0.6), math.log(1.7))) / CACHE_FACTOR
-    aspect = math.exp(rng.uniform(-0.15, 0.15))
-    sx, sy = zoom * aspect, zoom / aspect
-    angle = rng.uniform(-math.pi, math.pi) if rng.random() < 0.7 else 0.0
-    cos, sin = math.cos(angle), math.sin(angle)
-    # Output = A * (source - centre) + output centre, A = rotation * scale * flips.
-    linear = np.array([[cos, -sin], [sin, cos]]) @ np.diag([sx, sy])
-    if rng.random() < 0.5:
-        linear = linear @ np.diag([-1.0, 1.0])
-    if rng.random() < 0.5:
-        linear = linear @ np.diag([1.0, -1.0])
-    centre = np.array([rng.uniform(0, cache_w), rng.uniform(0, cache_h)])
-    offset = np.array([out_w / 2, out_h / 2]) - linear @ centre
-    matrix = np.hstack([linear, offset[:, None]])
-    warped = cv2.warpAffine(image, matrix, out_size, flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT_101)
-    warped_mask = cv2.warpAffine(mask, matrix, out_size, flags=cv2.INTER_NEAREST, borderMode=cv2.BORDER_REFLECT_101)
-    return warped, warped_mask
+def resolve_class_weights(args, photos):
+    frequencies = class_frequencies([p.mask for p in photos], len(args.class_names))
+    if args.weights is not None:
+        return args.weights, "given", frequencies
+    for name, share in zip(args.class_names, frequencies):
+        if share == 0:
+            print(f"warning: class '{name}' has no labelled pixel in the training photos", flush=True)
+    return auto_class_weights(frequencies), "auto: sqrt(top share / share), clipped to [1, 20]", frequencies
 
 
-def random_photometry(rng, bgr):
-    """Colour, light and camera changes another field or camera may bring; float RGB 0-255 out."""
-    image = bgr.astype(np.float32) / 255.0
-    hsv = cv2.cvtColor(image, cv2.COLOR_BGR2HSV)
-    hsv[..., 0] = (hsv[..., 0] + rng.uniform(-15, 15)) % 360.0
-    hsv[..., 1] *= rng.uniform(0.55, 1.45)
-    image = cv2.cvtColor(np.clip(hsv, 0, [360, 1, 1]).astype(np.float32), cv2.COLOR_HSV2BGR)
-    image *= rng.uniform(0.85, 1.15, size=3).astype(np.float32)  # white balance
-    image *= rng.uniform(0.55, 1.5)  # exposure
-    mean = image.mean()
-    image = (image - mean) * rng.uniform(0.7, 1.3) + mean  # contrast
-    image = np.clip(image, 0, 1) ** rng.uniform(0.7, 1.45)  # gamma
-    if rng.random() < 0.4:
-        image = cv2.GaussianBlur(image, (0, 0), rng.uniform(0.4, 1.6))
-    if rng.random() < 0.5:
-        image += rng.normal(0, rng.uniform(0.005, 0.04), image.shape).astype(np.float32)
-    image = np.clip(image, 0, 1) * 255.0
-    return image[..., ::-1]  # RGB
+def build_model(args, target_mm):
+    """The network, fresh or from --base; and what the base brings ({} without one)."""
+    model = SegmentationNet(len(args.class_names), width=WIDTH)
+    if not args.base:
+        return model, {}
+    try:
+        checkpoint = read_checkpoint(args.base)
+        kept = load_checkpoint_into(model, checkpoint, args.class_names)
+    except ValueError as error:
+        raise SystemExit(f"--base {error}")
+    meta = checkpoint.get("meta", {})
+    base_mm = meta.get("ground_mm_per_px")
+    print(f"--base {args.base}: classes {checkpoint['classes']} -> {args.class_names}, "
+          f"class head {'kept' if kept else 'new'}, learnt at {base_mm} mm/px", flush=True)
+    if base_mm and target_mm and max(base_mm / target_mm, target_mm / base_mm) > BASE_SCALE_MISMATCH:
+        print(f"warning: the base learnt at {base_mm} mm/px, this model's target is {target_mm:.3g} mm/px "
+              f"(more than {BASE_SCALE_MISMATCH}x apart): its features fit this scale less; "
+              f"--target-mm-per-px {base_mm} trains at the base's scale", flush=True)
+    elif base_mm and not target_mm:
+        print(f"note: the base learnt at {base_mm} mm/px, but these photos' scale is unknown: "
+              f"--dataset-mm-per-px lets them be resampled to a scale of your choice", flush=True)
+    return model, {"path": os.path.abspath(args.base), "classes": checkpoint["classes"], "ground_mm_per_px": base_mm,
+                   "training_data": meta.get("training_data", []), "head": "kept" if kept else "new"}
 
 
-def batches(rng, cache, args):
-    images, masks = cache
-    order = rng.permutation(len(images))
-    for start in range(0, len(order) - args.batch + 1, args.batch):
-        inputs, targets = [], []
-        for i in order[start : start + args.batch]:
-            image, mask = random_geometry(rng, images[i], masks[i], args.crop)
-            rgb = random_photometry(rng, image)
-            inputs.append(((rgb - np.array(MEAN_RGB, np.float32)) * SCALE).transpose(2, 0, 1))
-            targets.append(mask)
-        yield torch.from_numpy(np.stack(inputs).astype(np.float32)), torch.from_numpy(np.stack(targets).astype(np.int64))
-
-
-def loss_fn(logits, target, class_weights):
-    cross_entropy = F.cross_entropy(logits, target, weight=class_weights)
-    probabilities = logits.softmax(dim=1)
-    one_hot = F.one_hot(target, logits.shape[1]).permute(0, 3, 1, 2).float()
-    intersection = (probabilities * one_hot).sum(dim=(0, 2, 3))
-    total = probabilities.sum(dim=(0, 2, 3)) + one_hot.sum(dim=(0, 2, 3))
-    dice = 1.0 - ((2 * intersection + 1.0) / (total + 1.0)).mean()
-    return cross_entropy + dice
-
-
-def learning_rate(step, total, peak):
-    warmup = max(1, total // 30)
-    if step < warmup:
-        return peak * (step + 1) / warmup
-    return 0.5 * peak * (1 + math.cos(math.pi * (step - warmup) / max(1, total - warmup)))
-
-
-def quick_val_miou(model, args, val_pairs):
-    """MIoU at the network's resolution with torch (progress log only)."""
-    spec = model_spec(args)
-    classes = len(args.class_names)
-    confusion = np.zeros((classes, classes), np.int64)
-    model.eval()
-    with torch.no_grad():
-        for image, mask in val_pairs:
-            labels = model(torch.from_numpy(to_blob(image, spec)))[0].argmax(0).numpy()
-            small = cv2.resize(mask, args.input, interpolation=cv2.INTER_NEAREST)
-            confusion += np.bincount(small.ravel().astype(np.int64) * classes + labels.ravel(),
-                                     minlength=classes**2).reshape(classes, classes)
-    model.train()
-    tp = np.diag(confusion)
-    iou = tp / np.maximum(confusion.sum(0) + confusion.sum(1) - tp, 1)
-    return iou
-
-
-def model_spec(args):
+def model_spec(args, ground_mm):
+    if ground_mm:
+        note = f"one network input pixel covers {ground_mm:.4g} mm of ground"
+    else:
+        note = "unknown: trained without --dataset-mm-per-px"
     return {
         "input_width": args.input[0],
         "input_height": args.input[1],
+        "stride": STRIDE,
+        "input_channels": 3,
         "mean_rgb": list(MEAN_RGB),
         "scale": SCALE,
         "rgb": True,
-        "resize": "whole frame to input size, INTER_AREA, aspect not kept",
+        "resize": "whole frame, INTER_AREA: to ground_mm_per_px per pixel when known (sides rounded to the stride), "
+                  "else to the input size (aspect not kept)",
         "classes": args.class_names,
         "soil_class": args.soil_class,
         "crop_class": args.crop_class,
         "weed_class": args.weed_class,
         "input_name": "input",
         "output": "logits, 1 x classes x input_height x input_width (argmax = class id)",
+        "ground_mm_per_px": round(ground_mm, 4) if ground_mm else None,
+        "ground_scale_note": note,
     }
 
 
-def main():
-    args = parse_args()
-    command = " ".join(["/usr/bin/python3", "tools/train/train.py"] + [shlex.quote(a) for a in sys.argv[1:]])
-    torch.set_num_threads(args.threads)
-    cv2.setNumThreads(1)
-    torch.manual_seed(args.seed)
-    torch.use_deterministic_algorithms(True, warn_only=True)
-    rng = np.random.default_rng(args.seed)
+def training_data(args, count, base):
+    records = [training_data_entry(args.images, count, args.data_licence, args.data_attribution)]
+    for record in base.get("training_data", []):
+        records.append(dict(record, via=f"base {os.path.basename(base['path'])}"))
+    return records
+
+
+def command_line(argv):
+    return " ".join(["/usr/bin/python3", "tools/train/train.py"] + [shlex.quote(a) for a in argv])
+
+
+def export_and_check(model, args, onnx_path, spec, val_images):
+    model.eval()
+    export_onnx(model, onnx_path, *args.input)
+    check = [torch.from_numpy(to_blob(image, spec)) for image in val_images[:4]]
+    diff = max_abs_diff_vs_opencv(model, onnx_path, check)
+    if diff > 1e-3:
+        raise SystemExit(f"{onnx_path}: OpenCV DNN output differs from torch by {diff}")
+    return diff
+
+
+def announce_scale(args, photo_mm, target_mm, ground_mm):
+    if ground_mm:
+        print(f"ground scale: photos {photo_mm:.4g} mm/px, network input {target_mm:.4g} mm/px, "
+              f"zoom {args.zoom[0]}-{args.zoom[1]}x around it", flush=True)
+    else:
+        print(f"--dataset-mm-per-px not given: the ground scale is unknown; photos are scaled to the input width "
+              f"({args.input[0]} px) as at inference, spec.ground_mm_per_px = null, and the daemon will squeeze "
+              f"each frame to {args.input[0]}x{args.input[1]} whatever its camera's scale", flush=True)
+
+
+def read_lists(args):
     train_stems, val_stems = read_list(args.train_list), read_list(args.val_list)
     overlap = set(train_stems) & set(val_stems)
     if overlap:
         raise SystemExit(f"--train-list and --val-list share {len(overlap)} images, e.g. {sorted(overlap)[0]}")
-    cache = load_cache(args, train_stems)
-    val_pairs = [load_pair(args.images, args.masks, s, len(args.class_names)) for s in val_stems]
+    return train_stems, val_stems
 
-    model = SegmentationNet(len(args.class_names))
-    optimiser = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=1e-4)
-    class_weights = torch.tensor(args.weights)
-    steps_per_epoch = len(train_stems) // args.batch
-    total = steps_per_epoch * args.epochs
-    print(f"{len(train_stems)} train / {len(val_stems)} val images, {total} iterations, "
-          f"{sum(p.numel() for p in model.parameters())} parameters", flush=True)
-    started = time.time()
-    step = 0
-    model.train()
-    for epoch in range(1, args.epochs + 1):
-        running = 0.0
-        for inputs, targets in batches(rng, cache, args):
-            for group in optimiser.param_groups:
-                group["lr"] = learning_rate(step, total, args.lr)
-            loss = loss_fn(model(inputs), targets, class_weights)
-            optimiser.zero_grad()
-            loss.backward()
-            optimiser.step()
-            running += loss.item()
-            step += 1
-        line = f"epoch {epoch}/{args.epochs} loss {running / steps_per_epoch:.4f} {time.time() - started:.0f} s"
-        if epoch % args.log_every == 0 or epoch == args.epochs:
-            iou = quick_val_miou(model, args, val_pairs)
-            line += " val IoU " + " ".join(f"{n} {v:.3f}" for n, v in zip(args.class_names, iou))
-            line += f" MIoU {iou.mean():.3f}"
-        print(line, flush=True)
-    wall_s = time.time() - started
 
-    model.eval()
+def seed_everything(args):
+    torch.set_num_threads(args.threads)
+    cv2.setNumThreads(1)
+    torch.manual_seed(args.seed)
+    torch.use_deterministic_algorithms(True, warn_only=True)
+    return np.random.default_rng(args.seed)
+
+
+def step_count(args, photos):
+    if args.steps:
+        return args.steps
+    return args.epochs * max(1, photos // args.batch) if args.epochs else DEFAULT_STEPS
+
+
+def validation_line(args, spec, val_pairs):
+    """validate(model) for the progress lines: torch IoU per class on the validation photos."""
+    samples = [(image, mask, args.dataset_mm_per_px) for image, mask in val_pairs]
+
+    def validate(model):
+        iou = quick_iou(model, samples, spec)
+        return "val IoU " + " ".join(f"{n} {v:.3f}" for n, v in zip(args.class_names, iou)) + f" MIoU {iou.mean():.3f}"
+
+    return validate
+
+
+def measure(args, model, spec, val_pairs, stems):
+    """Exports NAME.onnx and measures it through OpenCV DNN: (onnx path, net, figures)."""
     os.makedirs(args.out, exist_ok=True)
     onnx_path = os.path.join(args.out, args.name + ".onnx")
-    export_onnx(model, onnx_path, *args.input)
-    spec = model_spec(args)
-    check = [torch.from_numpy(to_blob(image, spec)) for image, _ in val_pairs[:4]]
-    diff = max_abs_diff_vs_opencv(model, onnx_path, check)
-    if diff > 1e-3:
-        raise SystemExit(f"{onnx_path}: OpenCV DNN output differs from torch by {diff}")
+    diff = export_and_check(model, args, onnx_path, spec, [image for image, _ in val_pairs])
     net = load_opencv_net(onnx_path)
-    report = {
-        "model": os.path.basename(onnx_path),
-        "spec": spec,
-        "validation": evaluate(net, spec, args.images, args.masks, val_stems),
-        "training_set": evaluate(net, spec, args.images, args.masks, train_stems),
-        "export": {"onnx_bytes": os.path.getsize(onnx_path), "opset": 11,
-                   "opencv_vs_torch_max_abs_diff": diff, "parameters": sum(p.numel() for p in model.parameters())},
+    train_stems, val_stems = stems
+    training_set = evaluate(net, spec, args.images, args.masks, train_stems, args.dataset_mm_per_px)
+    for key in ("per_image", "intervals"):
+        del training_set[key]
+    figures = {
+        "validation": evaluate(net, spec, args.images, args.masks, val_stems, args.dataset_mm_per_px),
+        "training_set": training_set,
+        "export": {"onnx_bytes": os.path.getsize(onnx_path), "opset": OPSET, "opencv_vs_torch_max_abs_diff": diff,
+                   "parameters": sum(p.numel() for p in model.parameters())},
         "inference": {"forward_ms_1_thread": median_forward_ms(net, spec), "opencv": cv2.__version__,
                       "machine": f"{platform.machine()}, {os.cpu_count()} cores (shared with other work)"},
-        "training": {
-            "command": command,
-            "seed": args.seed,
-            "epochs": args.epochs,
-            "iterations": total,
-            "batch": args.batch,
-            "crop": list(args.crop),
-            "lr": args.lr,
-            "class_weights": args.weights,
-            "train_list": args.train_list,
-            "val_list": args.val_list,
-            "train_images": len(train_stems),
-            "val_images": len(val_stems),
-            "threads": args.threads,
-            "wall_s": round(wall_s, 1),
-            "torch": torch.__version__,
-            "torchvision": torchvision.__version__,
-            "opencv": cv2.__version__,
-            "pretrained_weights": None,
-        },
     }
-    json_path = os.path.join(args.out, args.name + ".json")
-    with open(json_path, "w") as out:
-        json.dump(report, out, indent=2)
+    return onnx_path, net, figures
+
+
+def overlays(args, net, spec, validation):
+    folder = os.path.join(args.out, args.name + "-report")
+    worst = worst_images(validation["per_image"], spec, max(0, args.report_worst))
+    pictures = write_overlays(net, spec, args.images, args.masks, worst, folder, args.dataset_mm_per_px)
+    return {"folder": os.path.basename(folder), "worst": pictures, "legend": LEGEND}
+
+
+def training_record(args, argv, run, setup):
+    """The JSON's training object: how to repeat the run and what it used."""
+    return {
+        "command": command_line(argv),
+        "seed": args.seed,
+        "steps": setup["steps"],
+        "epochs": args.epochs,
+        "iterations": setup["steps"],
+        "batch": args.batch,
+        "crop": list(args.crop),
+        "lr": args.lr,
+        "class_weights": setup["weights"],
+        "class_weights_method": setup["weights_method"],
+        "class_shares": {n: round(float(f), 4) for n, f in zip(args.class_names, setup["frequencies"])},
+        "dataset_mm_per_px": args.dataset_mm_per_px,
+        "target_mm_per_px": round(setup["target_mm"], 4) if setup["ground_mm"] else None,
+        "zoom": list(args.zoom),
+        "train_list": args.train_list,
+        "val_list": args.val_list,
+        "train_images": setup["train_images"],
+        "val_images": setup["val_images"],
+        "threads": args.threads,
+        "steps_per_s": run["steps_per_s"],
+        "wall_s": run["wall_s"],
+        "torch": torch.__version__,
+        "torchvision": torchvision.__version__,
+        "opencv": cv2.__version__,
+        "pretrained_weights": setup["base"].get("path"),
+        "base": setup["base"] or None,
+    }
+
+
+def write_json(path, document):
+    with open(path, "w") as out:
+        json.dump(document, out, indent=2)
         out.write("\n")
+
+
+def main(argv=None):
+    argv = sys.argv[1:] if argv is None else argv
+    args = parse_args(argv)
+    started = time.time()
+    rng = seed_everything(args)
+    train_stems, val_stems = read_lists(args)
+    photo_mm, target_mm, ground_mm = ground_scale(args, train_stems)
+    announce_scale(args, photo_mm, target_mm, ground_mm)
+    photos = load_photos(args, train_stems, photo_mm, target_mm)
+    weights, weights_method, frequencies = resolve_class_weights(args, photos)
+    print("class shares " + ", ".join(f"{n} {f:.1%}" for n, f in zip(args.class_names, frequencies))
+          + "; weights " + ", ".join(f"{n} {w:g}" for n, w in zip(args.class_names, weights)), flush=True)
+    val_pairs = [load_pair(args.images, args.masks, s, len(args.class_names)) for s in val_stems]
+    spec = model_spec(args, ground_mm)
+    model, base = build_model(args, ground_mm)
+    steps = step_count(args, len(train_stems))
+    print(f"{len(train_stems)} train / {len(val_stems)} val photos, {steps} steps of {args.batch} crops "
+          f"{args.crop[0]}x{args.crop[1]}, {sum(p.numel() for p in model.parameters())} parameters, "
+          f"{args.threads} threads", flush=True)
+
+    run = train_steps(model, Sampler(photos, args.crop, target_mm, args.zoom), steps, args.batch, args.lr, weights,
+                      rng, args.log_every, validation_line(args, spec, val_pairs), args.val_every)
+
+    onnx_path, net, figures = measure(args, model, spec, val_pairs, (train_stems, val_stems))
+    data = training_data(args, len(train_stems), base)
+    setup = {"steps": steps, "weights": weights, "weights_method": weights_method, "frequencies": frequencies,
+             "target_mm": target_mm, "ground_mm": ground_mm, "train_images": len(train_stems),
+             "val_images": len(val_stems), "base": base}
+    report = {"model": os.path.basename(onnx_path), "spec": spec, "licence": model_licence(data), "training_data": data,
+              "validation": figures["validation"], "training_set": figures["training_set"],
+              "report": overlays(args, net, spec, figures["validation"]), "export": figures["export"],
+              "inference": figures["inference"], "training": training_record(args, argv, run, setup)}
+    report["training"]["total_s"] = round(time.time() - started, 1)
+    json_path = os.path.join(args.out, args.name + ".json")
+    write_json(json_path, report)
+    save_checkpoint(os.path.join(args.out, args.name + ".pt"), model, args.class_names,
+                    {"ground_mm_per_px": spec["ground_mm_per_px"], "training_data": data, "licence": report["licence"]},
+                    width=WIDTH)
+    summarise(report, onnx_path)
+    if args.install:
+        try:
+            drop_in = install(onnx_path, json_path, args.name, args.install, figures["validation"]["zones"]["best"])
+        except OSError as error:
+            raise SystemExit(f"--install {args.install}: {error} (the model is in {args.out}; run as root?)")
+        print(f"installed into {os.path.abspath(args.install)}; {drop_in} selects it "
+              f"(check: weedsprayd --check-config)")
+
+
+def summarise(report, onnx_path):
     v = report["validation"]
-    print(f"{onnx_path}: val IoU {v['iou']} MIoU {v['miou']} MPA {v['mpa']}; zones best {v['zones']['best']}; "
-          f"forward {report['inference']['forward_ms_1_thread']} ms; OpenCV-torch diff {diff:.2e}", flush=True)
+    best = v["zones"]["best"]
+    intervals = v["intervals"]["iou"]
+    ious = ", ".join(f"{n} {x} [{'-' if intervals[n] is None else f'{intervals[n][0]}-{intervals[n][1]}'}]"
+                     for n, x in v["iou"].items())
+    print(f"{onnx_path}: validation IoU {ious}, MIoU {v['miou']}; zones at threshold {best['threshold']}: "
+          f"recall {best['recall']}, crop-only left dry {best['crop_only_left_dry']}, "
+          f"bare left dry {best['bare_left_dry']}; forward {report['inference']['forward_ms_1_thread']} ms; "
+          f"OpenCV-torch diff {report['export']['opencv_vs_torch_max_abs_diff']:.2e}; "
+          f"{format_seconds(report['training']['total_s'])} in all; worst photos in {report['report']['folder']}/",
+          flush=True)
 
 
 if __name__ == "__main__":
