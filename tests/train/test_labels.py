@@ -129,6 +129,24 @@ class LabelImport(unittest.TestCase):
         import_source(folder, self.out, mapping("0=soil,1=crop,2=weed,255=ignore"))
         np.testing.assert_array_equal(read_mask(self.out, "plot7"), [[0, 1, 1], [2, IGNORE, 0]])
 
+    def test_crop_only_labels_call_green_soil_weed(self):
+        import synthetic
+
+        field = os.path.join(self.dir, "field")
+        images, masks = synthetic.write_field(field, ["f1"])
+        crop_only = os.path.join(self.dir, "crop-only")
+        os.makedirs(crop_only)
+        truth = read_mask(masks, "f1")
+        cv2.imwrite(os.path.join(crop_only, "f1.png"), (truth == 1).astype(np.uint8))
+        import_source(crop_only, self.out, mapping("0=soil,1=crop"), images=images, green_soil="weed")
+        relabelled = read_mask(self.out, "f1")
+        np.testing.assert_array_equal(relabelled == 1, truth == 1)
+        weed = truth == 2
+        self.assertGreater(np.mean(relabelled[weed] == 2), 0.95)  # the unlabelled weeds
+        self.assertLess(np.mean(relabelled[truth == 0] == 2), 0.1)  # soil stays soil, but for a rim
+        with self.assertRaises(LabelError):
+            import_source(crop_only, self.out, mapping("0=soil,1=crop"), green_soil="weed")
+
     def test_labelme_polygons_later_over_earlier(self):
         document = {
             "imagePath": "../photos/row3.jpg", "imageHeight": 40, "imageWidth": 60,

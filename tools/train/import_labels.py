@@ -15,7 +15,12 @@ See labels.py for what each format may hold.
 Labels named like a class (soil, crop, weed) or "ignore" map to themselves; every other label
 needs a --map entry, or the run stops naming the file and the label. --unlabelled sets what the
 pixels outside every polygon are (LabelMe, COCO): soil (the default: label every plant) or
-ignore (label only some plants; the rest counts for nothing). Prints each mask's class shares.
+ignore (label only some plants; the rest counts for nothing). A set that labels only the crop
+(as ../shared/data/cauliflower) can name its green unlabelled pixels: --green-soil weed (or
+ignore). Prints each mask's class shares.
+
+    /usr/bin/python3 tools/train/import_labels.py ../shared/data/cauliflower/masks --out /tmp/cw \
+        --map 0=soil,1=crop --images ../shared/data/cauliflower/images --green-soil weed
 """
 
 import argparse
@@ -37,6 +42,9 @@ def parse_args(argv=None):
     parser.add_argument("--classes", default="soil,crop,weed", help="class names in class-id order (as train.py)")
     parser.add_argument("--labelmap", help="labelmap.txt naming mask colours (name:r,g,b::), if not in the export")
     parser.add_argument("--images", help="photo folder: check each mask has a photo of the same size")
+    parser.add_argument("--green-soil", metavar="CLASS",
+                        help="for sets that label only the crop: pixels labelled soil that a colour index "
+                             "calls green become CLASS (weed, or ignore); needs --images")
     return parser.parse_args(argv)
 
 
@@ -44,7 +52,8 @@ def main(argv=None):
     args = parse_args(argv)
     try:
         mapping = LabelMapping(args.classes.split(","), parse_map(args.map), args.unlabelled)
-        written = import_source(args.source, args.out, mapping, args.format, args.labelmap, args.images)
+        written = import_source(args.source, args.out, mapping, args.format, args.labelmap, args.images,
+                                args.green_soil)
     except LabelError as error:
         raise SystemExit(f"import_labels: {error}")
     for stem, shares in sorted(written.items()):

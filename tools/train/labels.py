@@ -373,22 +373,34 @@ def iter_masks(source, mapping, fmt="auto", labelmap=None):
 
 
 def check_against_image(images, stem, mask):
-    """Error unless images/STEM.* exists with the mask's size."""
+    """The photo images/STEM.* (BGR); error unless it exists with the mask's size."""
     from evaluate import IMAGE_SUFFIXES
 
     for suffix in IMAGE_SUFFIXES:
         path = os.path.join(images, stem + suffix)
         if os.path.exists(path):
-            image = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+            image = cv2.imread(path, cv2.IMREAD_COLOR)
             if image is None or image.shape[:2] != mask.shape:
                 found = "unreadable" if image is None else f"{image.shape[1]}x{image.shape[0]}"
                 raise LabelError(f"{path}: {found}, but its mask is {mask.shape[1]}x{mask.shape[0]}")
-            return
+            return image
     raise LabelError(f"--images {images}: no photo named {stem}.* for its mask")
 
 
-def import_source(source, out_dir, mapping, fmt="auto", labelmap=None, images=None):
-    """Writes out_dir/STEM.png for every mask of source; returns {stem: {class: pixel share}}."""
+def relabel_green_soil(mask, image, soil_id, green_id):
+    """Sets labelled-soil pixels that a colour index calls green to green_id (a set that labels
+    only the crop leaves its weeds as 'soil': they become weed, or ignore)."""
+    from datasets import green_mask
+
+    mask[(mask == soil_id) & green_mask(image)] = green_id
+
+
+def import_source(source, out_dir, mapping, fmt="auto", labelmap=None, images=None, green_soil=None):
+    """Writes out_dir/STEM.png for every mask of source; returns {stem: {class: pixel share}}.
+    green_soil (a class name or "ignore", needs images): what green pixels labelled soil become."""
+    if green_soil and not images:
+        raise LabelError("--green-soil needs --images (the photos say which pixels are green)")
+    green_id = None if not green_soil else mapping.class_id(green_soil, "--green-soil")
     with _unpacked(source) as folder:
         os.makedirs(out_dir, exist_ok=True)
         written = {}
@@ -396,7 +408,9 @@ def import_source(source, out_dir, mapping, fmt="auto", labelmap=None, images=No
             if stem in written:
                 raise LabelError(f"{source}: two masks for '{stem}'")
             if images:
-                check_against_image(images, stem, mask)
+                image = check_against_image(images, stem, mask)
+                if green_id is not None:
+                    relabel_green_soil(mask, image, mapping.class_id("soil", "--classes"), green_id)
             cv2.imwrite(os.path.join(out_dir, stem + ".png"), mask)
             written[stem] = class_shares(mask, mapping.classes)
     if not written:
