@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 #include <iterator>
+#include <numbers>
 #include <sstream>
 #include <tuple>
 
@@ -82,27 +83,27 @@ void check_model_spec(const Config& config) {
   }
 }
 
-std::string format_number(double value) {
+std::string spec_number_text(double value) {
   std::ostringstream out;
   out.precision(6);
   out << value;
   return out.str();
 }
 
-std::string format_mean(const std::array<double, 3>& mean) {
+std::string mean_text(const std::array<double, 3>& mean) {
   std::ostringstream out;
   out.precision(6);
   out << '[' << mean[0] << ", " << mean[1] << ", " << mean[2] << ']';
   return out.str();
 }
 
-std::string format_classes(const std::vector<std::string>& classes) {
+std::string classes_text(const std::vector<std::string>& classes) {
   std::string text = "[";
   for (std::size_t i = 0; i < classes.size(); ++i) text += (i ? ", \"" : "\"") + classes[i] + "\"";
   return text + "]";
 }
 
-bool close(double a, double b) {
+bool nearly_equal(double a, double b) {
   return std::abs(a - b) <= 1e-6 * std::max({1.0, std::abs(a), std::abs(b)});
 }
 
@@ -134,24 +135,24 @@ vision::DnnModelSpec merged_spec(const Config& config, const ModelDescription& m
   std::array<double, 3> mean{};
   for (std::size_t i = 0; i < 3 && i < v.model_mean.size(); ++i) mean[i] = v.model_mean[i];
   if (set("vision.model_mean") &&
-      !(close(mean[0], spec.mean_rgb[0]) && close(mean[1], spec.mean_rgb[1]) &&
-        close(mean[2], spec.mean_rgb[2]))) {
-    refuse("vision.model_mean", format_mean(mean), "spec.mean_rgb = " + format_mean(spec.mean_rgb));
+      !(nearly_equal(mean[0], spec.mean_rgb[0]) && nearly_equal(mean[1], spec.mean_rgb[1]) &&
+        nearly_equal(mean[2], spec.mean_rgb[2]))) {
+    refuse("vision.model_mean", mean_text(mean), "spec.mean_rgb = " + mean_text(spec.mean_rgb));
   }
-  if (set("vision.model_scale") && !close(v.model_scale, spec.scale)) {
-    refuse("vision.model_scale", format_number(v.model_scale),
-           "spec.scale = " + format_number(spec.scale));
+  if (set("vision.model_scale") && !nearly_equal(v.model_scale, spec.scale)) {
+    refuse("vision.model_scale", spec_number_text(v.model_scale),
+           "spec.scale = " + spec_number_text(spec.scale));
   }
   if (set("vision.model_rgb") && v.model_rgb != spec.rgb) {
     refuse("vision.model_rgb", v.model_rgb ? "true" : "false",
            spec.rgb ? "spec.rgb = true (R, G, B order)" : "spec.rgb = false (B, G, R order)");
   }
   if (set("vision.model_classes") && v.model_classes != spec.classes) {
-    refuse("vision.model_classes",
-           format_classes(v.model_classes) + " (" + std::to_string(v.model_classes.size()) +
-               " classes)",
-           "spec.classes = " + format_classes(spec.classes) + " (" +
-               std::to_string(spec.classes.size()) + " classes)");
+    refuse(
+        "vision.model_classes",
+        classes_text(v.model_classes) + " (" + std::to_string(v.model_classes.size()) + " classes)",
+        "spec.classes = " + classes_text(spec.classes) + " (" +
+            std::to_string(spec.classes.size()) + " classes)");
   }
   for (const auto& [key, ours, theirs, name] :
        {std::tuple{"vision.soil_class", v.soil_class, spec.soil_class, "spec.soil_class"},
@@ -226,8 +227,6 @@ std::shared_ptr<LoadedModel> read_model(const Config& config) {
 vision::PipelineConfig pipeline_config_with(const Config& config, const CameraSection& camera,
                                             const vision::DnnModelSpec& spec);
 
-constexpr double kPi = 3.14159265358979323846;
-
 // How a camera's view meets the model's ground scale: a GREY camera cannot feed a colour
 // network, a camera much coarser than the model hides the weeds it learnt, and a view that
 // needs a larger input than vision.max_network_pixels costs more than a frame's time.
@@ -256,23 +255,23 @@ void check_camera_against_model(const Config& config, std::size_t i,
   // learnt from (its zoom augmentation spans well under 2x).
   constexpr double kMaxCoarser = 2.0;
   if (input.scale > kMaxCoarser) {
-    throw VisionKeyError(geometry, which + " sees " + format_number(frame_mm) +
+    throw VisionKeyError(geometry, which + " sees " + spec_number_text(frame_mm) +
                                        " mm per pixel on the ground, " +
-                                       format_number(input.scale) + "x coarser than the " +
-                                       format_number(spec.ground_mm_per_px) + " mm/px " + model +
+                                       spec_number_text(input.scale) + "x coarser than the " +
+                                       spec_number_text(spec.ground_mm_per_px) + " mm/px " + model +
                                        " learnt at (more than 2x): mount it lower, narrow its "
                                        "view, or train for this scale (tools/train/train.py "
                                        "--target-mm-per-px " +
-                                       format_number(frame_mm) + ")");
+                                       spec_number_text(frame_mm) + ")");
   }
   if (input.pixels() > config.vision.max_network_pixels) {
     throw VisionKeyError(geometry,
                          which + "'s " + std::to_string(region_w) + "x" + std::to_string(region_h) +
-                             " px at " + format_number(frame_mm) + " mm/px needs a " +
+                             " px at " + spec_number_text(frame_mm) + " mm/px needs a " +
                              std::to_string(input.width) + "x" + std::to_string(input.height) +
                              " network input to match "
                              "the " +
-                             format_number(spec.ground_mm_per_px) + " mm/px " + model +
+                             spec_number_text(spec.ground_mm_per_px) + " mm/px " + model +
                              " learnt at, more than "
                              "vision.max_network_pixels (" +
                              std::to_string(config.vision.max_network_pixels) +
@@ -292,8 +291,9 @@ double camera_ground_mm_per_px(const CameraSection& camera) {
   if (camera.ground_mm_per_px > 0.0) return camera.ground_mm_per_px;
   // The optical axis meets the ground at range h / cos(tilt); one pixel subtends vfov / height
   // (square pixels), so across travel it covers range x that angle.
-  const double range_m = camera.mount_height_m / std::cos(camera.tilt_deg * kPi / 180.0);
-  const double pixel_rad = camera.vfov_deg * kPi / 180.0 / camera.height;
+  const double range_m =
+      camera.mount_height_m / std::cos(camera.tilt_deg * std::numbers::pi / 180.0);
+  const double pixel_rad = camera.vfov_deg * std::numbers::pi / 180.0 / camera.height;
   return range_m * pixel_rad * 1000.0;
 }
 
