@@ -6,6 +6,7 @@
 #include "daemon/config/config.hpp"
 #include "daemon/config/config_schema.hpp"
 #include "daemon/config/options.hpp"
+#include "daemon/config/vision_config.hpp"
 #include "daemon/run.hpp"
 
 int main(int argc, char** argv) {
@@ -66,6 +67,7 @@ int main(int argc, char** argv) {
         std::cout << "configuration OK:";
         for (const auto& file : config.files) std::cout << " " << file;
         std::cout << "\n";
+        for (const auto& line : describe_model_use(config)) std::cout << line << "\n";
       }
       return 0;
     } catch (const ConfigError& error) {

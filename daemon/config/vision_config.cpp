@@ -227,6 +227,13 @@ std::shared_ptr<LoadedModel> read_model(const Config& config) {
 vision::PipelineConfig pipeline_config_with(const Config& config, const CameraSection& camera,
                                             const vision::DnnModelSpec& spec);
 
+// The pixels of a camera's frame the pipeline looks at (its region of interest).
+std::pair<int, int> region_size(const CameraSection& camera) {
+  const vision::RegionOfInterest roi = vision::default_pipeline_config().roi;
+  return {static_cast<int>(std::lround((roi.right - roi.left) * camera.width)),
+          static_cast<int>(std::lround((roi.bottom - roi.top) * camera.height))};
+}
+
 // How a camera's view meets the model's ground scale: a GREY camera cannot feed a colour
 // network, a camera much coarser than the model hides the weeds it learnt, and a view that
 // needs a larger input than vision.max_network_pixels costs more than a frame's time.
@@ -243,9 +250,7 @@ void check_camera_against_model(const Config& config, std::size_t i,
   }
   if (spec.fixed_input || !(spec.ground_mm_per_px > 0.0)) return;
   const double frame_mm = camera_ground_mm_per_px(camera);
-  const vision::RegionOfInterest roi = vision::default_pipeline_config().roi;
-  const int region_w = static_cast<int>(std::lround((roi.right - roi.left) * camera.width));
-  const int region_h = static_cast<int>(std::lround((roi.bottom - roi.top) * camera.height));
+  const auto [region_w, region_h] = region_size(camera);
   const vision::NetworkInputSize input =
       vision::network_input_size(spec, frame_mm, region_w, region_h);
   const std::string geometry = config.sources.count(which + ".ground_mm_per_px")
@@ -326,6 +331,32 @@ vision::PipelineConfig pipeline_config_with(const Config& config, const CameraSe
 }
 
 }  // namespace
+
+std::vector<std::string> describe_model_use(const Config& config) {
+  std::vector<std::string> lines;
+  if (!config.model) return lines;
+  const vision::DnnModelSpec& spec = config.model->spec;
+  for (std::size_t i = 0; i < config.cameras.size(); ++i) {
+    const vision::PipelineConfig pipeline = pipeline_config(config, config.cameras[i]);
+    const auto [region_w, region_h] = region_size(config.cameras[i]);
+    const vision::NetworkInputSize input =
+        vision::network_input_size(spec, pipeline.frame_mm_per_px, region_w, region_h);
+    std::ostringstream line;
+    line.precision(3);
+    line << "camera[" << i << "]: " << pipeline.frame_mm_per_px << " mm/px -> "
+         << config.model->path.filename().string() << " (";
+    if (spec.ground_mm_per_px > 0.0) {
+      line << "learnt at " << spec.ground_mm_per_px << " mm/px";
+    } else {
+      line << "ground scale not stated";
+    }
+    if (!config.model->licence.empty()) line << "; " << config.model->licence;
+    line << "): network input " << input.width << "x" << input.height
+         << (spec.fixed_input || !(spec.ground_mm_per_px > 0.0) ? " (squeezed)" : "");
+    lines.push_back(line.str());
+  }
+  return lines;
+}
 
 std::vector<std::filesystem::path> model_search_dirs(const std::string& set_in_file) {
   std::vector<std::filesystem::path> dirs;

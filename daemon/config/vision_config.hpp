@@ -31,6 +31,11 @@ namespace weedspray::daemon {
                                                      const CameraSection& camera,
                                                      const LoadedModel* model = nullptr);
 
+// One line per camera saying how its frames meet the weed model: "camera[0]: 1.01 mm/px ->
+// weed-peanut.onnx (0.94 mm/px, CC BY-SA 4.0 ...): network input 1376x864"; empty when the weed
+// source needs no model.
+[[nodiscard]] std::vector<std::string> describe_model_use(const Config& config);
+
 // Folders a relative vision.model is looked up in, in order: the folder of the file that set
 // it (when it was set in a file), the installed models, and a build tree's models/.
 [[nodiscard]] std::vector<std::filesystem::path> model_search_dirs(const std::string& set_in_file);

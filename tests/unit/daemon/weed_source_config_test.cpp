@@ -125,6 +125,18 @@ TEST_F(OwnModel, PipelineGetsTheModelsSpecAndGroundDistancesInPixels) {
   EXPECT_DOUBLE_EQ(c.frame_mm_per_px, camera_ground_mm_per_px(config.cameras[0]));
 }
 
+TEST_F(OwnModel, CheckConfigSaysHowEachCameraMeetsTheModel) {
+  describe(kBgrSpec);
+  // 1.008 mm/px to the model's 2 mm/px: 1280 x 800 -> 645 x 403 -> 640 x 416 (strides of 32).
+  const auto lines = describe_model_use(parse_weed_config(dnn()));
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_NE(lines[0].find("camera[0]: 1.01 mm/px -> own.onnx (learnt at 2 mm/px; MIT): network "
+                          "input 640x416"),
+            std::string::npos)
+      << lines[0];
+  EXPECT_TRUE(describe_model_use(parse_weed_config("")).empty());
+}
+
 TEST_F(OwnModel, KeysThatDisagreeWithTheModelAreRefusedByName) {
   describe(kBgrSpec);
   const std::vector<std::tuple<std::string, std::string, int>> cases = {
