@@ -4,6 +4,7 @@ import contextlib
 import io
 import json
 import os
+import subprocess
 import tempfile
 import unittest
 
@@ -101,6 +102,20 @@ class SmallSetTraining(unittest.TestCase):
             drop_in = text.read()
         self.assertIn('[vision]\nweed_source = "dnn"\n', drop_in)
         self.assertIn(f'model = "{os.path.join(os.path.abspath(self.etc), "tiny.onnx")}"', drop_in)
+
+    @unittest.skipUnless(os.environ.get("WEEDSPRAYD"), "WEEDSPRAYD (the built daemon) not given")
+    def test_the_daemon_accepts_the_installed_model(self):
+        """The JSON train.py writes is the spec the daemon reads: --check-config loads the
+        installed model through the drop-in and says how the default camera meets it."""
+        main = os.path.join(self.etc, "weedspray.toml")
+        with open(main, "w") as out:
+            out.write("# the defaults\n")
+        checked = subprocess.run([os.environ["WEEDSPRAYD"], "--check-config", "--config", main],
+                                 capture_output=True, text=True)
+        self.assertEqual(checked.returncode, 0, checked.stderr)
+        self.assertIn("configuration OK", checked.stdout)
+        self.assertRegex(checked.stdout, r"camera\[0\]: 1.01 mm/px -> tiny.onnx "
+                                         r"\(learnt at [0-9.]+ mm/px; .*\): network input \d+x\d+\n")
 
     def test_epochs_without_scale_from_a_checkpoint(self):
         log = run(train.main, self.common("again") + [
