@@ -31,10 +31,8 @@ WeedNetwork::WeedNetwork(const DnnModelSpec& spec, std::span<const std::uint8_t>
 
   // One forward pass at the spec's size, fed as is: the shapes are known only by running it.
   const cv::Mat probe(spec_.input_height, spec_.input_width, CV_8UC3, cv::Scalar::all(0));
-  const double scale = frame_mm_per_px_;
-  frame_mm_per_px_ = 0.0;
   try {
-    segment(probe, false);
+    segment_at(probe, false, probe.size());
   } catch (const cv::Exception& error) {
     reject("forward pass at " + std::to_string(spec_.input_width) + "x" +
            std::to_string(spec_.input_height) + " failed (" + error.what() + ")");
@@ -49,11 +47,19 @@ WeedNetwork::WeedNetwork(const DnnModelSpec& spec, std::span<const std::uint8_t>
     reject("output shape " + shape + " is not 1 x " + std::to_string(classes) +
            " classes x H x W (classes lists " + std::to_string(classes) + " classes)");
   }
-  frame_mm_per_px_ = scale;
-  image_size_ = {};
 }
 
 const cv::Mat& WeedNetwork::segment(const cv::Mat& image, bool image_is_rgb) {
+  if (image.size() != image_size_) {
+    const NetworkInputSize input =
+        network_input_size(spec_, frame_mm_per_px_, image.cols, image.rows);
+    image_size_ = image.size();
+    input_size_ = cv::Size(input.width, input.height);
+  }
+  return segment_at(image, image_is_rgb, input_size_);
+}
+
+const cv::Mat& WeedNetwork::segment_at(const cv::Mat& image, bool image_is_rgb, cv::Size size) {
   // blobFromImage subtracts the mean given in the network's channel order (after the swap).
   const auto& m = spec_.mean_rgb;
   const cv::Scalar mean = spec_.rgb ? cv::Scalar(m[0], m[1], m[2]) : cv::Scalar(m[2], m[1], m[0]);
@@ -63,13 +69,6 @@ const cv::Mat& WeedNetwork::segment(const cv::Mat& image, bool image_is_rgb) {
   // which aliases fine weeds away when shrinking a frame 3x. (Bilinear to twice the input
   // then 2x2 averaging is 4 ms faster at 1280x800 and scored the same MIoU within 0.001,
   // but moved the zone trade-off by a couple of zones.)
-  if (image.size() != image_size_) {
-    const NetworkInputSize input =
-        network_input_size(spec_, frame_mm_per_px_, image.cols, image.rows);
-    image_size_ = image.size();
-    input_size_ = cv::Size(input.width, input.height);
-  }
-  const cv::Size size = input_size_;
   const bool shrinking = size.width <= image.cols && size.height <= image.rows;
   cv::resize(image, resized_, size, 0, 0, shrinking ? cv::INTER_AREA : cv::INTER_LINEAR);
   cv::dnn::blobFromImage(resized_, blob_, spec_.scale, size, mean, swap, false);

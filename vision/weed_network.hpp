@@ -32,6 +32,9 @@ class WeedNetwork {
   const DnnModelSpec& spec() const { return spec_; }
 
  private:
+  // segment() at a given network input size.
+  const cv::Mat& segment_at(const cv::Mat& image, bool image_is_rgb, cv::Size size);
+
   DnnModelSpec spec_;
   double frame_mm_per_px_ = 0.0;
   cv::Size image_size_;  // the last image's size and the network input it maps to

@@ -1,6 +1,7 @@
 #include "io/sim/ground_mosaic.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
@@ -28,7 +29,9 @@ cv::Mat lay_ground(const GroundScale& scale, const std::function<cv::Mat()>& nex
       if (photo.empty()) throw std::invalid_argument("lay_ground: an empty photo");
       if (frame.empty()) frame = cv::Mat::zeros(scale.frame, photo.type());
       cv::Mat resampled;
-      cv::resize(photo, resampled, cv::Size(), factor, factor, interpolation);
+      const cv::Size size(std::max(1, static_cast<int>(std::lround(photo.cols * factor))),
+                          std::max(1, static_cast<int>(std::lround(photo.rows * factor))));
+      cv::resize(photo, resampled, size, 0, 0, interpolation);
       const int w = std::min(resampled.cols, scale.frame.width - x);
       const int h = std::min(resampled.rows, scale.frame.height - y);
       if (w < 1 || h < 1) break;

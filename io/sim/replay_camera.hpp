@@ -29,8 +29,8 @@ struct ReplayCameraConfig {
   // Speeds below this do not produce frames (standing still: the camera sees the same patch).
   double min_speed_m_per_s = 0.05;
   // Images only: when set (source_mm_per_px > 0), each frame is the ground at the camera's
-  // scale, consecutive images resampled and laid edge to edge to fill it (lay_ground); else
-  // each image is one frame as it is.
+  // scale, consecutive images resampled and laid edge to edge to fill it (lay_ground; within a
+  // frame the list wraps round to its first image); else each image is one frame as it is.
   double source_mm_per_px = 0.0;
   double frame_mm_per_px = 0.0;
   int frame_width = 0;

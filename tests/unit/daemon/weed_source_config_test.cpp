@@ -205,9 +205,9 @@ TEST_F(OwnModel, TheCamerasGroundScaleMustSuitTheModel) {
   EXPECT_NE(std::string(coarse.what()).find("more than 2x"), std::string::npos) << coarse.what();
   const auto high = parse_error(dnn("[[camera]]\nmount_height_m = 5.0\n"));
   EXPECT_EQ(high.key(), "camera[0].mount_height_m");
-  // 0.5 mm/px over 1280x800 needs 320x200 -> 320x192 at 2 mm/px; 0.1 mm/px needs 64x40.
+  // 5 m up: 5.04 mm/px, 2.5x coarser. 0.5 mm/px over 1280x800 needs 320x192 at 2 mm/px.
   EXPECT_NO_THROW((void)parse_weed_config(dnn("[[camera]]\nground_mm_per_px = 0.5\n")));
-  // 4 mm/px against a 0.1 mm/px model: 51200 x 32000 network pixels, over the budget.
+  // 0.15 mm/px against a 0.1 mm/px model: 1920 x 1200 network pixels, over 1.5 M.
   describe(std::string(kBgrSpec).replace(std::string(kBgrSpec).find("2.0"), 3, "0.1"));
   const auto big = parse_error(dnn("[[camera]]\nground_mm_per_px = 0.15\n"));
   EXPECT_EQ(big.key(), "camera[0].ground_mm_per_px");
