@@ -9,6 +9,7 @@ import unittest
 import cv2
 import numpy as np
 
+import few_shot
 import split
 from synthetic import field_photo
 
@@ -50,6 +51,21 @@ class NearDuplicates(unittest.TestCase):
             self.assertFalse(train & val)
             self.assertEqual("p03" in val, "p10" in val, f"seed {seed}")
             self.assertIn("p03 p10", printed.getvalue())
+
+    def test_few_shot_cut_leaves_out_photos_of_the_validation_plants(self):
+        lists = {name: os.path.join(self.tmp.name, name + ".txt") for name in ("pool", "val", "few", "unshared")}
+        with open(lists["pool"], "w") as out:
+            out.write("".join(f"p{i:02d}\n" for i in (0, 1, 2, 3, 4, 5, 6)))
+        with open(lists["val"], "w") as out:
+            out.write("p07\np08\np10\n")  # p10 shows p03's plants
+        with contextlib.redirect_stdout(io.StringIO()):
+            few_shot.main(["--images", self.images, "--pool", lists["pool"], "--val-list", lists["val"],
+                           "--count", "6", "--seed", "1", "--out", lists["few"], "--val-out", lists["unshared"]])
+        self.assertEqual(read_stems(lists["few"]), {"p00", "p01", "p02", "p04", "p05", "p06"})
+        self.assertEqual(read_stems(lists["unshared"]), {"p07", "p08"})
+        with self.assertRaises(SystemExit):  # only 6 pool photos share no plants with validation
+            few_shot.main(["--images", self.images, "--pool", lists["pool"], "--val-list", lists["val"],
+                           "--count", "7", "--seed", "1", "--out", lists["few"]])
 
     def test_only_photos_with_masks(self):
         masks = os.path.join(self.tmp.name, "masks")

@@ -98,7 +98,8 @@ def network_input_size(spec, frame_mm_per_px, width, height):
 def to_blob(bgr, spec, size=None):
     """N=1 x 3 x H x W float blob of a BGR frame at size (default: the spec's input size)."""
     size = size or (spec["input_width"], spec["input_height"])
-    resized = cv2.resize(bgr, size, interpolation=cv2.INTER_AREA)
+    shrinking = size[0] <= bgr.shape[1] and size[1] <= bgr.shape[0]  # as the daemon resamples
+    resized = cv2.resize(bgr, size, interpolation=cv2.INTER_AREA if shrinking else cv2.INTER_LINEAR)
     return cv2.dnn.blobFromImage(resized, spec["scale"], size, tuple(spec["mean_rgb"]), swapRB=spec["rgb"])
 
 
