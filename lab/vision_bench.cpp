@@ -15,6 +15,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "daemon/config/config.hpp"
+#include "daemon/config/vision_config.hpp"
 #include "daemon/sprayer/snapshot_handoff.hpp"
 #include "lab/vision_dataset.hpp"
 #include "lab/vision_tools.hpp"
@@ -35,6 +37,7 @@ struct BenchOptions {
   int crop_margin_px = kDefaultCropMarginPx;
   int frames = 500;
   int warmup = 20;
+  double frame_mm_per_px = -1.0;  // < 0: the default camera's ground scale
   bool json = false;
 };
 
@@ -154,6 +157,12 @@ int run_bench(const BenchOptions& options) {
   config.cols = 4;
   config.weed_source = parse_weed_source_option("--pipeline", options.pipeline);
   config.crop_margin_px = options.crop_margin_px;
+  // The frame's ground scale decides the network input (the daemon resamples to the model's
+  // scale): the default camera's unless given; 0 squeezes the frame to the spec's input size.
+  config.frame_mm_per_px =
+      options.frame_mm_per_px >= 0
+          ? options.frame_mm_per_px
+          : daemon::camera_ground_mm_per_px(daemon::default_config().cameras.front());
   WeedModel model;
   if (!options.model.empty()) {
     model = read_weed_model(options.model);
@@ -189,13 +198,18 @@ int run_bench(const BenchOptions& options) {
     png_bytes = daemon::overlay_png(*handoff.ready(), duties).size();
   });
   const std::string name(to_string(config.weed_source));
+  const vision::NetworkInputSize input =
+      vision::network_input_size(config.dnn, config.frame_mm_per_px, kFrameWidth, kFrameHeight);
   if (options.json) {
     std::printf(
         "{\"frame\": \"%dx%d\", \"pipeline\": \"%s\", \"threads\": 1, "
-        "\"pipeline_ms_median\": %.4f, \"pipeline_ms_p99\": %.4f",
-        kFrameWidth, kFrameHeight, name.c_str(), ours.median_ms, ours.p99_ms);
+        "\"pipeline_ms_median\": %.4f, \"pipeline_ms_p99\": %.4f, "
+        "\"pipeline_thread_cpu_ms_median\": %.4f",
+        kFrameWidth, kFrameHeight, name.c_str(), ours.median_ms, ours.p99_ms, ours.cpu_median_ms);
     if (vision::needs_model(config.weed_source)) {
-      std::printf(", \"model_input\": \"%dx%d\"", config.dnn.input_width, config.dnn.input_height);
+      std::printf(
+          ", \"frame_mm_per_px\": %.4f, \"model_mm_per_px\": %.4f, \"model_input\": \"%dx%d\"",
+          config.frame_mm_per_px, config.dnn.ground_mm_per_px, input.width, input.height);
     }
     if (vegetation) std::printf(", \"opencv_baseline_ms_median\": %.4f", opencv.median_ms);
     std::printf(", \"snapshot_copy_ms_median\": %.4f, \"snapshot_png_ms_median\": %.4f}\n",
@@ -209,8 +223,9 @@ int run_bench(const BenchOptions& options) {
       std::string(to_string(config.threshold)).c_str(), config.rows, config.cols, name.c_str(),
       options.frames, options.warmup);
   if (vision::needs_model(config.weed_source)) {
-    std::printf("model %s at %dx%d%s\n", options.model.c_str(), config.dnn.input_width,
-                config.dnn.input_height,
+    std::printf("model %s (%.2f mm/px) on frames of %.2f mm/px: network input %dx%d%s\n",
+                options.model.c_str(), config.dnn.ground_mm_per_px, config.frame_mm_per_px,
+                input.width, input.height,
                 model.spec_from_json ? "" : " (no .json beside it: default spec)");
   }
   std::printf(
@@ -253,6 +268,11 @@ void add_bench_vision_command(CLI::App& app) {
                    "Field image scaled to 1280x800 (default: the first image of "
                    "$WEEDSPRAY_DATA_DIR/ews-train/images, else a seeded synthetic field)")
       ->check(CLI::ExistingFile);
+  bench
+      ->add_option("--frame-mm-per-px", options->frame_mm_per_px,
+                   "Ground mm per frame pixel (default: the default camera's, from its mount "
+                   "height, tilt and field of view; 0: squeeze the frame to the model's input)")
+      ->check(CLI::NonNegativeNumber);
   bench->add_option("--frames", options->frames, "Timed frames")->capture_default_str();
   bench->add_option("--warmup", options->warmup, "Untimed warm-up frames")->capture_default_str();
   bench->add_flag("--json", options->json, "Print one JSON object");
