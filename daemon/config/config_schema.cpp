@@ -123,12 +123,12 @@ const std::vector<KeySpec<Config>>& config_keys() {
      {"vegetation", "inter_row", "dnn", "hybrid"}},
     {WS_KEY(vision, row_band_cm), 30.0, 1, 500, "cm",
      "inter_row: width on the ground of the band around each crop row that counts as crop "
-     "(converted to a share of the image width, which spans the camera's nozzle_count x "
-     "boom.nozzle_width_m)"},
+     "(converted to pixels with the camera's ground scale, camera.ground_mm_per_px or its "
+     "mount geometry)"},
     {WS_KEY(vision, crop_margin_cm), 2.0, 0, 50, "cm",
      "hybrid: the network's crop mask is grown by this much on the ground before it is removed "
-     "from the vegetation (converted to pixels of the camera's configured width, which spans "
-     "its nozzle_count x boom.nozzle_width_m)"},
+     "from the vegetation (converted to pixels with the camera's ground scale, "
+     "camera.ground_mm_per_px or its mount geometry)"},
     {WS_KEY(vision, model), std::string("weed-peanut.onnx"), 0, 0, "path",
      "dnn, hybrid: the segmentation network, an ONNX file OpenCV DNN loads (checked with one "
      "forward pass at load), with its spec in NAME.json beside it (input size, normalisation, "

@@ -28,8 +28,9 @@ std::string centimetres(double metres) {
   return out.str();
 }
 
-double camera_ground_width_m(const Config& config, const CameraSection& camera) {
-  return camera.nozzle_count * config.boom.nozzle_width_m;
+// What the camera sees across its frame, from its ground scale.
+double camera_view_width_m(const CameraSection& camera) {
+  return camera_ground_mm_per_px(camera) * camera.width / 1000.0;
 }
 
 vision::DnnModelSpec dnn_spec(const VisionSection& vision) {
@@ -288,10 +289,6 @@ void check_camera_against_model(const Config& config, std::size_t i,
 
 }  // namespace
 
-double ground_m_per_px(const Config& config, const CameraSection& camera) {
-  return camera_ground_width_m(config, camera) / camera.width;
-}
-
 double camera_ground_mm_per_px(const CameraSection& camera) {
   if (camera.ground_mm_per_px > 0.0) return camera.ground_mm_per_px;
   // The optical axis meets the ground at range h / cos(tilt); one pixel subtends vfov / height
@@ -321,12 +318,10 @@ vision::PipelineConfig pipeline_config_with(const Config& config, const CameraSe
   c.rows = v.grid_rows;
   c.cols = camera.nozzle_count;
   c.weed_source = vision::parse_weed_source(v.weed_source).value_or(c.weed_source);
-  c.inter_row_rule.row_band_fraction =
-      v.row_band_cm / 100.0 / camera_ground_width_m(config, camera);
+  c.inter_row_rule.row_band_fraction = v.row_band_cm / 100.0 / camera_view_width_m(camera);
   c.dnn = spec;
   c.frame_mm_per_px = camera_ground_mm_per_px(camera);
-  c.crop_margin_px =
-      static_cast<int>(std::lround(v.crop_margin_cm / 100.0 / ground_m_per_px(config, camera)));
+  c.crop_margin_px = static_cast<int>(std::lround(v.crop_margin_cm * 10.0 / c.frame_mm_per_px));
   return c;
 }
 
@@ -386,11 +381,12 @@ std::shared_ptr<const LoadedModel> check_weed_source(const Config& config) {
   for (std::size_t i = 0; i < config.cameras.size(); ++i) {
     const auto& camera = config.cameras[i];
     const std::string which = "camera[" + std::to_string(i) + "]";
-    const double view_m = camera_ground_width_m(config, camera);
+    const double view_m = camera_view_width_m(camera);
     if (*source == vision::WeedSource::kInterRow && config.vision.row_band_cm / 100.0 >= view_m) {
-      throw VisionKeyError("vision.row_band_cm", "is as wide as " + which + "'s view (" +
-                                                     centimetres(view_m) +
-                                                     ": nozzle_count x boom.nozzle_width_m)");
+      throw VisionKeyError("vision.row_band_cm",
+                           "is as wide as " + which + "'s view (" + centimetres(view_m) +
+                               " across at " + spec_number_text(camera_ground_mm_per_px(camera)) +
+                               " mm/px)");
     }
     if (model) check_camera_against_model(config, i, spec, model->path.filename().string());
     try {

@@ -15,10 +15,6 @@
 
 namespace weedspray::daemon {
 
-// Ground width of one pixel of a camera's configured frame: the frame's width spans the
-// nozzles it steers (one zone column per nozzle), nozzle_count x boom.nozzle_width_m.
-[[nodiscard]] double ground_m_per_px(const Config& config, const CameraSection& camera);
-
 // Ground size of one pixel of a camera's frame at the image centre, across travel, in mm:
 // camera.ground_mm_per_px, or from its mount height, tilt and vertical field of view.
 [[nodiscard]] double camera_ground_mm_per_px(const CameraSection& camera);

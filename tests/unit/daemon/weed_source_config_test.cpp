@@ -104,17 +104,17 @@ class OwnModel : public ::testing::Test {
 
 TEST_F(OwnModel, PipelineGetsTheModelsSpecAndGroundDistancesInPixels) {
   describe(kBgrSpec);
-  // 4 nozzles x 0.5 m across 1280 px: 1.5625 mm per pixel for the zones' ground distances.
-  const Config config = parse_weed_config(dnn("crop_margin_cm = 2.0\nrow_band_cm = 30.0\n"));
+  // The camera's own ground scale converts ground distances, not the nozzles' span (4 x 0.5 m).
+  const Config config = parse_weed_config(dnn("crop_margin_cm = 2.0\nrow_band_cm = 30.0\n") +
+                                          "[[camera]]\nground_mm_per_px = 1.25\n");
   ASSERT_EQ(config.cameras.size(), 1U);
   ASSERT_NE(config.model, nullptr);
   EXPECT_EQ(config.model->licence, "MIT");
-  EXPECT_DOUBLE_EQ(ground_m_per_px(config, config.cameras[0]), 2.0 / 1280);
   const vision::PipelineConfig c = pipeline_config(config, config.cameras[0]);
   EXPECT_EQ(c.weed_source, vision::WeedSource::kDnn);
   EXPECT_EQ(c.cols, 4);
-  EXPECT_EQ(c.crop_margin_px, 13);  // 20 mm / 1.5625 mm = 12.8
-  EXPECT_DOUBLE_EQ(c.inter_row_rule.row_band_fraction, 0.15);
+  EXPECT_EQ(c.crop_margin_px, 16);                               // 20 mm / 1.25 mm
+  EXPECT_DOUBLE_EQ(c.inter_row_rule.row_band_fraction, 0.1875);  // 30 cm of 1280 x 1.25 mm
   EXPECT_FALSE(c.dnn.rgb);
   EXPECT_EQ(c.dnn.weed_class, 1);
   EXPECT_EQ(c.dnn.crop_class, 2);
