@@ -569,4 +569,13 @@ bool overrides_model_spec(std::string_view full_name) {
   return std::find(kKeys.begin(), kKeys.end(), full_name) != kKeys.end();
 }
 
+bool is_safety_limit(std::string_view full_name) {
+  static constexpr std::array<std::string_view, 10> kKeys = {
+      "alarms.over_pressure_mpa",   "alarms.sensor_fault_low_ma",  "alarms.sensor_fault_high_ma",
+      "alarms.sensor_fault_hold_s", "alarms.blocked_pressure_mpa", "alarms.blocked_flow_l_per_min",
+      "alarms.no_flow_l_per_min",   "alarms.debounce_s",           "alarms.tank_empty_pct",
+      "alarms.camera_stall_s"};
+  return std::find(kKeys.begin(), kKeys.end(), full_name) != kKeys.end();
+}
+
 }  // namespace weedspray::daemon
