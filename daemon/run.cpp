@@ -288,6 +288,7 @@ class Daemon final : public CommandHandler {
 
   CommandResult clear_alarms() override {
     const AlarmMask cleared = alarms_.clear();
+    if (sprayer_) sprayer_->resume_heartbeat();
     ++trip_reset_;
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
       const auto id = static_cast<AlarmId>(i);
@@ -643,6 +644,9 @@ class Daemon final : public CommandHandler {
     if (alarms_.fault_latched() && state_.state() != SprayerState::kFault) {
       transition(StateEvent::kFault, "alarm");
     }
+    // A latched Fault stops the heartbeat: the external relay cuts valves and pump whatever the
+    // outputs do. ClearAlarms lets it beat again.
+    if (alarms_.fault_latched()) sprayer_->stop_heartbeat();
     if (state_.state() == SprayerState::kSpraying) {
       if (!was_spraying_) spraying_since_ = now;
       was_spraying_ = true;

@@ -4,6 +4,7 @@
 // the alarm evaluation latches pressure_sensor_fault, a Fault.
 #include <gtest/gtest.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -86,6 +87,34 @@ TEST(SensorCut, ACutWireWhileSprayingIsASensorFaultPumpOffValvesClosed) {
   EXPECT_TRUE(alarms.fault_latched());
   // Still safe: the pump stays off and the valves closed while the wire is cut.
   EXPECT_TRUE(safe()) << backends.describe_outputs();
+  sprayer.stop();
+}
+
+// The pump relay refuses the pressure loop's safe write after a sensor fault: the pump may
+// still run, so the heartbeat stops and the external relay cuts valves and pump.
+TEST(SensorCut, ARefusedPumpWriteStopsTheHeartbeat) {
+  SprayingMachine m(1.0);
+  m.start();
+  Backends& backends = m.backends;
+  Sprayer& sprayer = *m.sprayer;
+  ASSERT_TRUE(run_until(
+      backends, [&] { return sprayer.pressure().pump_on; }, 5s));
+  EXPECT_FALSE(sprayer.pwm().heartbeat_stopped);
+  const std::uint64_t toggles = sprayer.pwm().heartbeat_toggles;
+  EXPECT_TRUE(run_until(
+      backends, [&] { return sprayer.pwm().heartbeat_toggles > toggles; }, 1s))
+      << "the heartbeat beats while all is well";
+  backends.fail_output_writes(OutputRole::kPump, EIO, 0);
+  backends.with_plant(
+      [](control::plant::HydraulicPlant& plant) { plant.set_sensor_wire_broken(true); });
+  EXPECT_TRUE(run_until(
+      backends, [&] { return sprayer.pwm().heartbeat_stopped; }, 300ms));
+  EXPECT_EQ(backends.heartbeat->safe_mask(), 0U);
+  const std::uint64_t stopped_at = sprayer.pwm().heartbeat_toggles;
+  run_until(
+      backends, [] { return false; }, 200ms);
+  EXPECT_EQ(sprayer.pwm().heartbeat_toggles, stopped_at) << "no beat after the stop";
+  backends.fail_output_writes(OutputRole::kPump, 0, 0);
   sprayer.stop();
 }
 
