@@ -28,6 +28,7 @@
 #include "daemon/bus/dbus_service.hpp"
 #include "daemon/bus/status.hpp"
 #include "daemon/config/config.hpp"
+#include "daemon/config/live_reload.hpp"
 #include "daemon/logging.hpp"
 #include "daemon/records/as_applied_log.hpp"
 #include "daemon/records/map_geometry.hpp"
@@ -83,17 +84,6 @@ Config load_with_overrides(const Options& options) {
   }
   if (!options.state_dir.empty()) config.daemon.state_dir = options.state_dir;
   return config;
-}
-
-// Keys applied live on reload; every other change waits for a restart.
-Config with_live_sections_of(Config target, const Config& live_from) {
-  target.spray = live_from.spray;
-  target.alarms = live_from.alarms;
-  target.pressure.setpoint_mpa = live_from.pressure.setpoint_mpa;
-  target.daemon.log_level = live_from.daemon.log_level;
-  target.daemon.autostart = live_from.daemon.autostart;
-  target.daemon.status_max_rate_hz = live_from.daemon.status_max_rate_hz;
-  return target;
 }
 
 class Daemon final : public CommandHandler {
@@ -268,9 +258,9 @@ class Daemon final : public CommandHandler {
   }
 
   CommandResult reload_config() override {
-    Config fresh;
+    LiveReload reload;
     try {
-      fresh = load_with_overrides(options_);
+      reload = apply_live_reload(config_, load_with_overrides(options_));
     } catch (const ConfigError& error) {
       spdlog::error("reload refused, running configuration kept: {}", error.what());
       return {kErrorConfig, error.what()};
@@ -278,13 +268,15 @@ class Daemon final : public CommandHandler {
       spdlog::error("reload refused, running configuration kept: {}", error.what());
       return {kErrorConfig, error.what()};
     }
-    const Config comparable = with_live_sections_of(fresh, config_);
-    if (dump_config(comparable) != dump_config(config_)) {
+    if (reload.restart_needed) {
       spdlog::warn(
           "reload: changes outside [spray], [alarms], pressure.setpoint_mpa and "
           "[daemon] levels take effect after a restart");
     }
-    config_ = with_live_sections_of(config_, fresh);
+    for (const auto& key : reload.kept_limits) {
+      spdlog::warn("reload: {} is a safety limit: restart required, running value kept", key);
+    }
+    config_ = std::move(reload.config);
     if (calibrations_) calibrations_->set_config(config_);
     setpoint_mpa_ = config_.pressure.setpoint_mpa;
     alarms_.set_thresholds(config_.alarms);
@@ -296,6 +288,7 @@ class Daemon final : public CommandHandler {
 
   CommandResult clear_alarms() override {
     const AlarmMask cleared = alarms_.clear();
+    if (sprayer_) sprayer_->resume_heartbeat();
     ++trip_reset_;
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
       const auto id = static_cast<AlarmId>(i);
@@ -651,6 +644,9 @@ class Daemon final : public CommandHandler {
     if (alarms_.fault_latched() && state_.state() != SprayerState::kFault) {
       transition(StateEvent::kFault, "alarm");
     }
+    // A latched Fault stops the heartbeat: the external relay cuts valves and pump whatever the
+    // outputs do. ClearAlarms lets it beat again.
+    if (alarms_.fault_latched()) sprayer_->stop_heartbeat();
     if (state_.state() == SprayerState::kSpraying) {
       if (!was_spraying_) spraying_since_ = now;
       was_spraying_ = true;

@@ -42,7 +42,20 @@ int highest_permitted_fifo_priority() noexcept {
   return static_cast<int>(std::min<rlim_t>(limit.rlim_cur, static_cast<rlim_t>(max)));
 }
 
-constexpr std::array<int, 5> kFatalSignals{SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL};
+// The signals whose default action ends the process (SIGTERM, SIGINT and SIGHUP excepted: the
+// daemon's event loop takes them); the real-time signals are added at run time.
+constexpr std::array<int, 18> kFatalSignals{
+    SIGABRT, SIGSEGV, SIGBUS,  SIGFPE,  SIGILL,    SIGTRAP, SIGQUIT, SIGSYS, SIGXCPU,
+    SIGXFSZ, SIGUSR1, SIGUSR2, SIGALRM, SIGVTALRM, SIGPROF, SIGIO,   SIGPWR, SIGSTKFLT};
+
+constexpr std::size_t kMaxFatalSignals = 64;
+// Every signal that gets the handler: kFatalSignals and the real-time signals.
+std::size_t fatal_exit_signals(std::array<int, kMaxFatalSignals>& out) noexcept {
+  std::size_t n = 0;
+  for (int signal : kFatalSignals) out[n++] = signal;
+  for (int signal = SIGRTMIN; signal <= SIGRTMAX && n < out.size(); ++signal) out[n++] = signal;
+  return n;
+}
 
 bool perform(const EmergencyWrite& w) noexcept {
   if (w.fd < 0) return false;
@@ -187,7 +200,13 @@ void install_fatal_exit_handlers() noexcept {
   action.sa_handler = on_fatal_signal;
   sigemptyset(&action.sa_mask);
   action.sa_flags = SA_RESETHAND | SA_ONSTACK | SA_NODEFER;
-  for (int signal : kFatalSignals) ::sigaction(signal, &action, nullptr);
+  std::array<int, kMaxFatalSignals> signals{};
+  const std::size_t n = fatal_exit_signals(signals);
+  for (std::size_t i = 0; i < n; ++i) ::sigaction(signals[i], &action, nullptr);
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  sigemptyset(&ignore.sa_mask);
+  ::sigaction(SIGPIPE, &ignore, nullptr);
   std::set_terminate(on_terminate);
 }
 

@@ -1,9 +1,9 @@
 // Fail-safe writes for the exits that run no normal code: a fatal signal (the systemd
-// watchdog's SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL) or std::terminate (an exception that
-// escaped a thread or a C callback). Each output device registers, at start-up, one write that
-// puts it in its safe state as a single syscall on a file descriptor it already holds (a GPIO
-// line handle's SET_LINE_VALUES ioctl, a pwrite of a sysfs attribute): the handler then runs
-// only async-signal-safe calls - no allocation, no locks, no library - and re-raises the signal
+// watchdog's SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, or any other signal whose default action
+// ends the process) or std::terminate (an exception that escaped a thread or a C callback).
+// Each output device registers, at start-up, one write that puts it in its safe state as a
+// single syscall on a file descriptor it already holds (a GPIO line handle's SET_LINE_VALUES
+// ioctl, a pwrite of a sysfs attribute): the handler then runs only async-signal-safe calls - no allocation, no locks, no library - and re-raises the signal
 // so the process still dies of it (core dump, systemd's Restart=on-failure, the exit status).
 // kill -9 and power loss run nothing in the process: the exit watcher (the same writes on
 // copies of these descriptors, daemon/backends/emergency_write_handoff.hpp), ExecStopPost
@@ -77,7 +77,12 @@ class EmergencyOutputs {
 };
 
 // Installs the handlers (SA_ONSTACK on an alternate stack, so a stack overflow's SIGSEGV is
-// handled too) and a std::terminate handler that triggers, logs nothing and aborts.
+// handled too) and a std::terminate handler that triggers, logs nothing and aborts. Every
+// signal whose default action ends the process gets the handler (the crashes above, SIGTRAP
+// from __builtin_trap on aarch64, SIGQUIT, SIGSYS, SIGXCPU from RLIMIT_RTTIME, SIGXFSZ, SIGUSR1/2,
+// the timer signals, SIGIO, SIGPWR, SIGSTKFLT and the real-time signals), except SIGTERM,
+// SIGINT and SIGHUP, which the daemon's event loop takes, and SIGKILL, which nothing can catch;
+// SIGPIPE is ignored (a write to a closed pipe or socket fails with EPIPE instead).
 void install_fatal_exit_handlers() noexcept;
 
 }  // namespace weedspray::io

@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <span>
@@ -56,8 +57,9 @@ struct ValvePwmDriverConfig {
   void (*on_wake)(void* context, std::chrono::nanoseconds now) noexcept = nullptr;
   void* on_wake_context = nullptr;
   // Heartbeat output (LinuxCNC's charge pump): toggled every half period while this loop runs,
-  // left at its safe (low) value when it returns. An external retriggerable relay powers the
-  // valves only while the wave comes, so a stopped real-time core cuts them in hardware.
+  // left at its safe (low) value when it returns, when a valve bank write fails, and while
+  // stop_heartbeat() holds. An external retriggerable relay powers the valves (and the pump)
+  // only while the wave comes, so a stopped real-time core or a Fault cuts them in hardware.
   DigitalOutputBank* heartbeat = nullptr;
   std::chrono::nanoseconds heartbeat_half_period = std::chrono::milliseconds(10);
 };
@@ -65,6 +67,7 @@ struct ValvePwmDriverConfig {
 struct ValvePwmStats {
   std::uint64_t wakes = 0;  // loop iterations: advances at least every max_sleep while alive
   std::uint64_t heartbeat_toggles = 0;
+  bool heartbeat_stopped = false;  // held low: stop_heartbeat() or a failed valve write
   std::uint64_t edges_written = 0;
   std::uint64_t late_edges = 0;              // written > late_threshold after their time
   std::uint64_t missed_edges = 0;            // written > miss_tolerance after their time
@@ -89,6 +92,12 @@ class ValvePwmDriver {
 
   // Producer side (any one thread): a fresh command also refreshes the dead-man.
   void command(const ValveCommand& cmd) noexcept { commands_.publish(cmd); }
+
+  // Any thread, wait-free: the heartbeat goes low at this loop's next wake and stays low until
+  // resume_heartbeat() (a latched Fault, a refused output write). A failed write of the valve
+  // bank stops it from inside the loop, the same way.
+  void stop_heartbeat() noexcept { heartbeat_stopped_.store(true); }
+  void resume_heartbeat() noexcept { heartbeat_stopped_.store(false); }
 
   // Counters, readable from any thread.
   ValvePwmStats stats() const noexcept { return published_stats_.read(); }
@@ -126,7 +135,7 @@ class ValvePwmDriver {
       if (!have_command || now >= expires_at) {
         if (!stats_.expired) {
           schedule_.force_closed();
-          bank_.force_safe();
+          if (bank_.force_safe() != 0) count_write_error();
           stats_.last_mask = bank_.safe_mask();
           stats_.expired = true;
           ++stats_.deadman_expiries;
@@ -183,8 +192,13 @@ class ValvePwmDriver {
   static constexpr int kMaxSkip = 100000;
 
   void write_mask(std::uint32_t mask) noexcept {
-    if (bank_.write(mask) != 0) ++stats_.write_errors;
+    if (bank_.write(mask) != 0) count_write_error();
     stats_.last_mask = mask;
+  }
+  // A valve may be stuck open: the relay must cut the valves' power.
+  void count_write_error() noexcept {
+    ++stats_.write_errors;
+    heartbeat_stopped_.store(true);
   }
   void publish_stats() noexcept { published_stats_.publish(stats_); }
 
@@ -193,6 +207,16 @@ class ValvePwmDriver {
       next_beat_ = std::chrono::nanoseconds::max();
       return;
     }
+    if (heartbeat_stopped_.load()) {
+      if (!stats_.heartbeat_stopped) {
+        stats_.heartbeat_stopped = true;
+        beat_level_ = false;
+        next_beat_ = std::chrono::nanoseconds::max();
+        if (config_.heartbeat->force_safe() != 0) ++stats_.heartbeat_write_errors;
+      }
+      return;
+    }
+    stats_.heartbeat_stopped = false;
     if (now < next_beat_ && next_beat_ != std::chrono::nanoseconds::max()) return;
     beat_level_ = !beat_level_;
     if (config_.heartbeat->write(beat_level_ ? 1U : 0U) != 0) ++stats_.heartbeat_write_errors;
@@ -209,6 +233,7 @@ class ValvePwmDriver {
   ValvePwmStats stats_;
   std::chrono::nanoseconds next_beat_ = std::chrono::nanoseconds::max();
   bool beat_level_ = false;
+  std::atomic<bool> heartbeat_stopped_{false};
 };
 
 }  // namespace weedspray::io

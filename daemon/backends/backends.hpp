@@ -93,12 +93,17 @@ void add_gnss(Backends& b, const Config& config);
 // device or file.
 void add_yaw_sensor(Backends& b, const Config& config);
 
-// Throws std::runtime_error naming the device that could not be opened.
+// One output whose safe value could not be written.
+struct SafeWriteFailure {
+  std::string message;     // "pump: line offset 4 on GPIO chip 'gpiochip0' is busy (used by ...)"
+  bool line_busy = false;  // a line another request still holds: worth a retry
+};
+
 // For ExecStopPost (weedsprayd --safe-outputs), after the daemon has gone however it went
 // (kill -9 included): requests every output line at its safe value and releases it (a Pi keeps
 // driving a released line's last value), and writes the return-valve DAC's safe value. Each
-// output is tried on its own; returns the failures, each described in `errors`.
-int write_hw_safe_outputs(const Config& config, std::vector<std::string>& errors);
+// output is tried on its own; returns the number of failures, each described in `failures`.
+int write_hw_safe_outputs(const Config& config, std::vector<SafeWriteFailure>& failures);
 
 // Loads `config_path` (without the weed source check: no model, no vision library), then
 // write_hw_safe_outputs(); each failure on stderr prefixed by `program`. Returns the exit

@@ -1,17 +1,19 @@
 // The fail-safe writer's work (ExecStopPost after any exit, kill -9 included): every output
 // line requested at its safe value and released, and the return-valve DAC's safe value.
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
 
 #include "daemon/backends/backends.hpp"
 #include "daemon/backends/hw_output_lines.hpp"
+#include "io/linux/gpio_lines.hpp"
 #include "io/linux/gpio_output_bank.hpp"
 #include "io/linux/monotonic_clock.hpp"
 
 namespace weedspray::daemon {
 
-int write_hw_safe_outputs(const Config& config, std::vector<std::string>& errors) {
+int write_hw_safe_outputs(const Config& config, std::vector<SafeWriteFailure>& failures) {
   const auto& gpio = config.gpio;
   const auto attempt = [&](const char* what, auto&& make) {
     try {
@@ -22,11 +24,14 @@ int write_hw_safe_outputs(const Config& config, std::vector<std::string>& errors
       const SafeWriteErrors refused = b.force_safe();
       for (std::size_t i = 0; i < kOutputRoleCount; ++i) {
         if (refused[i] != 0)
-          errors.push_back(std::string(what) +
-                           ": safe value not written: " + std::strerror(-refused[i]));
+          failures.push_back(
+              {std::string(what) + ": safe value not written: " + std::strerror(-refused[i]),
+               refused[i] == -EBUSY});
       }
+    } catch (const io::hw::GpioLineBusy& error) {
+      failures.push_back({std::string(what) + ": " + error.what(), true});
     } catch (const std::exception& error) {
-      errors.push_back(std::string(what) + ": " + error.what());
+      failures.push_back({std::string(what) + ": " + error.what(), false});
     }
   };
   attempt("valves", [&](Backends& b) {
@@ -59,7 +64,7 @@ int write_hw_safe_outputs(const Config& config, std::vector<std::string>& errors
     b.return_valve = keep(b, converters.dac);  // writes the safe value when it is made
     keep(b, converters.adc);
   });
-  return static_cast<int>(errors.size());
+  return static_cast<int>(failures.size());
 }
 
 int write_safe_outputs(const std::filesystem::path& config_path, const char* program) {
@@ -70,11 +75,12 @@ int write_safe_outputs(const std::filesystem::path& config_path, const char* pro
     std::fprintf(stderr, "%s: %s\n", program, error.what());
     return 1;
   }
-  std::vector<std::string> errors;
-  write_hw_safe_outputs(config, errors);
-  for (const auto& error : errors) std::fprintf(stderr, "%s: %s\n", program, error.c_str());
-  if (errors.empty()) std::printf("%s: outputs written safe\n", program);
-  return errors.empty() ? 0 : 1;
+  std::vector<SafeWriteFailure> failures;
+  write_hw_safe_outputs(config, failures);
+  for (const auto& failure : failures)
+    std::fprintf(stderr, "%s: %s\n", program, failure.message.c_str());
+  if (failures.empty()) std::printf("%s: outputs written safe\n", program);
+  return failures.empty() ? 0 : 1;
 }
 
 }  // namespace weedspray::daemon

@@ -54,6 +54,25 @@ void close_handed_writes() {
 
 }  // namespace
 
+int write_retrying_busy_lines(const std::function<void(std::vector<SafeWriteFailure>&)>& write,
+                              std::vector<SafeWriteFailure>& failures,
+                              std::chrono::nanoseconds retry_for,
+                              std::chrono::nanoseconds retry_every) {
+  const auto start = std::chrono::steady_clock::now();
+  int attempts = 0;
+  for (;;) {
+    failures.clear();
+    ++attempts;
+    write(failures);
+    // Only a line still held (the kernel releasing the daemon's requests) is worth a retry; a
+    // missing chip or device stays missing.
+    const bool busy = std::any_of(failures.begin(), failures.end(),
+                                  [](const SafeWriteFailure& f) { return f.line_busy; });
+    if (!busy || std::chrono::steady_clock::now() - start > retry_for) return attempts;
+    std::this_thread::sleep_for(retry_every);
+  }
+}
+
 int watch_and_write_safe_outputs(int fd, int daemon_pid, const std::filesystem::path& config_path,
                                  const char* program) {
   for (int signal : {SIGTERM, SIGINT, SIGHUP}) std::signal(signal, SIG_IGN);
@@ -118,27 +137,18 @@ int watch_and_write_safe_outputs(int fd, int daemon_pid, const std::filesystem::
   close_handed_writes();
   // Then as before: each output requested at its safe value (this is what holds them safe from
   // now on, with the request's bias, and covers any output that was not handed over).
-  std::vector<std::string> errors;
-  int attempts = 0;
-  for (;;) {
-    errors.clear();
-    ++attempts;
-    write_hw_safe_outputs(config, errors);
-    // Only a line still held (the kernel releasing the daemon's requests) is worth a retry; a
-    // missing chip or device stays missing.
-    const bool busy = std::any_of(errors.begin(), errors.end(), [](const std::string& e) {
-      return e.find(std::strerror(EBUSY)) != std::string::npos;
-    });
-    if (!busy || std::chrono::steady_clock::now() - ended > kRetryFor) break;
-    std::this_thread::sleep_for(kRetryEvery);
-  }
+  std::vector<SafeWriteFailure> failures;
+  const int attempts = write_retrying_busy_lines(
+      [&](std::vector<SafeWriteFailure>& out) { write_hw_safe_outputs(config, out); }, failures,
+      kRetryFor, kRetryEvery);
   const double ms = ms_since(ended);
-  for (const auto& error : errors) std::fprintf(stderr, "%s: %s\n", program, error.c_str());
-  if (errors.empty())
+  for (const auto& failure : failures)
+    std::fprintf(stderr, "%s: %s\n", program, failure.message.c_str());
+  if (failures.empty())
     std::printf("%s: weedsprayd ended: outputs written safe %.1f ms later (%d attempt%s)\n",
                 program, ms, attempts, attempts == 1 ? "" : "s");
   std::fflush(stdout);
-  return errors.empty() ? 0 : 1;
+  return failures.empty() ? 0 : 1;
 }
 
 }  // namespace weedspray::daemon

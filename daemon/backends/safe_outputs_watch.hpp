@@ -14,9 +14,22 @@
 // (seconds on a slow board).
 #pragma once
 
+#include <chrono>
 #include <filesystem>
+#include <functional>
+#include <vector>
+
+#include "daemon/backends/backends.hpp"
 
 namespace weedspray::daemon {
+
+// Calls `write` (which appends its failures) until none of its failures is a busy line, or
+// `retry_for` has passed since the first call; `failures` holds the last call's. Returns the
+// number of calls.
+int write_retrying_busy_lines(const std::function<void(std::vector<SafeWriteFailure>&)>& write,
+                              std::vector<SafeWriteFailure>& failures,
+                              std::chrono::nanoseconds retry_for,
+                              std::chrono::nanoseconds retry_every);
 
 // Loads the configuration first (so nothing is left to read after the daemon is gone), ignores
 // SIGTERM/SIGINT/SIGHUP (a stop signals the whole service: the watcher must outlive the

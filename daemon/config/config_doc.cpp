@@ -58,6 +58,8 @@ void document_key(std::ostringstream& out, const KeySpec<Root>& spec) {
     for (auto choice : spec.choices) out << " \"" << choice << "\"";
   }
   out << "; default " << format_value(spec.default_value) << "\n";
+  if (is_safety_limit(spec.full_name()))
+    out << "# safety limit: a reload keeps the running value; a restart applies a change\n";
   // A key that overrides the weed model's JSON is the model's own while unset.
   const char* unset = overrides_model_spec(spec.full_name()) ? "# " : "";
   out << unset << spec.name << " = " << format_value(spec.default_value) << "\n\n";

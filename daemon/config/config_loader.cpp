@@ -405,6 +405,7 @@ class Loader {
     if (c.pressure.output_min >= c.pressure.output_max) {
       fail("pressure.output_max", "must be above pressure.output_min");
     }
+    validate_trip_limits();
     if (c.pressure.setpoint_mpa >= c.alarms.over_pressure_mpa) {
       fail("pressure.setpoint_mpa", "must be below alarms.over_pressure_mpa (" +
                                         format_number(c.alarms.over_pressure_mpa) + " MPa)");
@@ -421,6 +422,22 @@ class Loader {
     }
     if (c.sim.speed_min_m_per_s > c.sim.speed_max_m_per_s) {
       fail("sim.speed_min_m_per_s", "must not exceed sim.speed_max_m_per_s");
+    }
+  }
+
+  // Trip limits that a value in range can still defeat. The current floors are the key
+  // ranges (sensor_fault_low_ma, sensor_fault_high_ma); here the rules between keys.
+  void validate_trip_limits() const {
+    const auto& c = config_;
+    // A transmitter saturates at its full scale (20.5 mA at most), so a trip at or above the
+    // pressure it reads at 20 mA may never come: the pump would run on at full pressure.
+    if (c.alarms.over_pressure_mpa >= c.pressure.sensor_max_mpa) {
+      const bool trip_set = c.sources.count("alarms.over_pressure_mpa") > 0;
+      fail(trip_set ? "alarms.over_pressure_mpa" : "pressure.sensor_max_mpa",
+           "alarms.over_pressure_mpa (" + format_number(c.alarms.over_pressure_mpa) +
+               " MPa) must be below pressure.sensor_max_mpa (" +
+               format_number(c.pressure.sensor_max_mpa) +
+               " MPa, the sensor's full scale): a trip the sensor cannot read never comes");
     }
   }
 

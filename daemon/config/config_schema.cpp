@@ -457,11 +457,15 @@ const std::vector<KeySpec<Config>>& config_keys() {
     {WS_KEY(modbus, timeout_s), 0.5, 0.01, 10, "s", "response timeout"},
     // [alarms]
     {WS_KEY(alarms, over_pressure_mpa), 0.9, 0.1, 10, "MPa",
-     "over-pressure: pump off and Fault"},
-    {WS_KEY(alarms, sensor_fault_low_ma), 3.6, 0, 4, "mA",
-     "a loop current below this is a broken sensor wire"},
-    {WS_KEY(alarms, sensor_fault_high_ma), 21.0, 20, 30, "mA",
-     "a loop current above this is a shorted sensor"},
+     "over-pressure: pump off and Fault; must lie below pressure.sensor_max_mpa (a sensor that "
+     "saturates at its full scale never reads above it)"},
+    {WS_KEY(alarms, sensor_fault_low_ma), 3.6, 3.0, 3.8, "mA",
+     "a loop current below this is a broken sensor wire or an unpowered sensor (NAMUR NE 43: "
+     "3.6 and below is a failure, 3.8 the bottom of the measuring range); the range keeps a cut "
+     "wire (0-1 mA) a fault"},
+    {WS_KEY(alarms, sensor_fault_high_ma), 21.0, 20.5, 22, "mA",
+     "a loop current above this is a shorted sensor (NAMUR NE 43: 21 and above is a failure, "
+     "20.5 the top of the measuring range)"},
     {WS_KEY(alarms, blocked_pressure_mpa), 0.7, 0.05, 10, "MPa",
      "line blocked: pressure above this while spraying ..."},
     {WS_KEY(alarms, blocked_flow_l_per_min), 0.05, 0, 100, "L/min",
@@ -562,6 +566,15 @@ bool overrides_model_spec(std::string_view full_name) {
       "vision.model_input_width", "vision.model_input_height", "vision.model_mean",
       "vision.model_scale",       "vision.model_rgb",          "vision.model_classes",
       "vision.soil_class",        "vision.crop_class",         "vision.weed_class"};
+  return std::find(kKeys.begin(), kKeys.end(), full_name) != kKeys.end();
+}
+
+bool is_safety_limit(std::string_view full_name) {
+  static constexpr std::array<std::string_view, 10> kKeys = {
+      "alarms.over_pressure_mpa",   "alarms.sensor_fault_low_ma",  "alarms.sensor_fault_high_ma",
+      "alarms.sensor_fault_hold_s", "alarms.blocked_pressure_mpa", "alarms.blocked_flow_l_per_min",
+      "alarms.no_flow_l_per_min",   "alarms.debounce_s",           "alarms.tank_empty_pct",
+      "alarms.camera_stall_s"};
   return std::find(kKeys.begin(), kKeys.end(), full_name) != kKeys.end();
 }
 

@@ -63,6 +63,10 @@ const std::vector<KeySpec<CameraSection>>& camera_keys();
 // value holds, so the default file leaves them commented out.
 [[nodiscard]] bool overrides_model_spec(std::string_view full_name);
 
+// The trip limits of the alarms that are faults (pump off, valves closed): a live reload keeps
+// their running value, a restart applies a change (config/live_reload.hpp).
+[[nodiscard]] bool is_safety_limit(std::string_view full_name);
+
 }  // namespace weedspray::daemon
 
 namespace weedspray::daemon {

@@ -373,6 +373,7 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
       // again next cycle.
       if (io_.pump != nullptr && !status.pump_on && io_.pump->write(1) != 0) {
         ++status.pump_write_errors;
+        pwm_driver_->stop_heartbeat();
       } else {
         status.pump_on = true;
       }
@@ -385,7 +386,10 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
     } else if (!outputs_safe) {
       // A refused safe write is counted and tried again next cycle (outputs_safe stays false).
       const bool pump_safe = io_.pump == nullptr || io_.pump->force_safe() == 0;
-      if (!pump_safe) ++status.pump_write_errors;
+      if (!pump_safe) {
+        ++status.pump_write_errors;
+        pwm_driver_->stop_heartbeat();  // the pump may still run: the relay cuts it
+      }
       analog_io_->command_safe();
       controller_->disable();
       status.pump_on = false;

@@ -82,6 +82,11 @@ class Sprayer {
   std::uint64_t start_wheel_calibration(double run_distance_m) noexcept;
   WheelCalibrationReport wheel_calibration() const noexcept { return wheel_calibration_.read(); }
   io::ValvePwmStats pwm() const noexcept { return pwm_driver_->stats(); }
+  // The heartbeat output (the external relay that powers valves and pump) held low from the
+  // valve thread's next wake, or beating again (io/valve_pwm_driver.hpp). A refused pump write
+  // in the pressure loop stops it too.
+  void stop_heartbeat() noexcept { pwm_driver_->stop_heartbeat(); }
+  void resume_heartbeat() noexcept { pwm_driver_->resume_heartbeat(); }
   io::AnalogIoStats analog_io() const noexcept { return analog_io_->stats(); }
   // Failed output writes of the real-time threads (unsafe_error left 0).
   OutputWriteCounters output_write_counters() const noexcept;

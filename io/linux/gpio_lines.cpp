@@ -46,8 +46,8 @@ gpiod::line find_line(const std::string& chip, const GpioLineConfig& config) {
   }
   if (line.is_used()) {
     const std::string consumer = line.consumer();
-    throw std::runtime_error(describe(chip, config) + " is busy (used by '" +
-                             (consumer.empty() ? std::string("kernel") : consumer) + "')");
+    throw GpioLineBusy(describe(chip, config) + " is busy (used by '" +
+                       (consumer.empty() ? std::string("kernel") : consumer) + "')");
   }
   return line;
 }

@@ -4,9 +4,22 @@
 
 #include <bitset>
 #include <gpiod.hpp>
+#include <stdexcept>
 #include <string>
 
 #include "io/linux/gpio_config.hpp"
+
+namespace weedspray::io::hw {
+
+// A line another request still holds (another program, or a daemon whose requests the kernel
+// has not released yet): the one GPIO error worth retrying. The message names the line and
+// its consumer.
+class GpioLineBusy : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace weedspray::io::hw
 
 namespace weedspray::io::hw::detail {
 
@@ -14,8 +27,8 @@ namespace weedspray::io::hw::detail {
 gpiod::chip open_chip(const std::string& chip);
 
 // The line `line` names: by name (on `chip` if given, else on any chip) or by offset on
-// `chip`. Throws std::runtime_error naming the chip and line; also when the line is already
-// used by another consumer ("line busy").
+// `chip`. Throws std::runtime_error naming the chip and line; GpioLineBusy when the line is
+// already used by another consumer.
 gpiod::line find_line(const std::string& chip, const GpioLineConfig& line);
 
 // Human-readable "chip X line Y" for messages.

@@ -76,9 +76,10 @@ GpioOutputBank::GpioOutputBank(const GpioOutputBankConfig& config)
   try {
     impl_->bulk.request({config.consumer, gpiod::line_request::DIRECTION_OUTPUT, 0}, defaults);
   } catch (const std::system_error& e) {
-    throw std::runtime_error("GPIO output bank on " + impl_->chip_name +
-                             ": requesting the lines failed (" + e.code().message() +
-                             (e.code().value() == EBUSY ? ": line busy" : "") + ")");
+    const std::string message = "GPIO output bank on " + impl_->chip_name +
+                                ": requesting the lines failed (" + e.code().message() + ")";
+    if (e.code().value() == EBUSY) throw GpioLineBusy(message + ": line busy");
+    throw std::runtime_error(message);
   }
   impl_->values.resize(config.lines.size());
   const std::set<int> handles_after = line_handle_fds();

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "io/linux/gpio_lines.hpp"
 #include "io/linux/gpio_output_bank.hpp"
 #include "tests/vm/gpio_sim_chip.hpp"
 
@@ -150,6 +151,8 @@ TEST_F(ValveBankTest, BusyLineIsAClearErrorAndTheHolderKeepsDriving) {
   config.chip = chip_.chip_name();
   config.lines = {{.name = "valve0"}};
   expect_error_mentions(config, "valve0");
+  // Its own kind: the exit watcher retries only a busy line.
+  EXPECT_THROW(GpioOutputBank{config}, GpioLineBusy);
   EXPECT_EQ(chip_.value(0), 1);
 }
 

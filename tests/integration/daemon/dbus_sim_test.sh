@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # weedsprayd --sim on a PRIVATE session bus, driven with busctl and sprayctl:
 # properties, Start -> pressure at set-point and duties following densities, a refused bad
-# set-point, a refused broken reload (old config keeps running), SIGTERM -> valves closed, exit 0.
+# set-point, a refused broken reload (old config keeps running), a reloaded trip limit kept until
+# a restart, SIGTERM -> valves closed, exit 0.
 # usage: dbus_sim_test.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
 BUILD=$(realpath "$1")
@@ -129,6 +130,25 @@ printf '[pressure]\nsetpoint_mpa = 0.25\n' >"$T/etc/conf.d/99-broken.toml"
 "$SPRAYCTL" --user reload || fail "valid reload refused"
 [ "$(prop PressureSetpoint)" = "0.25" ] || fail "valid reload not applied"
 echo "ok: reload"
+
+# A reload that raises the over-pressure trip: the live set-point applies, the trip keeps its
+# running value until a restart (logged), so the set-point stays bounded by the old trip.
+printf '[pressure]\nsetpoint_mpa = 0.26\n[alarms]\nover_pressure_mpa = 0.98\n' \
+  >"$T/etc/conf.d/99-broken.toml"
+kill -HUP "$DAEMON_PID"
+for _ in $(seq 1 25); do
+  [ "$(prop PressureSetpoint)" = "0.26" ] && break
+  sleep 0.1
+done
+[ "$(prop PressureSetpoint)" = "0.26" ] || fail "live set-point not applied beside a safety limit"
+grep -q "reload: alarms.over_pressure_mpa is a safety limit: restart required, running value kept" \
+  "$T/daemon.log" || fail "kept safety limit not logged"
+if "$SPRAYCTL" --user set-pressure 0.95 2>"$T/err.txt"; then
+  fail "set-point 0.95 accepted: the reloaded trip was applied live"
+fi
+grep -q "outside 0.05..0.9 MPa" "$T/err.txt" || fail "$(cat "$T/err.txt")"
+rm "$T/etc/conf.d/99-broken.toml"
+echo "ok: a safety limit changed by reload waits for a restart"
 
 # monitor prints changes.
 timeout 2 "$SPRAYCTL" --user monitor >"$T/monitor.txt" || true

@@ -5,9 +5,12 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
+#include <string_view>
 
 #include "daemon/config/config.hpp"
 #include "daemon/config/config_schema.hpp"
+#include "io/signal_conversion.hpp"
 #include "vision/threshold.hpp"
 #include "vision/vegetation_index.hpp"
 
@@ -245,6 +248,82 @@ TEST(ConfigErrors, CrossKeyRulesNameTheKeyAndWhereItWasSet) {
   EXPECT_EQ(both_pump.key(), "gpio.pump_name");
   const auto not_strings = parse_error({{"main.toml", "[gpio]\nvalve_names = [\"a\", 2]\n"}});
   EXPECT_EQ(not_strings.key(), "gpio.valve_names");
+}
+
+// The pressure sensor's trip limits cannot be configured so that a cut wire reads as a
+// pressure, a short as a valid reading, or an over-pressure trip lies beyond what the sensor
+// can read.
+const KeySpec<Config>& key_spec(std::string_view full_name) {
+  for (const auto& spec : config_keys()) {
+    if (spec.full_name() == full_name) return spec;
+  }
+  throw std::logic_error("no key " + std::string(full_name));
+}
+
+TEST(ConfigTripLimits, ACutWireIsAlwaysASensorFault) {
+  const auto& low = key_spec("alarms.sensor_fault_low_ma");
+  // A cut wire reads 0 mA; leakage and ADC offset leave it within about 1 mA. At the most
+  // permissive limit allowed the conversion still calls both an open circuit.
+  io::CurrentLoopSensorConfig sensor;
+  sensor.fault_below_ma = low.min;
+  for (double cut_ma : {0.0, 1.0}) {
+    const auto reading =
+        io::pressure_from_sensor_volts(io::volts_from_current_ma(cut_ma, sensor), sensor);
+    EXPECT_EQ(reading.status, io::SensorStatus::kOpenCircuit) << cut_ma << " mA";
+  }
+  EXPECT_GE(low.min, 3.0);
+  EXPECT_LE(low.max, 3.8);  // the bottom of NAMUR NE 43's measuring range stays valid
+  const auto zero = parse_error({{"main.toml", "[alarms]\n\nsensor_fault_low_ma = 0\n"}});
+  EXPECT_EQ(zero.key(), "alarms.sensor_fault_low_ma");
+  EXPECT_EQ(zero.line(), 3);
+  EXPECT_NE(std::string(zero.what()).find("0 is outside 3..3.8 mA"), std::string::npos)
+      << zero.what();
+  EXPECT_EQ(parse_error({{"main.toml", "[alarms]\nsensor_fault_low_ma = 1.0\n"}}).key(),
+            "alarms.sensor_fault_low_ma");
+  EXPECT_EQ(parse_error({{"main.toml", "[alarms]\nsensor_fault_low_ma = 3.9\n"}}).key(),
+            "alarms.sensor_fault_low_ma");
+  EXPECT_EQ(parse("[alarms]\nsensor_fault_low_ma = 3.0\n").alarms.sensor_fault_low_ma, 3.0);
+  EXPECT_EQ(parse("[alarms]\nsensor_fault_low_ma = 3.8\n").alarms.sensor_fault_low_ma, 3.8);
+}
+
+TEST(ConfigTripLimits, AShortedSensorIsAlwaysAFault) {
+  const auto& high = key_spec("alarms.sensor_fault_high_ma");
+  EXPECT_GE(high.min, 20.5);  // the top of the measuring range stays valid
+  // A shorted loop (the simulator's 24 mA) is above every allowed limit.
+  io::CurrentLoopSensorConfig sensor;
+  sensor.fault_above_ma = high.max;
+  EXPECT_EQ(io::pressure_from_sensor_volts(io::volts_from_current_ma(24.0, sensor), sensor).status,
+            io::SensorStatus::kShortCircuit);
+  EXPECT_EQ(parse_error({{"main.toml", "[alarms]\nsensor_fault_high_ma = 20.0\n"}}).key(),
+            "alarms.sensor_fault_high_ma");
+  EXPECT_EQ(parse_error({{"main.toml", "[alarms]\nsensor_fault_high_ma = 30\n"}}).key(),
+            "alarms.sensor_fault_high_ma");
+  EXPECT_EQ(parse("[alarms]\nsensor_fault_high_ma = 20.5\n").alarms.sensor_fault_high_ma, 20.5);
+}
+
+TEST(ConfigTripLimits, OverPressureTripLiesBelowTheSensorsFullScale) {
+  // At the full scale (1 MPa at 20 mA by default): refused, naming the trip where it was set.
+  const auto at = parse_error({{"main.toml", "[alarms]\nover_pressure_mpa = 1.0\n"}});
+  EXPECT_EQ(at.key(), "alarms.over_pressure_mpa");
+  EXPECT_EQ(at.line(), 2);
+  EXPECT_NE(std::string(at.what()).find("must be below pressure.sensor_max_mpa (1 MPa"),
+            std::string::npos)
+      << at.what();
+  EXPECT_EQ(parse_error({{"main.toml", "[alarms]\nover_pressure_mpa = 5\n"}}).key(),
+            "alarms.over_pressure_mpa");
+  // A smaller sensor under the default trip: the sensor's key is named, in its drop-in.
+  const auto small = parse_error(
+      {{"main.toml", "[boom]\nnozzles = 4\n"},
+       {"conf.d/20-sensor.toml", "[pressure]\nsensor_max_mpa = 0.6\nsetpoint_mpa = 0.3\n"}});
+  EXPECT_EQ(small.key(), "pressure.sensor_max_mpa");
+  EXPECT_EQ(small.file(), "conf.d/20-sensor.toml");
+  EXPECT_EQ(small.line(), 2);
+  const Config bigger =
+      parse("[pressure]\nsensor_max_mpa = 2.5\n[alarms]\nover_pressure_mpa = 2\n");
+  EXPECT_EQ(bigger.alarms.over_pressure_mpa, 2.0);
+  EXPECT_NO_THROW(
+      parse("[pressure]\nsensor_max_mpa = 0.6\nsetpoint_mpa = 0.3\n[alarms]\n"
+            "over_pressure_mpa = 0.55\nblocked_pressure_mpa = 0.5\n"));
 }
 
 // Nozzle health needs staggered phase windows long enough to outlast the meter's lag.

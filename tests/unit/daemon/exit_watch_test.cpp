@@ -10,10 +10,12 @@
 #include <cstring>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "daemon/backends/emergency_write_handoff.hpp"
+#include "daemon/backends/safe_outputs_watch.hpp"
 #include "daemon/supervision/process_exit_probe.hpp"
 #include "io/emergency_outputs.hpp"
 
@@ -113,6 +115,60 @@ TEST(EmergencyWriteHandoff, AMessageWithoutADescriptorIsRefused) {
   EXPECT_EQ(receive_emergency_write(fds[1], received), -EBADMSG);
   close(fds[0]);
   close(fds[1]);
+}
+
+}  // namespace
+}  // namespace weedspray::daemon
+
+namespace weedspray::daemon {
+namespace {
+
+using namespace std::chrono_literals;
+
+// After the daemon is gone, the watcher requests every line at its safe value; a line the
+// kernel has not released from the dying daemon yet is busy, and only that is retried.
+TEST(ExitWatcherRetry, ABusyLineIsRetriedUntilItIsFree) {
+  int calls = 0;
+  std::vector<SafeWriteFailure> failures;
+  const int attempts = write_retrying_busy_lines(
+      [&](std::vector<SafeWriteFailure>& out) {
+        if (++calls <= 2)
+          out.push_back(
+              {"pump: line offset 4 on GPIO chip 'gpiochip0' is busy (used by "
+               "'weedsprayd')",
+               true});
+      },
+      failures, 2s, 1ms);
+  EXPECT_EQ(attempts, 3);
+  EXPECT_EQ(calls, 3);
+  EXPECT_TRUE(failures.empty());
+}
+
+TEST(ExitWatcherRetry, AMissingDeviceIsNotRetried) {
+  std::vector<SafeWriteFailure> failures;
+  const int attempts = write_retrying_busy_lines(
+      [](std::vector<SafeWriteFailure>& out) {
+        out.push_back({"valves: GPIO chip 'gpiochip9' not found or not accessible", false});
+      },
+      failures, 2s, 1ms);
+  EXPECT_EQ(attempts, 1);
+  ASSERT_EQ(failures.size(), 1U);
+}
+
+TEST(ExitWatcherRetry, ALineBusyForGoodIsGivenUpAfterTheRetryTime) {
+  std::vector<SafeWriteFailure> failures;
+  const auto start = std::chrono::steady_clock::now();
+  const int attempts = write_retrying_busy_lines(
+      [](std::vector<SafeWriteFailure>& out) {
+        out.push_back({"led: busy", true});
+      },
+      failures, 50ms, 5ms);
+  const auto took = std::chrono::steady_clock::now() - start;
+  EXPECT_GT(attempts, 2);
+  EXPECT_GE(took, 50ms);
+  EXPECT_LT(took, 1s);
+  ASSERT_EQ(failures.size(), 1U);
+  EXPECT_TRUE(failures.front().line_busy);
 }
 
 }  // namespace

@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -97,7 +99,51 @@ TEST_P(FatalExit, WritesTheSafeValueAndDiesOfTheSameSignal) {
 }
 
 INSTANTIATE_TEST_SUITE_P(EverySignal, FatalExit,
-                         ::testing::Values(SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL));
+                         ::testing::Values(SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGTRAP,
+                                           SIGQUIT, SIGSYS, SIGXCPU, SIGXFSZ, SIGUSR1, SIGUSR2,
+                                           SIGALRM, SIGVTALRM, SIGPROF, SIGIO, SIGPWR, SIGSTKFLT,
+                                           SIGRTMIN, SIGRTMIN + 5, SIGRTMAX));
+
+// No signal whose default action ends the process is left at that default: each one either
+// writes the outputs safe first or is ignored. The exceptions are the event loop's own
+// (SIGTERM, SIGINT, SIGHUP) and those nothing can catch.
+TEST(FatalExit, EveryTerminatingSignalIsHandledOrIgnored) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    install_fatal_exit_handlers();
+    // Default actions that do not end the process: ignore, continue, stop.
+    const std::array<int, 9> not_terminating{SIGCHLD, SIGCONT, SIGURG,  SIGWINCH, SIGSTOP,
+                                             SIGTSTP, SIGTTIN, SIGTTOU, SIGKILL};
+    const std::array<int, 3> event_loop{SIGTERM, SIGINT, SIGHUP};
+    for (int signal = 1; signal <= SIGRTMAX; ++signal) {
+      if (signal > SIGSYS && signal < SIGRTMIN) continue;  // the C library's own
+      if (std::find(not_terminating.begin(), not_terminating.end(), signal) !=
+              not_terminating.end() ||
+          std::find(event_loop.begin(), event_loop.end(), signal) != event_loop.end())
+        continue;
+      struct sigaction action {};
+      if (::sigaction(signal, nullptr, &action) != 0) ::_exit(100);
+      if (action.sa_handler == SIG_DFL) ::_exit(signal);  // names the signal left at default
+    }
+    ::_exit(0);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status)) << status;
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "signal " << WEXITSTATUS(status) << " ("
+                                    << strsignal(WEXITSTATUS(status)) << ") left at its default";
+}
+
+// SIGPIPE (a write to a closed socket or pipe) is ignored: the write fails with EPIPE and the
+// process goes on, with the outputs as they were.
+TEST(FatalExit, SigpipeIsIgnored) {
+  const auto file = std::filesystem::temp_directory_path() / "weedspray_emergency_sigpipe";
+  const int status = run_child(file, Death::kSignal, SIGPIPE, true);
+  ASSERT_TRUE(WIFEXITED(status)) << "status " << status;
+  EXPECT_EQ(WEXITSTATUS(status), 91);
+  EXPECT_EQ(read_file(file), "OPEN\n");
+  std::filesystem::remove(file);
+}
 
 TEST(FatalExit, AnExceptionEscapingAThreadWritesSafeAndAborts) {
   const auto file = std::filesystem::temp_directory_path() / "weedspray_emergency_terminate";

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cerrno>
 #include <functional>
 #include <stop_token>
 
@@ -308,6 +309,82 @@ TEST(ValvePwmDriver, HeartbeatIsASquareWaveWhileRunningAndLowAfter) {
   }
   EXPECT_EQ(driver.stats().heartbeat_toggles, writes.size());
   EXPECT_EQ(heartbeat.mask(), 0U) << "low once the loop has stopped: the relay drops";
+}
+
+// A driver with a 50 Hz heartbeat and a fresh command, for the heartbeat's stop tests.
+struct HeartbeatRig {
+  ScriptedClock clock;
+  sim::MemoryOutputBank heartbeat{1, 0, clock, 1000};
+  sim::MemoryOutputBank bank{4, 0, clock, 1000};
+  control::PwmConfig pwm_config{};
+  control::PwmSchedule schedule{pwm_config};
+  ValvePwmDriver<control::PwmSchedule> driver{clock, bank, schedule, config()};
+
+  HeartbeatRig() { driver.command(Rig::command(0ns)); }
+  ValvePwmDriverConfig config() {
+    ValvePwmDriverConfig c;
+    c.command_expiry = 10s;
+    c.heartbeat = &heartbeat;
+    c.heartbeat_half_period = 10ms;
+    return c;
+  }
+};
+
+// The heartbeat stops (low, no more toggles) when told to - a latched Fault - and beats again
+// when resumed; the relay it holds then drops within its hold-up time.
+TEST(ValvePwmDriver, HeartbeatStopsWhenToldAndBeatsAgainWhenResumed) {
+  HeartbeatRig rig;
+  std::uint64_t toggles_at_stop = 0;
+  bool low_while_stopped = true;
+  rig.clock.on_sleep = [&](nanoseconds now) {
+    if (now >= 300ms && now < 310ms) {
+      rig.driver.stop_heartbeat();
+      toggles_at_stop = rig.heartbeat.write_count();
+    }
+    if (now >= 350ms && now < 700ms && rig.heartbeat.mask() != 0) low_while_stopped = false;
+    if (now >= 700ms) rig.driver.resume_heartbeat();
+  };
+  rig.clock.stop_at = 1s;
+  rig.driver.run(rig.clock.stop.get_token());
+
+  EXPECT_TRUE(low_while_stopped);
+  std::size_t toggles_while_stopped = 0;
+  std::size_t toggles_after = 0;
+  for (const auto& write : rig.heartbeat.history()) {
+    if (write.time > 330ms && write.time < 700ms) ++toggles_while_stopped;
+    if (write.time > 720ms) ++toggles_after;
+  }
+  EXPECT_GT(toggles_at_stop, 25U) << "it beat before";
+  EXPECT_EQ(toggles_while_stopped, 0U);
+  EXPECT_GT(toggles_after, 20U) << "it beats again once resumed";
+  EXPECT_EQ(rig.heartbeat.mask(), 0U);
+}
+
+// A refused valve write may leave a valve open: the heartbeat stops at once, from the valve
+// thread itself, and stays stopped (until resumed) even when the writes work again.
+TEST(ValvePwmDriver, AFailedValveWriteStopsTheHeartbeat) {
+  HeartbeatRig rig;
+  nanoseconds failed_at{0};
+  rig.clock.on_sleep = [&](nanoseconds now) {
+    if (now >= 400ms && failed_at == 0ns) {
+      rig.bank.fail_writes(EIO);
+      failed_at = now;
+    }
+    if (now >= 500ms) rig.bank.fail_writes(0);
+  };
+  rig.clock.stop_at = 1s;
+  rig.driver.run(rig.clock.stop.get_token());
+
+  ASSERT_GT(rig.driver.stats().write_errors, 0U) << "the failure was not reached";
+  nanoseconds last_toggle{0};
+  for (const auto& write : rig.heartbeat.history()) {
+    if (write.mask != 0) last_toggle = write.time;
+  }
+  EXPECT_GT(last_toggle, 300ms) << "it beat before";
+  // Stopped by the first refused edge: a 5 Hz schedule of four valves has one every 50 ms.
+  EXPECT_LT(last_toggle, failed_at + 100ms);
+  EXPECT_TRUE(rig.driver.stats().heartbeat_stopped);
+  EXPECT_EQ(rig.heartbeat.mask(), 0U);
 }
 
 }  // namespace
