@@ -8,13 +8,15 @@ set(CPACK_PACKAGE_VENDOR "weedspray")
 set(CPACK_PACKAGE_CONTACT "weedspray developers <weedspray-dev@lists.weedspray.org>")
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "${PROJECT_DESCRIPTION}")
 # The extended description (CPack puts the summary above it).
-set(CPACK_PACKAGE_DESCRIPTION
-    "weedsprayd is the whole controller of a camera-guided, variable-rate weed sprayer on one "
-    "board: it finds the plants in each camera frame, opens each nozzle's solenoid valve for the "
-    "share of time the weed ahead of it needs, and holds the line pressure through a return "
-    "valve. Flow meter, wheel sensor, tank level, alarms and fail-safes run in the same "
-    "real-time process, a systemd service watched and steered over D-Bus with sprayctl. "
-    "weedsprayd --sim runs the same code against a simulated hydraulic line.")
+# One string, its lines under 80 columns as Debian policy asks.
+string(CONCAT CPACK_PACKAGE_DESCRIPTION
+  "weedsprayd is the whole controller of a camera-guided, variable-rate weed\n"
+  "sprayer on one board: it finds the plants in each camera frame, opens each\n"
+  "nozzle's solenoid valve for the share of time the weed ahead of it needs, and\n"
+  "holds the line pressure through a return valve. Flow meter, wheel sensor, tank\n"
+  "level, alarms and fail-safes run in the same real-time process, a systemd\n"
+  "service watched and steered over D-Bus with sprayctl. weedsprayd --sim runs\n"
+  "the same code against a simulated hydraulic line.")
 # Debian ships binaries without their symbol tables (lintian: unstripped-binary-or-object).
 set(CPACK_STRIP_FILES ON)
 set(CPACK_DEBIAN_PACKAGE_SECTION "misc")
