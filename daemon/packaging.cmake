@@ -5,8 +5,20 @@
 set(CPACK_GENERATOR "DEB")
 set(CPACK_PACKAGE_NAME "weedspray")
 set(CPACK_PACKAGE_VENDOR "weedspray")
-set(CPACK_PACKAGE_CONTACT "weedspray maintainers <weedspray@localhost>")
+set(CPACK_PACKAGE_CONTACT "weedspray developers <weedspray-dev@lists.weedspray.org>")
 set(CPACK_PACKAGE_DESCRIPTION_SUMMARY "${PROJECT_DESCRIPTION}")
+# The extended description (CPack puts the summary above it).
+# One string, its lines under 80 columns as Debian policy asks.
+string(CONCAT CPACK_PACKAGE_DESCRIPTION
+  "weedsprayd is the whole controller of a camera-guided, variable-rate weed\n"
+  "sprayer on one board: it finds the plants in each camera frame, opens each\n"
+  "nozzle's solenoid valve for the share of time the weed ahead of it needs, and\n"
+  "holds the line pressure through a return valve. Flow meter, wheel sensor, tank\n"
+  "level, alarms and fail-safes run in the same real-time process, a systemd\n"
+  "service watched and steered over D-Bus with sprayctl. weedsprayd --sim runs\n"
+  "the same code against a simulated hydraulic line.")
+# Debian ships binaries without their symbol tables (lintian: unstripped-binary-or-object).
+set(CPACK_STRIP_FILES ON)
 set(CPACK_DEBIAN_PACKAGE_SECTION "misc")
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 # Library dependencies from the binaries (dpkg-shlibdeps), plus the D-Bus daemon.
@@ -29,4 +41,14 @@ if(CMAKE_CROSSCOMPILING AND CMAKE_SYSTEM_PROCESSOR STREQUAL "aarch64")
 endif()
 file(WRITE "${CMAKE_CURRENT_BINARY_DIR}/conffiles"
      "${CMAKE_INSTALL_FULL_SYSCONFDIR}/weedspray/weedspray.toml\n")
+# Debian policy's documentation: the machine-readable copyright file (DEP-5) and the changelog,
+# whose latest entry must name this version.
+set(debian_dir "${PROJECT_SOURCE_DIR}/systemd/debian")
+file(STRINGS "${debian_dir}/changelog" changelog_top LIMIT_COUNT 1)
+if(NOT changelog_top MATCHES "^weedspray \\(${PROJECT_VERSION}\\) ")
+  message(FATAL_ERROR "systemd/debian/changelog starts with '${changelog_top}': "
+                      "add an entry for version ${PROJECT_VERSION}")
+endif()
+install(FILES "${debian_dir}/copyright" DESTINATION ${CMAKE_INSTALL_DOCDIR})
+weedspray_install_gzipped(weedspray_package_docs "${debian_dir}/changelog" ${CMAKE_INSTALL_DOCDIR})
 include(CPack)

@@ -4,6 +4,8 @@
 //   sprayctl calibrate meter --seconds S | --volume L    catch test, then the collected volume
 //   sprayctl calibrate nozzles                            each nozzle's line over a duty sweep
 //   sprayctl export-map ...   runs weedspray-export-map (no bus; GDAL stays out of sprayctl)
+// Exit status: 0 done, 1 refused by the daemon or failed, 2 usage, 3 weedsprayd not reachable
+// (docs/man/sprayctl.1.in).
 #include <systemd/sd-bus.h>
 #include <unistd.h>
 #include <CLI/CLI.hpp>
@@ -34,8 +36,14 @@ using Value = std::variant<std::string, double, std::uint64_t, bool, std::vector
                            std::vector<std::string>>;
 using Properties = std::map<std::string, Value>;
 
+// Exit statuses, as sprayctl(1) documents them.
+constexpr int kExitRefused = 1;      // the daemon refused the request, or it failed
+constexpr int kExitUsage = 2;        // no command, an unknown one, a bad argument
+constexpr int kExitUnreachable = 3;  // weedsprayd not on the bus, no bus, or no answer
+
 struct BusError {
   std::string message;
+  int exit_status = kExitRefused;
 };
 
 // Minimal JSON string escaping (the output has only flat values; no JSON library in the
@@ -257,12 +265,9 @@ Properties read_properties(sd_bus_message* m) {
 
 class Client {
  public:
-  explicit Client(bool user_bus) {
+  explicit Client(bool user_bus) : bus_kind_(user_bus ? "session" : "system") {
     const int r = user_bus ? sd_bus_open_user(&bus_) : sd_bus_open_system(&bus_);
-    if (r < 0) {
-      throw BusError{std::string("cannot connect to the ") + (user_bus ? "session" : "system") +
-                     " bus: " + std::strerror(-r)};
-    }
+    if (r < 0) throw unreachable_bus(r);
   }
   ~Client() { sd_bus_flush_close_unref(bus_); }
 
@@ -395,11 +400,42 @@ class Client {
   }
 
  private:
-  [[noreturn]] static void fail(sd_bus_error& error, int r) {
+  // A failed call: the daemon's own refusal keeps its error name and message; the bus saying
+  // that nobody owns the name, or a connection that cannot be made, is "not reachable".
+  [[noreturn]] void fail(sd_bus_error& error, int r) {
+    const std::string name = error.name ? error.name : "";
     std::string message = error.message ? error.message : std::strerror(-r);
-    if (error.name) message = std::string(error.name) + ": " + message;
     sd_bus_error_free(&error);
+    if (name == SD_BUS_ERROR_SERVICE_UNKNOWN || name == SD_BUS_ERROR_NAME_HAS_NO_OWNER) {
+      throw BusError{std::string("weedsprayd is not running (no ") + kBusName + " on the " +
+                         bus_kind_ + " bus)",
+                     kExitUnreachable};
+    }
+    if (name == SD_BUS_ERROR_NO_REPLY || name == SD_BUS_ERROR_TIMEOUT || r == -ETIMEDOUT) {
+      throw BusError{"weedsprayd did not answer: " + message, kExitUnreachable};
+    }
+    if (name.empty() && is_connection_error(r)) throw unreachable_bus(r);
+    if (!name.empty()) message = name + ": " + message;
     throw BusError{message};
+  }
+
+  // sd-bus's errors for a bus that cannot be reached: no address (no session bus: ENOMEDIUM),
+  // no socket, refused or dropped connection.
+  static bool is_connection_error(int r) {
+    for (const int e : {ENOMEDIUM, ENOENT, ECONNREFUSED, ECONNRESET, ENOTCONN, EPIPE, ENXIO})
+      if (r == -e) return true;
+    return false;
+  }
+
+  BusError unreachable_bus(int r) const {
+    if (r == -ENOMEDIUM) {
+      return BusError{"weedsprayd is not reachable: this shell has no " + bus_kind_ +
+                          " bus (set DBUS_SESSION_BUS_ADDRESS to the bus weedsprayd --user is on)",
+                      kExitUnreachable};
+    }
+    return BusError{"weedsprayd is not running (cannot connect to the " + bus_kind_ +
+                        " bus: " + std::strerror(-r) + ")",
+                    kExitUnreachable};
   }
 
   static int on_signal(sd_bus_message* m, void* userdata, sd_bus_error*) {
@@ -419,6 +455,8 @@ class Client {
     std::cout.flush();
     return 0;
   }
+
+  std::string bus_kind_;
 
   void print_event(const std::string& kind, const std::string& name, const Value& value) {
     if (json_) {
@@ -522,7 +560,7 @@ int run_wheel_calibration(Client& client, double run_distance_m, double timeout_
   std::cerr << "sprayctl: calibrate-wheel: no straight run of " << run_distance_m << " m within "
             << timeout_s << " s (state " << (last_state.empty() ? "not started" : last_state)
             << ")\n";
-  return 1;
+  return kExitRefused;
 }
 
 // Follows the Calibration property until the run stops (done, cancelled or awaiting the
@@ -556,14 +594,14 @@ int run_meter_calibration(Client& client, double catch_test_s, double volume_l) 
   std::cout << "catch test: every valve open for " << catch_test_s
             << " s; collect the liquid of every nozzle\n"
             << std::flush;
-  if (!follow_calibration(client, "awaiting_volume", catch_test_s + 30.0)) return 1;
+  if (!follow_calibration(client, "awaiting_volume", catch_test_s + 30.0)) return kExitRefused;
   std::cout << "measure the collected litres, then: sprayctl calibrate meter --volume L\n";
   return 0;
 }
 
 int run_nozzle_calibration(Client& client, double timeout_s) {
   client.call("CalibrateNozzles");
-  if (!follow_calibration(client, "done", timeout_s)) return 1;
+  if (!follow_calibration(client, "done", timeout_s)) return kExitRefused;
   const Properties p = client.get_all();
   const auto found = p.find("NozzleCalibration");
   const auto* lines =
@@ -604,6 +642,7 @@ int main(int argc, char** argv) {
   double pressure_mpa = 0;
   app.add_flag("--user", user_bus, "use the session bus (weedsprayd --user)");
   app.add_flag("--json", json, "machine-readable output (one JSON object per line)");
+  app.set_version_flag("--version", std::string("sprayctl ") + WEEDSPRAY_VERSION);
   app.require_subcommand(1);
   auto* status = app.add_subcommand("status", "show the sprayer's state and measurements");
   auto* monitor = app.add_subcommand("monitor", "print property changes and alarms until Ctrl-C");
@@ -665,8 +704,24 @@ int main(int argc, char** argv) {
   export_map->prefix_command();
   export_map->set_help_flag();
   for (auto* sub : {status, monitor, alarms}) sub->add_flag("--json", json, "JSON output");
-  CLI11_PARSE(app, argc, argv);
+  // A bare `sprayctl` prints its usage; usage errors exit with their own status (CLI11's
+  // default, 106 and up, says nothing to a script).
+  app.name("sprayctl");
+  if (argc == 1) {
+    std::cerr << app.help();
+    return kExitUsage;
+  }
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    const int status = app.exit(error);
+    return status == 0 ? 0 : kExitUsage;
+  }
   if (*export_map) return exec_export_map(export_map->remaining());
+  if (*calibrate_meter && !(catch_test_s > 0) && !(collected_l > 0)) {
+    std::cerr << "sprayctl: calibrate meter: --seconds S (start the catch test) or --volume L\n";
+    return kExitUsage;
+  }
 
   try {
     Client client(user_bus);
@@ -692,8 +747,6 @@ int main(int argc, char** argv) {
     } else if (*reload) {
       client.call("ReloadConfig");
     } else if (*calibrate_meter) {
-      if (!(catch_test_s > 0) && !(collected_l > 0))
-        throw BusError{"calibrate meter: --seconds S (start the catch test) or --volume L"};
       return run_meter_calibration(client, catch_test_s, collected_l);
     } else if (*calibrate_nozzles) {
       return run_nozzle_calibration(client, nozzle_timeout_s);
@@ -712,7 +765,7 @@ int main(int argc, char** argv) {
     }
   } catch (const BusError& error) {
     std::cerr << "sprayctl: " << error.message << "\n";
-    return 1;
+    return error.exit_status;
   }
   return 0;
 }

@@ -75,4 +75,7 @@ namespace weedspray::daemon {
 // from it): each key preceded by its documentation, type, unit, range and choices.
 [[nodiscard]] std::string documented_config();
 
+// The same table as the man page weedspray.toml(5), in roff; `version` goes in its header.
+[[nodiscard]] std::string config_reference_man(std::string_view version);
+
 }  // namespace weedspray::daemon

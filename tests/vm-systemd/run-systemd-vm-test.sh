@@ -114,34 +114,10 @@ source "$source_dir/tests/vm/vm-kernel.sh"
 vm_kernel_init
 
 # --- the package, as a user builds it ----------------------------------------------------
-build_package() { # -> $deb
-  local started=$SECONDS
-  mkdir -p "$pkg_build" || die "cannot create the package tree '$pkg_build'"
-  if [ ! -f "$pkg_build/CMakeCache.txt" ]; then
-    note "configuring $pkg_build (Release, CMAKE_INSTALL_PREFIX=/usr, BUILD_TESTING=OFF)"
-    cmake -S "$source_dir" -B "$pkg_build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
-      -DCMAKE_INSTALL_PREFIX=/usr -DBUILD_TESTING=OFF >"$pkg_build.configure.log" 2>&1 || {
-      cat "$pkg_build.configure.log" >&2
-      die "configuring the package tree failed"
-    }
-  fi
-  if ! grep -qx "WEEDSPRAY_SELFTEST_NO_FAILSAFE:BOOL=$no_failsafe" "$pkg_build/CMakeCache.txt"; then
-    cmake -DWEEDSPRAY_SELFTEST_NO_FAILSAFE="$no_failsafe" "$pkg_build" >>"$pkg_build.configure.log" 2>&1 ||
-      die "cannot set WEEDSPRAY_SELFTEST_NO_FAILSAFE=$no_failsafe in $pkg_build"
-  fi
-  cmake --build "$pkg_build" -j"$(nproc)" >"$pkg_build.build.log" 2>&1 || {
-    tail -n 50 "$pkg_build.build.log" >&2
-    die "building the package tree failed (log: $pkg_build.build.log)"
-  }
-  rm -f "$pkg_build"/weedspray_*.deb
-  (cd "$pkg_build" && cpack -G DEB) >"$pkg_build.cpack.log" 2>&1 || {
-    cat "$pkg_build.cpack.log" >&2
-    die "cpack -G DEB failed"
-  }
-  local debs=("$pkg_build"/weedspray_*.deb)
-  [ -f "${debs[0]}" ] || die "cpack made no weedspray_*.deb in $pkg_build"
-  deb="${debs[0]}"
-  note "package $(basename "$deb") built in $((SECONDS - started)) s"
+# The package tree and its .deb: tools/build-deb.sh. -> $deb
+build_package() {
+  deb="$("$source_dir/tools/build-deb.sh" --source "$source_dir" --tree "$pkg_build" \
+    --no-failsafe "$no_failsafe")" || die "building the package failed"
 }
 
 # arm64: the arm64 preset's tree is built already (ctest runs after the build); its package is

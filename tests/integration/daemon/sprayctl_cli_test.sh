@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# sprayctl's command line and exit statuses (sprayctl(1) EXIT STATUS): --version names the
+# project's version; a bare call and usage errors print usage and exit 2, without a bus; with
+# no session bus, and on a PRIVATE session bus without weedsprayd, it says weedsprayd is not
+# running and exits 3; against weedsprayd --sim a request done exits 0 and one the daemon
+# refuses exits 1 with the daemon's reason.
+# usage: sprayctl_cli_test.sh BUILD_DIR VERSION
+set -euo pipefail
+BUILD=$(realpath "$1")
+VERSION=$2
+WEEDSPRAYD=$BUILD/daemon/weedsprayd
+SPRAYCTL=$BUILD/daemon/sprayctl
+. "$(dirname "$0")/private_bus_lib.sh" sprayctl-cli
+
+# expect STATUS PATTERN ARGS...: sprayctl ARGS (run under `env ${ENV[@]}`) exits STATUS and its
+# output (both streams) matches the extended regular expression PATTERN.
+ENV=()
+expect() {
+  local want=$1 pattern=$2 got=0
+  shift 2
+  env "${ENV[@]}" "$SPRAYCTL" "$@" >"$T/out.txt" 2>&1 || got=$?
+  [ "$got" -eq "$want" ] || fail "sprayctl $*: exit status $got, expected $want: $(cat "$T/out.txt")"
+  grep -qE -- "$pattern" "$T/out.txt" || fail "sprayctl $*: '$pattern' not in: $(cat "$T/out.txt")"
+}
+
+expect 0 "^sprayctl ${VERSION//./\\.}$" --version
+expect 2 "^Usage: sprayctl " # bare
+expect 2 "required|not expected|could not be matched" no-such-command
+expect 2 "MPA is required" set-pressure
+expect 2 "could not be converted|Could not convert" set-pressure high
+expect 2 "--seconds S .* or --volume L" calibrate meter
+# Nobody to talk to: no session bus in this shell (no address, then an address with no bus
+# behind it), then a bus without the daemon.
+ENV=(-u DBUS_SESSION_BUS_ADDRESS -u XDG_RUNTIME_DIR)
+expect 3 "^sprayctl: weedsprayd is not reachable: this shell has no session bus" --user status
+ENV=(-u DBUS_SESSION_BUS_ADDRESS XDG_RUNTIME_DIR="$T")
+expect 3 "^sprayctl: weedsprayd is not running \(cannot connect to the session bus" --user status
+ENV=()
+start_private_bus
+expect 3 "^sprayctl: weedsprayd is not running \(no org\.weedspray\.Sprayer1 on the session bus\)$" \
+  --user status
+expect 3 "weedsprayd is not running" --user start
+
+cat >"$T/weedspray.toml" <<'TOML'
+[sim]
+speed_profile = "constant"
+speed_max_m_per_s = 1.0
+TOML
+start_sim_daemon --run-seconds 60
+expect 0 "^State: *Idle" --user status
+# Outside the set-point's range: refused by the daemon, which says why.
+expect 1 "^sprayctl: org\.weedspray\.Sprayer1\.Error\.[A-Za-z]+: .*" --user set-pressure 5.0
+echo "ok: sprayctl --version, usage (2), not running (3), done (0) and refused (1)"

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Every long option and subcommand that PROGRAM --help lists (and, for each subcommand,
+# PROGRAM SUBCOMMAND... --help, to any depth) appears in the man page MANPAGE as rendered by man.
+#   man_options_test.sh PROGRAM MANPAGE
+set -euo pipefail
+program="${1:?usage: man_options_test.sh PROGRAM MANPAGE}"
+manpage="${2:?usage: man_options_test.sh PROGRAM MANPAGE}"
+# ASCII rendering (LC_ALL=C), wide, without hyphenation: each name is on one line, as typed.
+page="$(LC_ALL=C MANWIDTH=250 man --no-hyphenation --no-justification -l "$manpage")"
+[ -n "$page" ] || { echo "man_options_test: $manpage renders empty" >&2; exit 1; }
+
+missing=()
+checked=0
+in_page() { grep -qE -- "(^|[^A-Za-z0-9-])$1([^A-Za-z0-9-]|$)" <<<"$page"; }
+walk() { # ARGS...: the subcommand path
+  local help
+  help="$("$program" "$@" --help)" || { echo "man_options_test: '$program $* --help' failed" >&2; exit 1; }
+  local option sub
+  for option in $(grep -oE -- '^ +(-[A-Za-z], ?)?--[a-z][a-z0-9-]*' <<<"$help" | grep -oE -- '--[a-z][a-z0-9-]*'); do
+    checked=$((checked + 1))
+    in_page "$option" || missing+=("${*:+$* }$option")
+  done
+  for sub in $(sed -n '/^Subcommands:/,/^$/p' <<<"$help" | grep -oE '^  [a-z][a-z0-9-]*' || true); do
+    checked=$((checked + 1))
+    in_page "$sub" || missing+=("${*:+$* }$sub (subcommand)")
+    walk "$@" "$sub"
+  done
+}
+walk
+((checked > 0)) || { echo "man_options_test: no option found in '$program --help'" >&2; exit 1; }
+if ((${#missing[@]})); then
+  echo "man_options_test: not in $(basename "$manpage"):" >&2
+  printf '  %s\n' "${missing[@]}" >&2
+  exit 1
+fi
+echo "man_options_test: all $checked options and subcommands of $(basename "$program") are in $(basename "$manpage")"
