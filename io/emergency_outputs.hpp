@@ -3,12 +3,13 @@
 // ends the process) or std::terminate (an exception that escaped a thread or a C callback).
 // Each output device registers, at start-up, one write that puts it in its safe state as a
 // single syscall on a file descriptor it already holds (a GPIO line handle's SET_LINE_VALUES
-// ioctl, a pwrite of a sysfs attribute): the handler then runs only async-signal-safe calls - no allocation, no locks, no library - and re-raises the signal
-// so the process still dies of it (core dump, systemd's Restart=on-failure, the exit status).
-// kill -9 and power loss run nothing in the process: the exit watcher (the same writes on
-// copies of these descriptors, daemon/backends/emergency_write_handoff.hpp), ExecStopPost
-// (weedspray-safe-outputs) and the optional heartbeat relay cover those.
-// Hand-written because it must run inside a signal handler: fixed storage, no allocation.
+// ioctl, a pwrite of a sysfs attribute): the handler then runs only async-signal-safe calls - no
+// allocation, no locks, no library - and re-raises the signal so the process still dies of it (core
+// dump, systemd's Restart=on-failure, the exit status). kill -9 and power loss run nothing in the
+// process: the exit watcher (the same writes on copies of these descriptors,
+// daemon/backends/emergency_write_handoff.hpp), ExecStopPost (weedspray-safe-outputs) and the
+// optional heartbeat relay cover those. Hand-written because it must run inside a signal handler:
+// fixed storage, no allocation.
 #pragma once
 
 #include <array>

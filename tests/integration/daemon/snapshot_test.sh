@@ -48,7 +48,7 @@ for _ in $(seq 1 40); do
     got=1
     break
   fi
-  grep -q "no frame yet\|ServiceUnknown\|was not provided" "$T/err.txt" ||
+  grep -q "no frame yet\|is not running" "$T/err.txt" ||
     fail "snapshot: $(cat "$T/err.txt")"
   sleep 0.25
 done
