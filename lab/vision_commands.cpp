@@ -143,8 +143,9 @@ void add_vision_commands(CLI::App& app) {
                    "A zone is weedy when at least this share of it is weed")
       ->capture_default_str();
   eval->add_option("--crop-margin-px", weeds.crop_margin_px,
-                   "hybrid: crop mask grown by this many pixels (default " +
-                       std::to_string(kDefaultCropMarginPx) + ", or the configuration's)");
+                   "hybrid: crop mask grown by this many pixels (default: vision.crop_margin_cm, "
+                   "the daemon's or --config's, at the images' ground scale; " +
+                       std::to_string(kDefaultCropMarginPx) + " where that is unknown)");
   eval->add_option("--row-band", weeds.row_band_fraction,
                    "inter_row: crop-row band width as a share of the frame width");
   eval->add_flag("--bounds", eval_options->bounds,

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -77,6 +78,11 @@ WeedEvalRow evaluate_weed_source(const std::vector<LabelledImage>& images,
     row.zones = tally_zones(row.zone_samples, rule);
   }
   return row;
+}
+
+int crop_margin_px_at(double crop_margin_cm, double image_mm_per_px, int fallback_px) {
+  if (!(image_mm_per_px > 0)) return fallback_px;
+  return static_cast<int>(std::lround(crop_margin_cm * 10.0 / image_mm_per_px));
 }
 
 ImageIntervals image_intervals(const WeedEvalRow& row) {

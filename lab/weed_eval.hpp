@@ -32,6 +32,10 @@ struct ImageIntervals {
 };
 ImageIntervals image_intervals(const WeedEvalRow& row);
 
+// The hybrid's crop margin (a ground distance) in pixels of images image_mm_per_px each, as
+// the daemon converts vision.crop_margin_cm for a camera; fallback_px where the scale is unknown.
+int crop_margin_px_at(double crop_margin_cm, double image_mm_per_px, int fallback_px);
+
 // Runs `config` (its weed_source, with the rule's zone grid) over every image, each one a
 // fresh start for the row tracker (the photos are not a sequence). With class_masks, the
 // masks hold class ids (0 soil, 1 crop, 2 weed) and give scores and zones; a mask with other

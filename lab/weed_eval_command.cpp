@@ -7,6 +7,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "daemon/config/config.hpp"
 #include "lab/weed_eval.hpp"
 #include "lab/weed_model.hpp"
 
@@ -24,7 +25,7 @@ struct Setup {
 Setup setup_from(const WeedEvalOptions& options) {
   Setup setup;
   setup.zones.decision_threshold = default_decision_threshold();
-  setup.base.crop_margin_px = kDefaultCropMarginPx;
+  double crop_margin_cm = daemon::default_config().vision.crop_margin_cm;
   if (!options.config.empty()) {
     DaemonVisionSetup daemon = read_daemon_vision_setup(options.config);
     setup.base = daemon.pipeline;
@@ -33,6 +34,7 @@ Setup setup_from(const WeedEvalOptions& options) {
     setup.zones.rows = setup.base.rows;
     setup.zones.cols = setup.base.cols;
     setup.dataset_mm_per_px = daemon.dataset_mm_per_px;
+    crop_margin_cm = daemon.crop_margin_cm;
   }
   if (!options.model.empty()) {
     WeedModel model = read_weed_model(options.model);
@@ -44,6 +46,8 @@ Setup setup_from(const WeedEvalOptions& options) {
   // The images are photos, not the configured camera's frames: their own scale.
   setup.base.frame_mm_per_px =
       options.image_mm_per_px > 0 ? options.image_mm_per_px : setup.dataset_mm_per_px;
+  setup.base.crop_margin_px =
+      crop_margin_px_at(crop_margin_cm, setup.base.frame_mm_per_px, kDefaultCropMarginPx);
   if (!options.grid.empty()) {
     parse_grid_option("--grid", options.grid, setup.zones.rows, setup.zones.cols);
   }

@@ -16,7 +16,7 @@ struct WeedEvalOptions {
   std::string grid;                // ROWSxCOLS (empty: the configuration's, else 2x4)
   double decision_threshold = -1;  // < 0: the configuration's, else the daemon default
   double weedy_share = 0.005;
-  int crop_margin_px = -1;        // < 0: the configuration's, else kDefaultCropMarginPx
+  int crop_margin_px = -1;        // < 0: vision.crop_margin_cm at the images' scale (see setup)
   double row_band_fraction = -1;  // < 0: the configuration's, else InterRowRule's default
   // Ground size of one pixel of the images; 0: the model's training photos' (its JSON's
   // training.dataset_mm_per_px), else unknown (frames squeezed to the network's input size).

@@ -46,6 +46,7 @@ DaemonVisionSetup read_daemon_vision_setup(const std::filesystem::path& config_f
     setup.dataset_mm_per_px = config.model->dataset_mm_per_px;
   }
   setup.decision_threshold = config.spray.decision_threshold;
+  setup.crop_margin_cm = config.vision.crop_margin_cm;
   return setup;
 }
 

@@ -32,6 +32,7 @@ struct DaemonVisionSetup {
   std::vector<std::uint8_t> onnx;
   double decision_threshold = 0;
   double dataset_mm_per_px = 0;  // the model's training photos' ground scale; 0 = not stated
+  double crop_margin_cm = 0;     // vision.crop_margin_cm, to convert at the images' own scale
 };
 DaemonVisionSetup read_daemon_vision_setup(const std::filesystem::path& config_file);
 

@@ -111,5 +111,11 @@ TEST(ImageIntervals, BracketTheFiguresAndCollapseForIdenticalImages) {
   EXPECT_GT(mixed.recall[0], 0.1);
 }
 
+TEST(WeedEval, CropMarginIsAGroundDistanceAtTheImagesScale) {
+  EXPECT_EQ(crop_margin_px_at(2.0, 0.3125, 3), 64);  // 20 mm at 0.3125 mm/px
+  EXPECT_EQ(crop_margin_px_at(2.0, 2.0, 3), 10);
+  EXPECT_EQ(crop_margin_px_at(2.0, 0.0, 3), 3);  // scale unknown: the fallback
+}
+
 }  // namespace
 }  // namespace weedspray::lab
