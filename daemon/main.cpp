@@ -5,6 +5,7 @@
 #include "daemon/backends/sim_faults.hpp"
 #include "daemon/config/config.hpp"
 #include "daemon/config/config_schema.hpp"
+#include "daemon/config/model_timing.hpp"
 #include "daemon/config/options.hpp"
 #include "daemon/config/vision_config.hpp"
 #include "daemon/run.hpp"
@@ -68,8 +69,12 @@ int main(int argc, char** argv) {
         for (const auto& file : config.files) std::cout << " " << file;
         std::cout << "\n";
         for (const auto& line : describe_model_use(config)) std::cout << line << "\n";
+        for (const auto& line : time_model_use(config)) std::cout << line << "\n";
       }
       return 0;
+    } catch (const VisionKeyError& error) {
+      std::cerr << "weedsprayd: " << error.key() << ": " << error.what() << "\n";
+      return 1;
     } catch (const ConfigError& error) {
       std::cerr << "weedsprayd: " << error.what() << "\n";
       return 1;

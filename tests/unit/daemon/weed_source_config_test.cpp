@@ -7,6 +7,7 @@
 
 #include "daemon/config/config.hpp"
 #include "daemon/config/config_schema.hpp"
+#include "daemon/config/model_timing.hpp"
 #include "daemon/config/vision_config.hpp"
 #include "vision/weed_source.hpp"
 
@@ -135,6 +136,18 @@ TEST_F(OwnModel, CheckConfigSaysHowEachCameraMeetsTheModel) {
             std::string::npos)
       << lines[0];
   EXPECT_TRUE(describe_model_use(parse_weed_config("")).empty());
+}
+
+TEST_F(OwnModel, CheckConfigTimesEachCamerasFramesThroughTheModel) {
+  describe(kBgrSpec);
+  const auto lines =
+      time_model_use(parse_weed_config(dnn() + "[boom]\nnozzles = 8\n[[camera]]\n[[camera]]\n"
+                                               "width = 640\nheight = 400\nfirst_nozzle = 4\n"));
+  ASSERT_EQ(lines.size(), 2U);
+  EXPECT_NE(lines[0].find("camera[0]: dnn on 1280x800 frames: "), std::string::npos) << lines[0];
+  EXPECT_NE(lines[1].find("camera[1]: dnn on 640x400 frames: "), std::string::npos) << lines[1];
+  EXPECT_NE(lines[1].find(" ms per frame on this machine (one thread)"), std::string::npos);
+  EXPECT_TRUE(time_model_use(parse_weed_config("")).empty());
 }
 
 TEST_F(OwnModel, KeysThatDisagreeWithTheModelAreRefusedByName) {
