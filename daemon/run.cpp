@@ -347,6 +347,9 @@ class Daemon final : public CommandHandler {
     const Transition t = state_.handle(event);
     if (t.accepted && t.from != t.to) {
       spdlog::info("state {} -> {} ({})", to_string(t.from), to_string(t.to), cause);
+      // A calibration runs only in Idle: ended here, so the parameters published below close
+      // its valves and stop the pump in this tick, not the next.
+      if (t.to != SprayerState::kIdle && calibrating()) calibrations_->cancel(cause);
       publish_params();
       const std::string status = "STATUS=" + std::string(to_string(t.to));
       sd_notify(0, status.c_str());
@@ -363,13 +366,15 @@ class Daemon final : public CommandHandler {
     LiveParams params = live_params_from(config_);
     params.setpoint_mpa = setpoint_mpa_;
     // A calibration (in Idle) runs the pump for its own valves.
-    params.pump_enabled = state_.pump_enabled() || (calibrations_ && calibrations_->running());
+    params.pump_enabled = state_.pump_enabled(calibrating());
     params.valves_enabled = state_.valves_enabled();
     params.trip_reset = trip_reset_;
     if (calibrations_) calibrations_->apply(params);
     sprayer_->set_params(params);
     refresh_status();
   }
+
+  bool calibrating() const noexcept { return calibrations_ && calibrations_->running(); }
 
   void tick() {
     run_requested_test_fault();
@@ -530,6 +535,7 @@ class Daemon final : public CommandHandler {
     AlarmInputs in;
     in.now = now;
     in.spraying = state_.state() == SprayerState::kSpraying;
+    in.pump_commanded = state_.pump_enabled(calibrating());
     in.open_fraction = control.open_fraction;
     in.pressure_valid = pressure.cycles == 0 || pressure.sensor_ok;
     in.pressure_mpa = pressure.pressure_mpa;

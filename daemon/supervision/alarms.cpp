@@ -78,7 +78,9 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
     condition[static_cast<std::size_t>(id)] = present;
     hold_s[static_cast<std::size_t>(id)] = needs_debounce ? t.debounce_s : 0.0;
   };
-  const bool valves_open = in.spraying && in.open_fraction > 0.05;
+  // Judged whenever the pump is asked to run with valves open: spraying, and the calibrations
+  // (a catch test holds every valve open for minutes).
+  const bool valves_open = in.pump_commanded && in.open_fraction > 0.05;
   set(AlarmId::kPressureSensorFault, !in.pressure_valid, false);
   // One bad reading (a glitch on the loop, a lost converter sample) must not latch Fault: the
   // pressure loop already stops the pump in every cycle whose reading is bad, so the machine

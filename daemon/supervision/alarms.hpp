@@ -16,8 +16,8 @@ namespace weedspray::daemon {
 enum class AlarmId : std::uint8_t {
   kOverPressure,         // pressure above alarms.over_pressure_mpa: pump off
   kPressureSensorFault,  // loop current < 3.6 mA or > 21 mA
-  kLineBlocked,          // pressure high and flow low while valves are open
-  kNoFlow,               // valves open, pressure normal, no flow (pump, meter or tank)
+  kLineBlocked,          // pressure high and flow low while the pump runs and valves are open
+  kNoFlow,               // pump on, valves open, pressure normal, no flow (pump, meter or tank)
   kTankLow,
   kTankEmpty,
   kModbusSilent,       // the tank sensor stopped answering
@@ -45,6 +45,7 @@ bool is_fault(AlarmId id) noexcept;
 struct AlarmInputs {
   std::chrono::nanoseconds now{};
   bool spraying = false;
+  bool pump_commanded = false;  // the pump is asked to run: spraying, or a calibration in Idle
   double open_fraction = 0;     // mean commanded valve duty, 0..1
   bool pressure_valid = false;  // false: sensor fault (see sensor_current_ma)
   double pressure_mpa = 0;

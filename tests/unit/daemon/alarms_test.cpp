@@ -17,6 +17,7 @@ AlarmInputs healthy(std::chrono::nanoseconds now) {
   AlarmInputs in;
   in.now = now;
   in.spraying = true;
+  in.pump_commanded = true;
   in.open_fraction = 0.5;
   in.pressure_valid = true;
   in.pressure_mpa = 0.4;
@@ -113,8 +114,33 @@ TEST(Alarms, NoFlowOnlyWhileValvesOpen) {
   AlarmEvaluator alarms(thresholds());
   auto in = healthy(0s);
   in.spraying = false;
+  in.pump_commanded = false;
   in.flow_l_per_min = 0.0;
   for (int i = 0; i < 60; ++i) EXPECT_EQ(alarms.evaluate(at(in, i * 100ms)), 0U);
+}
+
+// A calibration runs the pump in Idle with its own valves open (a catch test: all of them):
+// the line monitors judge it as they judge spraying.
+TEST(Alarms, NoFlowAndLineBlockedDuringACalibration) {
+  auto in = healthy(0s);
+  in.spraying = false;
+  in.camera_expected = false;
+  in.pump_commanded = true;
+  in.open_fraction = 1.0;
+  in.flow_l_per_min = 0.0;
+  {
+    AlarmEvaluator alarms(thresholds());
+    EXPECT_EQ(alarms.evaluate(in), 0U);
+    EXPECT_EQ(alarms.evaluate(at(in, 1100ms)), alarm_bit(AlarmId::kNoFlow));
+    EXPECT_TRUE(alarms.fault_latched());
+  }
+  in.pressure_mpa = 0.8;
+  {
+    AlarmEvaluator alarms(thresholds());
+    EXPECT_EQ(alarms.evaluate(in), 0U);
+    EXPECT_EQ(alarms.evaluate(at(in, 1100ms)), alarm_bit(AlarmId::kLineBlocked));
+    EXPECT_TRUE(alarms.fault_latched());
+  }
 }
 
 TEST(Alarms, TankLowThenEmpty) {
