@@ -542,6 +542,9 @@ class Daemon final : public CommandHandler {
     in.over_pressure_trip = pressure.tripped;
     in.sensor_current_ma = pressure.current_ma;
     in.flow_l_per_min = control.flow_l_per_min;
+    // From the control loop's own cycles: a valve open between two ticks still counts.
+    if (control.cycles > 0 && control.open_fraction == 0.0)
+      in.valves_closed_s = seconds(control.time - control.valves_last_open);
     in.tank_enabled = backends_.tank != nullptr && (config_.modbus.enabled || options_.sim);
     const io::TankLevelSample tank = sprayer_->tank();
     in.tank_valid = tank.ok;
@@ -601,6 +604,12 @@ class Daemon final : public CommandHandler {
       if (id == AlarmId::kOutputWriteFailed) {
         spdlog::error("alarm raised: {} ({}; fault: every other output driven safe)", name,
                       output_failures);
+      } else if (id == AlarmId::kFlowValvesClosed) {
+        spdlog::error(
+            "alarm raised: {} ({:.3f} L/min through the meter with every valve commanded closed "
+            "for {:.1f} s: a valve leaks, sticks open or its wire does not close it; fault: "
+            "valves closed, pump off)",
+            name, in.flow_l_per_min, in.valves_closed_s);
       } else if (is_fault(id)) {
         spdlog::error("alarm raised: {} (fault: valves closed, pump off)", name);
       } else if (id == AlarmId::kControlOverruns) {

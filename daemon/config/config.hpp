@@ -271,6 +271,8 @@ struct AlarmsSection {
   int control_overrun_limit;        // such misses per second that raise control_overruns
   double calibration_drift_pct;     // the meter and the calibrated nozzles this far apart ...
   double calibration_drift_hold_s;  // ... for this long raise calibration_drift
+  double closed_flow_l_per_min;     // flow above this with every valve closed ...
+  double closed_flow_settle_s;      // ... closed this long: flow_with_valves_closed (Fault)
 };
 
 struct LogSection {

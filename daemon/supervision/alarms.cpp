@@ -21,6 +21,7 @@ constexpr std::array<std::string_view, kAlarmCount> kNames = {
     "gnss_fix_lost",
     "nozzle_flow_fault",
     "calibration_drift",
+    "flow_with_valves_closed",
 };
 
 double seconds(std::chrono::nanoseconds t) {
@@ -49,6 +50,7 @@ bool is_fault(AlarmId id) noexcept {
     case AlarmId::kTankEmpty:
     case AlarmId::kCameraLost:
     case AlarmId::kOutputWriteFailed:
+    case AlarmId::kFlowValvesClosed:
       return true;
     default:
       return false;
@@ -95,6 +97,12 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
   set(AlarmId::kNoFlow,
       valves_open && in.pressure_valid && in.pressure_mpa <= t.blocked_pressure_mpa &&
           in.flow_l_per_min < t.no_flow_l_per_min,
+      true);
+  // Liquid through the meter with every valve commanded closed, once the line has drained: a
+  // valve that leaks, sticks open or whose wire no longer closes it. In every state: with the
+  // pump off the line's pressure can still push liquid out.
+  set(AlarmId::kFlowValvesClosed,
+      in.valves_closed_s >= t.closed_flow_settle_s && in.flow_l_per_min > t.closed_flow_l_per_min,
       true);
   set(AlarmId::kTankLow, in.tank_enabled && in.tank_valid && in.tank_level_pct < t.tank_low_pct,
       true);

@@ -29,8 +29,9 @@ enum class AlarmId : std::uint8_t {
   kGnssFixLost,        // GNSS enabled, no usable fix for gnss.lost_fix_timeout_s
   kNozzleFlowFault,    // one nozzle's flow off its baseline ([nozzle_health]; nozzle named)
   kCalibrationDrift,   // the flow trim has held the boom off its calibration: recalibrate
+  kFlowValvesClosed,   // flow with every valve commanded closed: a leaking or stuck-open valve
 };
-inline constexpr std::size_t kAlarmCount = 15;
+inline constexpr std::size_t kAlarmCount = 16;
 
 using AlarmMask = std::uint32_t;
 constexpr AlarmMask alarm_bit(AlarmId id) noexcept {
@@ -52,6 +53,7 @@ struct AlarmInputs {
   bool over_pressure_trip = false;  // the pressure loop already cut the pump
   double sensor_current_ma = 0;
   double flow_l_per_min = 0;
+  double valves_closed_s = 0;  // how long every valve has been commanded closed (0: one is open)
   bool tank_enabled = false;
   bool tank_valid = false;
   double tank_level_pct = 0;
