@@ -1040,13 +1040,16 @@ int run_daemon(const Options& options) {
   io::install_fatal_exit_handlers();
 #endif
   Config config;
+  bool no_heartbeat = false;
   try {
     config = load_with_overrides(options);
+    if (!options.sim) no_heartbeat = require_heartbeat(config);
   } catch (const ConfigError& error) {
     std::fprintf(stderr, "weedsprayd: %s\n", error.what());
     return 1;
   }
   setup_logging(config.daemon.log_level);
+  if (no_heartbeat) spdlog::warn("{}", kNoHeartbeatWarning);
   if (install_test_crash_hook())
     spdlog::warn("test crash hook enabled (WEEDSPRAY_TEST_CRASH_HOOK)");
   if (options.sim && !options.config_given && !std::filesystem::exists(options.config_path)) {

@@ -265,6 +265,10 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "heartbeat line by name instead of offset (empty = use the offset)"},
     {WS_KEY(gpio, heartbeat_hz), 50.0, 1, 250, "Hz",
      "heartbeat square-wave frequency (the relay's hold-up time must exceed a few periods)"},
+    {WS_KEY(gpio, heartbeat_opt_out), false, 0, 1, "",
+     "hardware mode starts only with a heartbeat output (heartbeat_offset or heartbeat_name), "
+     "the channel that cuts valves and pump when the daemon stops driving them; true starts "
+     "without one, with a warning at every start"},
     {WS_KEY(gpio, key_offset), -1, -1, 1023, "line",
      "start/stop key input (-1 = none); each press toggles Idle/Spraying"},
     {WS_KEY(gpio, key_name), std::string(""), 0, 0, "",
