@@ -65,6 +65,8 @@ int main(int argc, char** argv) {
       if (options.dump_config) {
         std::cout << dump_config(config);
       } else {
+        if (!options.sim && require_heartbeat(config))
+          std::cerr << "weedsprayd: warning: " << kNoHeartbeatWarning << "\n";
         std::cout << "configuration OK:";
         for (const auto& file : config.files) std::cout << " " << file;
         std::cout << "\n";

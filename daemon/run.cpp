@@ -347,6 +347,9 @@ class Daemon final : public CommandHandler {
     const Transition t = state_.handle(event);
     if (t.accepted && t.from != t.to) {
       spdlog::info("state {} -> {} ({})", to_string(t.from), to_string(t.to), cause);
+      // A calibration runs only in Idle: ended here, so the parameters published below close
+      // its valves and stop the pump in this tick, not the next.
+      if (t.to != SprayerState::kIdle && calibrating()) calibrations_->cancel(cause);
       publish_params();
       const std::string status = "STATUS=" + std::string(to_string(t.to));
       sd_notify(0, status.c_str());
@@ -363,13 +366,15 @@ class Daemon final : public CommandHandler {
     LiveParams params = live_params_from(config_);
     params.setpoint_mpa = setpoint_mpa_;
     // A calibration (in Idle) runs the pump for its own valves.
-    params.pump_enabled = state_.pump_enabled() || (calibrations_ && calibrations_->running());
+    params.pump_enabled = state_.pump_enabled(calibrating());
     params.valves_enabled = state_.valves_enabled();
     params.trip_reset = trip_reset_;
     if (calibrations_) calibrations_->apply(params);
     sprayer_->set_params(params);
     refresh_status();
   }
+
+  bool calibrating() const noexcept { return calibrations_ && calibrations_->running(); }
 
   void tick() {
     run_requested_test_fault();
@@ -530,12 +535,16 @@ class Daemon final : public CommandHandler {
     AlarmInputs in;
     in.now = now;
     in.spraying = state_.state() == SprayerState::kSpraying;
+    in.pump_commanded = state_.pump_enabled(calibrating());
     in.open_fraction = control.open_fraction;
     in.pressure_valid = pressure.cycles == 0 || pressure.sensor_ok;
     in.pressure_mpa = pressure.pressure_mpa;
     in.over_pressure_trip = pressure.tripped;
     in.sensor_current_ma = pressure.current_ma;
     in.flow_l_per_min = control.flow_l_per_min;
+    // From the control loop's own cycles: a valve open between two ticks still counts.
+    if (control.cycles > 0 && control.open_fraction == 0.0)
+      in.valves_closed_s = seconds(control.time - control.valves_last_open);
     in.tank_enabled = backends_.tank != nullptr && (config_.modbus.enabled || options_.sim);
     const io::TankLevelSample tank = sprayer_->tank();
     in.tank_valid = tank.ok;
@@ -595,6 +604,12 @@ class Daemon final : public CommandHandler {
       if (id == AlarmId::kOutputWriteFailed) {
         spdlog::error("alarm raised: {} ({}; fault: every other output driven safe)", name,
                       output_failures);
+      } else if (id == AlarmId::kFlowValvesClosed) {
+        spdlog::error(
+            "alarm raised: {} ({:.3f} L/min through the meter with every valve commanded closed "
+            "for {:.1f} s: a valve leaks, sticks open or its wire does not close it; fault: "
+            "valves closed, pump off)",
+            name, in.flow_l_per_min, in.valves_closed_s);
       } else if (is_fault(id)) {
         spdlog::error("alarm raised: {} (fault: valves closed, pump off)", name);
       } else if (id == AlarmId::kControlOverruns) {
@@ -1025,13 +1040,16 @@ int run_daemon(const Options& options) {
   io::install_fatal_exit_handlers();
 #endif
   Config config;
+  bool no_heartbeat = false;
   try {
     config = load_with_overrides(options);
+    if (!options.sim) no_heartbeat = require_heartbeat(config);
   } catch (const ConfigError& error) {
     std::fprintf(stderr, "weedsprayd: %s\n", error.what());
     return 1;
   }
   setup_logging(config.daemon.log_level);
+  if (no_heartbeat) spdlog::warn("{}", kNoHeartbeatWarning);
   if (install_test_crash_hook())
     spdlog::warn("test crash hook enabled (WEEDSPRAY_TEST_CRASH_HOOK)");
   if (options.sim && !options.config_given && !std::filesystem::exists(options.config_path)) {

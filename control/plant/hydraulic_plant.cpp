@@ -200,9 +200,10 @@ void HydraulicPlant::set_return_valve_volts(double volts) {
 }
 
 void HydraulicPlant::set_valves(std::uint32_t mask) {
+  valve_mask_ = mask;
   for (int i = 0; i < params_.nozzle_count; ++i) {
     Valve& v = valves_[static_cast<std::size_t>(i)];
-    const bool cmd = ((mask >> i) & 1U) != 0;
+    const bool cmd = ((mask >> i) & 1U) != 0 || v.stuck_open;
     if (cmd == v.commanded) continue;
     v.commanded = cmd;
     const NozzleTruth& t = truth_[static_cast<std::size_t>(i)];
@@ -457,6 +458,12 @@ double HydraulicPlant::pressure_sensor_volts() const {
 double HydraulicPlant::true_meter_pulses_per_l() const {
   return params_.flow_meter.nominal_pulses_per_l * (1.0 + params_.flow_meter.k_factor_error) *
          (1.0 + meter_drift_);
+}
+
+void HydraulicPlant::set_valve_stuck_open(int i, bool stuck) {
+  (void)nozzle_truth(i);  // range check
+  valves_[static_cast<std::size_t>(i)].stuck_open = stuck;
+  set_valves(valve_mask_);  // moves now, as a command would
 }
 
 void HydraulicPlant::set_nozzle_blockage(int i, double fraction) {

@@ -282,6 +282,7 @@ class HydraulicPlant {
 
   // --- fault injection (for alarm tests) ---
   void set_nozzle_blockage(int i, double fraction);  // 0 clear .. 1 fully blocked
+  void set_valve_stuck_open(int i, bool stuck);      // opens whatever it is commanded
   void set_filter_blockage(double fraction);         // reduces pump flow by this fraction
   void set_sensor_wire_broken(bool broken);          // loop current 0 mA
   void set_sensor_shorted(bool shorted);             // loop current 24 mA
@@ -309,6 +310,7 @@ class HydraulicPlant {
     double wear = 0.0;
     double ageing = 1.0;
     double flow_l_per_s = 0.0;
+    bool stuck_open = false;
   };
 
   bool inertance_on() const { return params_.boom.inertance_mpa_s2_per_l > 0.0; }
@@ -324,6 +326,7 @@ class HydraulicPlant {
   PlantParams params_;
   std::array<NozzleTruth, kMaxNozzles> truth_{};
   std::array<Valve, kMaxNozzles> valves_{};
+  std::uint32_t valve_mask_ = 0;  // the last set_valves() command
   std::mt19937_64 rng_;
   std::normal_distribution<double> unit_normal_{0.0, 1.0};
   // Draws of the realism effects come from their own stream so the ideal bench's draws (and

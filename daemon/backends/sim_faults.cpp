@@ -89,6 +89,14 @@ std::optional<SimFault> parse_sim_fault(const std::string& text) {
     fault.apply = [nozzle, blockage](Plant& p) {
       if (nozzle < p.nozzle_count()) p.set_nozzle_blockage(nozzle, blockage);
     };
+  } else if (fault.name.starts_with("valve") && fault.name.size() >= 7 && fault.name[5] >= '0' &&
+             fault.name[5] <= '7' &&
+             (fault.name.substr(6) == "_stuck_open" || fault.name.substr(6) == "_freed")) {
+    const int valve = fault.name[5] - '0';
+    const bool stuck = fault.name.ends_with("_stuck_open");
+    fault.apply = [valve, stuck](Plant& p) {
+      if (valve < p.nozzle_count()) p.set_valve_stuck_open(valve, stuck);
+    };
   } else {
     constexpr std::pair<const char*, OutputRole> kOutputs[] = {
         {"valve", OutputRole::kValves},        {"pump", OutputRole::kPump},

@@ -32,7 +32,8 @@ inline constexpr const char* kSimFaultNames =
     "sensor_open, sensor_short, sensor_ok, filter_blocked, filter_ok, tank_empty, tank_refill, "
     "nozzleN_blocked, nozzleN_blocked_PP (PP % blocked, 1..99), nozzleN_ok, "
     "meter_drift_PP / meter_drift_minus_PP (the meter's true K off by PP %, 1..30), "
-    "nozzles_worn_PP (every tip PP % more flow, 1..50), camera_gone, "
+    "nozzles_worn_PP (every tip PP % more flow, 1..50), valveN_stuck_open (opens whatever it "
+    "is commanded), valveN_freed, camera_gone, "
     "camera_back, tank_silent, tank_ok; "
     "OUTPUT_write_fail / OUTPUT_write_ok with OUTPUT valve, pump, buzzer, led, heartbeat, "
     "return_valve; return_valve_write_fail_N (its next N writes fail, 1..99)";

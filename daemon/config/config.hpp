@@ -139,6 +139,7 @@ struct GpioSection {
   int heartbeat_offset;  // square wave while the valve thread runs (external dead-man relay)
   std::string heartbeat_name;
   double heartbeat_hz;
+  bool heartbeat_opt_out;  // hardware mode without a heartbeat output: allowed, warned at start
   int key_offset;
   std::string key_name;
   bool key_active_low;
@@ -271,6 +272,8 @@ struct AlarmsSection {
   int control_overrun_limit;        // such misses per second that raise control_overruns
   double calibration_drift_pct;     // the meter and the calibrated nozzles this far apart ...
   double calibration_drift_hold_s;  // ... for this long raise calibration_drift
+  double closed_flow_l_per_min;     // flow above this with every valve closed ...
+  double closed_flow_settle_s;      // ... closed this long: flow_with_valves_closed (Fault)
 };
 
 struct LogSection {
@@ -349,6 +352,16 @@ class ConfigError : public std::runtime_error {
 // Reads `main_file` and then `<its folder>/conf.d/*.toml` in name order (later files win).
 // Throws ConfigError naming the file, line and key of the first problem.
 [[nodiscard]] Config load_config(const std::filesystem::path& main_file);
+
+// Hardware mode needs a heartbeat output (gpio.heartbeat_offset or gpio.heartbeat_name): the
+// channel outside the process that cuts valves and pump through a relay when the daemon stops
+// driving them. Throws ConfigError (file, line, key) when there is none and
+// gpio.heartbeat_opt_out is not set; returns true when that opt-out is what allows the start
+// (the caller warns).
+bool require_heartbeat(const Config& config);
+inline constexpr const char* kNoHeartbeatWarning =
+    "gpio.heartbeat_opt_out = true: no heartbeat output, so nothing outside this "
+    "process cuts valves and pump if it stops driving them";
 
 // Same, from in-memory documents (name, text) in order; used by tests and --check-config.
 [[nodiscard]] Config load_config_from_strings(

@@ -22,6 +22,28 @@ ConfigError::ConfigError(std::string file, int line, std::string key, const std:
       line_(line),
       key_(std::move(key)) {}
 
+bool require_heartbeat(const Config& config) {
+  const GpioSection& g = config.gpio;
+  if (g.heartbeat_offset >= 0 || !g.heartbeat_name.empty()) return false;
+  if (g.heartbeat_opt_out) return true;
+  const std::string message =
+      "hardware mode needs a heartbeat output: set gpio.heartbeat_name or "
+      "gpio.heartbeat_offset to the line that holds the relay powering valves and pump, or "
+      "gpio.heartbeat_opt_out = true to run without one";
+  // Located at a heartbeat key that says "none", else at the [gpio] section, else the file.
+  for (const char* key :
+       {"gpio.heartbeat_offset", "gpio.heartbeat_name", "gpio.heartbeat_opt_out"}) {
+    if (const auto s = config.sources.find(key); s != config.sources.end())
+      throw ConfigError(s->second.file, s->second.line, key, message);
+  }
+  for (const auto& [key, source] : config.sources) {
+    if (key.starts_with("gpio."))
+      throw ConfigError(source.file, source.line, "gpio.heartbeat_name", message);
+  }
+  throw ConfigError(config.files.empty() ? "<defaults>" : config.files.front(), 0,
+                    "gpio.heartbeat_name", message);
+}
+
 std::filesystem::path Config::as_applied_dir() const {
   if (!log.dir.empty()) return log.dir;
   return std::filesystem::path(daemon.state_dir) / "as-applied";

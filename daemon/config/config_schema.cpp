@@ -265,6 +265,10 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "heartbeat line by name instead of offset (empty = use the offset)"},
     {WS_KEY(gpio, heartbeat_hz), 50.0, 1, 250, "Hz",
      "heartbeat square-wave frequency (the relay's hold-up time must exceed a few periods)"},
+    {WS_KEY(gpio, heartbeat_opt_out), false, 0, 1, "",
+     "hardware mode starts only with a heartbeat output (heartbeat_offset or heartbeat_name), "
+     "the channel that cuts valves and pump when the daemon stops driving them; true starts "
+     "without one, with a warning at every start"},
     {WS_KEY(gpio, key_offset), -1, -1, 1023, "line",
      "start/stop key input (-1 = none); each press toggles Idle/Spraying"},
     {WS_KEY(gpio, key_name), std::string(""), 0, 0, "",
@@ -496,6 +500,13 @@ const std::vector<KeySpec<Config>>& config_keys() {
     {WS_KEY(alarms, calibration_drift_hold_s), 30.0, 1, 3600, "s",
      "... for this long raises calibration_drift, a warning: run sprayctl calibrate meter, then "
      "calibrate nozzles"},
+    {WS_KEY(alarms, closed_flow_l_per_min), 0.1, 0.02, 2, "L/min",
+     "the line meter's flow above this while every valve has been commanded closed for "
+     "closed_flow_settle_s (then for debounce_s) raises flow_with_valves_closed, a Fault: a "
+     "leaking or stuck-open valve, or a valve wire that no longer closes it"},
+    {WS_KEY(alarms, closed_flow_settle_s), 2.0, 1, 30, "s",
+     "after the last valve closes, the line drains and the meter's window empties for this long "
+     "before flow_with_valves_closed is judged"},
     // [log]
     {WS_KEY(log, dir), std::string(""), 0, 0, "path",
      "as-applied CSV folder (empty = <daemon.state_dir>/as-applied)"},
@@ -570,11 +581,13 @@ bool overrides_model_spec(std::string_view full_name) {
 }
 
 bool is_safety_limit(std::string_view full_name) {
-  static constexpr std::array<std::string_view, 10> kKeys = {
-      "alarms.over_pressure_mpa",   "alarms.sensor_fault_low_ma",  "alarms.sensor_fault_high_ma",
-      "alarms.sensor_fault_hold_s", "alarms.blocked_pressure_mpa", "alarms.blocked_flow_l_per_min",
-      "alarms.no_flow_l_per_min",   "alarms.debounce_s",           "alarms.tank_empty_pct",
-      "alarms.camera_stall_s"};
+  static constexpr std::array<std::string_view, 12> kKeys = {
+      "alarms.over_pressure_mpa",     "alarms.sensor_fault_low_ma",
+      "alarms.sensor_fault_high_ma",  "alarms.sensor_fault_hold_s",
+      "alarms.blocked_pressure_mpa",  "alarms.blocked_flow_l_per_min",
+      "alarms.no_flow_l_per_min",     "alarms.debounce_s",
+      "alarms.tank_empty_pct",        "alarms.camera_stall_s",
+      "alarms.closed_flow_l_per_min", "alarms.closed_flow_settle_s"};
   return std::find(kKeys.begin(), kKeys.end(), full_name) != kKeys.end();
 }
 

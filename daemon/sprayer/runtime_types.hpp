@@ -110,7 +110,8 @@ struct ControlStatus {
   std::uint64_t overruns = 0;
   std::uint64_t misses = 0;  // lateness that affects spraying (alarms.timing_tolerance_ms)
   double open_fraction = 0;
-  bool inputs_stale = false;                       // valves held closed because an input is stale
+  Nanos valves_last_open{};   // the last cycle that commanded any valve open (0: none yet)
+  bool inputs_stale = false;  // valves held closed because an input is stale
   SpeedSource speed_source = SpeedSource::kFixed;  // where speed_m_per_s came from this cycle
   bool speed_fell_back = false;                    // speed.source = "gnss" without a usable fix
   double yaw_rate_deg_per_s = 0;  // turn compensation's yaw rate, clockwise (0: off or straight)

@@ -654,6 +654,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       open_sum += duty / 100.0;
     }
     status.open_fraction = nozzles > 0 ? open_sum / static_cast<double>(nozzles) : 0.0;
+    if (open_sum > 0.0) status.valves_last_open = now;
     if (io_.flow != nullptr && spray) {
       // The lab's rig feeds the same trim through the same windows (closed_loop_rig.cpp), so
       // `weedspray-lab experiment orthogonal` measures this law.

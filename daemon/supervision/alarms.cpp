@@ -21,6 +21,7 @@ constexpr std::array<std::string_view, kAlarmCount> kNames = {
     "gnss_fix_lost",
     "nozzle_flow_fault",
     "calibration_drift",
+    "flow_with_valves_closed",
 };
 
 double seconds(std::chrono::nanoseconds t) {
@@ -49,6 +50,7 @@ bool is_fault(AlarmId id) noexcept {
     case AlarmId::kTankEmpty:
     case AlarmId::kCameraLost:
     case AlarmId::kOutputWriteFailed:
+    case AlarmId::kFlowValvesClosed:
       return true;
     default:
       return false;
@@ -78,7 +80,9 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
     condition[static_cast<std::size_t>(id)] = present;
     hold_s[static_cast<std::size_t>(id)] = needs_debounce ? t.debounce_s : 0.0;
   };
-  const bool valves_open = in.spraying && in.open_fraction > 0.05;
+  // Judged whenever the pump is asked to run with valves open: spraying, and the calibrations
+  // (a catch test holds every valve open for minutes).
+  const bool valves_open = in.pump_commanded && in.open_fraction > 0.05;
   set(AlarmId::kPressureSensorFault, !in.pressure_valid, false);
   // One bad reading (a glitch on the loop, a lost converter sample) must not latch Fault: the
   // pressure loop already stops the pump in every cycle whose reading is bad, so the machine
@@ -93,6 +97,12 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
   set(AlarmId::kNoFlow,
       valves_open && in.pressure_valid && in.pressure_mpa <= t.blocked_pressure_mpa &&
           in.flow_l_per_min < t.no_flow_l_per_min,
+      true);
+  // Liquid through the meter with every valve commanded closed, once the line has drained: a
+  // valve that leaks, sticks open or whose wire no longer closes it. In every state: with the
+  // pump off the line's pressure can still push liquid out.
+  set(AlarmId::kFlowValvesClosed,
+      in.valves_closed_s >= t.closed_flow_settle_s && in.flow_l_per_min > t.closed_flow_l_per_min,
       true);
   set(AlarmId::kTankLow, in.tank_enabled && in.tank_valid && in.tank_level_pct < t.tank_low_pct,
       true);

@@ -16,8 +16,8 @@ namespace weedspray::daemon {
 enum class AlarmId : std::uint8_t {
   kOverPressure,         // pressure above alarms.over_pressure_mpa: pump off
   kPressureSensorFault,  // loop current < 3.6 mA or > 21 mA
-  kLineBlocked,          // pressure high and flow low while valves are open
-  kNoFlow,               // valves open, pressure normal, no flow (pump, meter or tank)
+  kLineBlocked,          // pressure high and flow low while the pump runs and valves are open
+  kNoFlow,               // pump on, valves open, pressure normal, no flow (pump, meter or tank)
   kTankLow,
   kTankEmpty,
   kModbusSilent,       // the tank sensor stopped answering
@@ -29,8 +29,9 @@ enum class AlarmId : std::uint8_t {
   kGnssFixLost,        // GNSS enabled, no usable fix for gnss.lost_fix_timeout_s
   kNozzleFlowFault,    // one nozzle's flow off its baseline ([nozzle_health]; nozzle named)
   kCalibrationDrift,   // the flow trim has held the boom off its calibration: recalibrate
+  kFlowValvesClosed,   // flow with every valve commanded closed: a leaking or stuck-open valve
 };
-inline constexpr std::size_t kAlarmCount = 15;
+inline constexpr std::size_t kAlarmCount = 16;
 
 using AlarmMask = std::uint32_t;
 constexpr AlarmMask alarm_bit(AlarmId id) noexcept {
@@ -45,12 +46,14 @@ bool is_fault(AlarmId id) noexcept;
 struct AlarmInputs {
   std::chrono::nanoseconds now{};
   bool spraying = false;
+  bool pump_commanded = false;  // the pump is asked to run: spraying, or a calibration in Idle
   double open_fraction = 0;     // mean commanded valve duty, 0..1
   bool pressure_valid = false;  // false: sensor fault (see sensor_current_ma)
   double pressure_mpa = 0;
   bool over_pressure_trip = false;  // the pressure loop already cut the pump
   double sensor_current_ma = 0;
   double flow_l_per_min = 0;
+  double valves_closed_s = 0;  // how long every valve has been commanded closed (0: one is open)
   bool tank_enabled = false;
   bool tank_valid = false;
   double tank_level_pct = 0;

@@ -34,9 +34,12 @@ class StateMachine {
   Transition handle(StateEvent event);
 
   // Valves may open and the pump run only while Spraying; Idle keeps sensors live, valves
-  // closed and the pump off.
+  // closed and the pump off, except that a calibration runs the pump in Idle (`calibrating`).
+  // Fault never runs it, whatever else asks.
   bool valves_enabled() const noexcept { return state_ == SprayerState::kSpraying; }
-  bool pump_enabled() const noexcept { return state_ == SprayerState::kSpraying; }
+  bool pump_enabled(bool calibrating = false) const noexcept {
+    return state_ == SprayerState::kSpraying || (calibrating && state_ == SprayerState::kIdle);
+  }
 
  private:
   SprayerState state_ = SprayerState::kStarting;

@@ -110,7 +110,9 @@ class SmallSetTraining(unittest.TestCase):
         main = os.path.join(self.etc, "weedspray.toml")
         with open(main, "w") as out:
             out.write("# the defaults\n")
-        checked = subprocess.run([os.environ["WEEDSPRAYD"], "--check-config", "--config", main],
+        # --sim: the defaults wire no heartbeat, which hardware mode requires.
+        checked = subprocess.run([os.environ["WEEDSPRAYD"], "--sim", "--check-config",
+                                  "--config", main],
                                  capture_output=True, text=True)
         self.assertEqual(checked.returncode, 0, checked.stderr)
         self.assertIn("configuration OK", checked.stdout)

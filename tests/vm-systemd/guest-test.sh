@@ -153,6 +153,7 @@ led_name = "lamp"
 key_name = "key"
 key_active_low = false
 wheel_name = "wheel"
+heartbeat_name = "heartbeat"
 
 [flow]
 counter = "interrupt-cnt"

@@ -19,12 +19,6 @@ PY=/usr/bin/python3
 . "$(dirname "$0")/private_bus_lib.sh" calibration
 start_private_bus
 
-stop_daemon() {
-  kill -TERM "$DAEMON_PID"
-  wait "$DAEMON_PID" || fail "weedsprayd exit status $?"
-  DAEMON_PID=
-}
-
 cat >"$T/weedspray.toml" <<'TOML'
 [boom]
 nozzles = 3

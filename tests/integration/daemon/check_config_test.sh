@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # weedsprayd --check-config refuses trip limits that would let a fault pass (a cut sensor wire
 # read as a pressure, an over-pressure trip beyond the sensor's full scale), naming
-# file:line: key, as the daemon does at start; the shipped configuration passes.
+# file:line: key, as the daemon does at start, and a hardware configuration without a heartbeat
+# output unless its opt-out is set; the shipped configuration passes once one of them is.
 # usage: check_config_test.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
 BUILD=$(realpath "$1")
@@ -22,8 +23,33 @@ refused() {  # refused NAME LOCATION: NAME.toml refused with LOCATION in the mes
   echo "ok: $name refused: $(cat "$T/$name.log")"
 }
 
-"$BUILD/daemon/weedsprayd" --check-config --config "$SOURCE/etc/weedspray.toml" >"$T/shipped.log" 2>&1 ||
-  fail "the shipped configuration is refused"
+# The shipped configuration wires no heartbeat: hardware mode refuses it, at the key, until a
+# heartbeat line or the opt-out is set (a drop-in); a simulation needs none.
+mkdir -p "$T/etc/conf.d"
+cp "$SOURCE/etc/weedspray.toml" "$T/etc/weedspray.toml"
+line=$(grep -n '^heartbeat_offset = -1$' "$T/etc/weedspray.toml" | cut -d: -f1)
+[ -n "$line" ] || fail "the shipped configuration sets no heartbeat_offset"
+cp "$T/etc/weedspray.toml" "$T/shipped.toml"
+refused shipped "$line: gpio.heartbeat_offset: hardware mode needs a heartbeat output"
+if "$BUILD/daemon/weedsprayd" --no-bus --run-seconds 1 --config "$T/etc/weedspray.toml" \
+  >"$T/start.log" 2>&1; then
+  fail "weedsprayd started in hardware mode without a heartbeat"
+fi
+grep -q "^weedsprayd: $T/etc/weedspray.toml:$line: gpio.heartbeat_offset: hardware mode needs" \
+  "$T/start.log" || fail "start without a heartbeat: $(cat "$T/start.log")"
+echo "ok: start without a heartbeat refused: $(cat "$T/start.log")"
+"$BUILD/daemon/weedsprayd" --sim --check-config --config "$T/etc/weedspray.toml" >"$T/sim.log" 2>&1 ||
+  fail "the shipped configuration is refused for a simulation"
+printf '[gpio]\nheartbeat_opt_out = true\n' >"$T/etc/conf.d/50-opt-out.toml"
+"$BUILD/daemon/weedsprayd" --check-config --config "$T/etc/weedspray.toml" >"$T/opt-out.log" 2>&1 ||
+  fail "the heartbeat opt-out is refused"
+grep -q "^weedsprayd: warning: gpio.heartbeat_opt_out = true: no heartbeat output" "$T/opt-out.log" ||
+  fail "the opt-out is not warned about"
+printf '[gpio]\nheartbeat_name = "HEARTBEAT"\n' >"$T/etc/conf.d/50-opt-out.toml"
+"$BUILD/daemon/weedsprayd" --check-config --config "$T/etc/weedspray.toml" >"$T/heartbeat.log" 2>&1 ||
+  fail "the shipped configuration with a heartbeat is refused"
+if grep -q "warning" "$T/heartbeat.log"; then fail "warned with a heartbeat: $(cat "$T/heartbeat.log")"; fi
+rm -f "$T"/etc/conf.d/*.toml
 
 printf '[alarms]\nsensor_fault_low_ma = 0\n' >"$T/cut_wire.toml"
 refused cut_wire "2: alarms.sensor_fault_low_ma: 0 is outside"

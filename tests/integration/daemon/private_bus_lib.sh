@@ -3,7 +3,7 @@
 # the daemon and the bus the script started ($DAEMON_PID, $BUS_PID) and whatever the script
 # adds to EXIT_HOOKS (commands, run after the daemon is killed), fail() with the tails of the
 # logs in FAIL_LOGS (default: $T/daemon.log), start_private_bus, prop/call/wait_state on the
-# sprayer's object, and start_sim_daemon.
+# sprayer's object, start_sim_daemon and stop_daemon.
 # usage: . private_bus_lib.sh NAME   ($T is /tmp/weedspray-NAME-test.XXXXXX; KEEP=1 keeps it)
 T=$(mktemp -d "/tmp/weedspray-$1-test.XXXXXX")
 DAEMON_PID=
@@ -56,6 +56,11 @@ start_sim_daemon() {  # start_sim_daemon [WEEDSPRAYD ARGS...]
     >>"$T/daemon.log" 2>&1 &
   DAEMON_PID=$!
   wait_state Idle 15
+}
+stop_daemon() {  # SIGTERM; fails unless weedsprayd exits with status 0
+  kill -TERM "$DAEMON_PID"
+  wait "$DAEMON_PID" || fail "weedsprayd exit status $?"
+  DAEMON_PID=
 }
 wait_state() {  # wait_state STATE SECONDS
   local state

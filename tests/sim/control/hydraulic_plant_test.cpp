@@ -109,6 +109,26 @@ TEST(HydraulicPlant, ValveOpensAfterItsDelayAndClosesLater) {
   EXPECT_EQ(plant.valve_opening(0), 0.0);
 }
 
+// A valve stuck open (sim fault): open and metered while every valve is commanded closed,
+// closed again once freed.
+TEST(HydraulicPlant, AStuckOpenValveFlowsWhateverItIsCommanded) {
+  HydraulicPlant plant = settled(0x0, 4.0);
+  const std::uint64_t pulses_closed = plant.flow_meter_pulses();
+  plant.step(1.0);
+  EXPECT_EQ(plant.flow_meter_pulses(), pulses_closed) << "no flow with every valve closed";
+  plant.set_valve_stuck_open(2, true);
+  plant.step(1.0);
+  plant.set_valves(0x0);
+  plant.step(1.0);
+  EXPECT_EQ(plant.valve_opening(2), 1.0);
+  EXPECT_EQ(plant.valve_opening(0), 0.0);
+  EXPECT_GT(plant.nozzle_flow_l_per_min(2), 0.1);
+  EXPECT_GT(plant.flow_meter_pulses(), pulses_closed + 100);
+  plant.set_valve_stuck_open(2, false);
+  plant.step(1.0);
+  EXPECT_EQ(plant.valve_opening(2), 0.0);
+}
+
 TEST(HydraulicPlant, SameSeedReproducesExactlyAndOtherSeedDiffers) {
   auto run = [](std::uint64_t seed) {
     HydraulicPlant plant(PlantParams{}, seed);

@@ -17,6 +17,7 @@ AlarmInputs healthy(std::chrono::nanoseconds now) {
   AlarmInputs in;
   in.now = now;
   in.spraying = true;
+  in.pump_commanded = true;
   in.open_fraction = 0.5;
   in.pressure_valid = true;
   in.pressure_mpa = 0.4;
@@ -32,6 +33,10 @@ AlarmInputs healthy(std::chrono::nanoseconds now) {
   in.vision_latency_s = 0.002;
   in.lead_distance_m = 1.4;
   return in;
+}
+
+std::chrono::nanoseconds from_s(double s) {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::duration<double>(s));
 }
 
 // Moves the clock of `in` to t with the camera and tank sensor still fresh.
@@ -113,8 +118,65 @@ TEST(Alarms, NoFlowOnlyWhileValvesOpen) {
   AlarmEvaluator alarms(thresholds());
   auto in = healthy(0s);
   in.spraying = false;
+  in.pump_commanded = false;
   in.flow_l_per_min = 0.0;
   for (int i = 0; i < 60; ++i) EXPECT_EQ(alarms.evaluate(at(in, i * 100ms)), 0U);
+}
+
+// A calibration runs the pump in Idle with its own valves open (a catch test: all of them):
+// the line monitors judge it as they judge spraying.
+TEST(Alarms, NoFlowAndLineBlockedDuringACalibration) {
+  auto in = healthy(0s);
+  in.spraying = false;
+  in.camera_expected = false;
+  in.pump_commanded = true;
+  in.open_fraction = 1.0;
+  in.flow_l_per_min = 0.0;
+  {
+    AlarmEvaluator alarms(thresholds());
+    EXPECT_EQ(alarms.evaluate(in), 0U);
+    EXPECT_EQ(alarms.evaluate(at(in, 1100ms)), alarm_bit(AlarmId::kNoFlow));
+    EXPECT_TRUE(alarms.fault_latched());
+  }
+  in.pressure_mpa = 0.8;
+  {
+    AlarmEvaluator alarms(thresholds());
+    EXPECT_EQ(alarms.evaluate(in), 0U);
+    EXPECT_EQ(alarms.evaluate(at(in, 1100ms)), alarm_bit(AlarmId::kLineBlocked));
+    EXPECT_TRUE(alarms.fault_latched());
+  }
+}
+
+// A valve that leaks or sticks open: flow through the meter with every valve commanded closed,
+// judged once the line has drained (closed_flow_settle_s), then after the debounce.
+TEST(Alarms, FlowWithEveryValveClosedIsAFault) {
+  const AlarmsSection t = thresholds();
+  auto in = healthy(0s);
+  in.open_fraction = 0.0;
+  in.flow_l_per_min = t.closed_flow_l_per_min * 3;
+  in.valves_closed_s = t.closed_flow_settle_s * 0.9;  // still draining
+  AlarmEvaluator alarms(t);
+  for (int i = 0; i < 40; ++i) EXPECT_EQ(alarms.evaluate(at(in, i * 100ms)), 0U);
+  in.valves_closed_s = t.closed_flow_settle_s;
+  EXPECT_EQ(alarms.evaluate(at(in, 4s)), 0U);
+  EXPECT_EQ(alarms.evaluate(at(in, 4s + from_s(t.debounce_s) + 50ms)),
+            alarm_bit(AlarmId::kFlowValvesClosed));
+  EXPECT_TRUE(alarms.fault_latched());
+  EXPECT_EQ(alarm_name(AlarmId::kFlowValvesClosed), "flow_with_valves_closed");
+}
+
+TEST(Alarms, NoClosedValveFaultBelowItsFlowOrWithAValveOpen) {
+  const AlarmsSection t = thresholds();
+  auto in = healthy(0s);
+  in.open_fraction = 0.0;
+  in.valves_closed_s = 60;
+  in.flow_l_per_min = t.closed_flow_l_per_min * 0.9;  // meter noise, a drip
+  AlarmEvaluator alarms(t);
+  for (int i = 0; i < 60; ++i) EXPECT_EQ(alarms.evaluate(at(in, i * 100ms)), 0U);
+  in.valves_closed_s = 0;  // spraying normally: a valve open
+  in.open_fraction = 0.5;
+  in.flow_l_per_min = 2.0;
+  for (int i = 60; i < 120; ++i) EXPECT_EQ(alarms.evaluate(at(in, i * 100ms)), 0U);
 }
 
 TEST(Alarms, TankLowThenEmpty) {

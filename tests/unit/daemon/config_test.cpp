@@ -187,6 +187,46 @@ TEST(ConfigErrors, UnknownKeyNamesFileLineAndKey) {
       << e.what();
 }
 
+// Hardware mode needs the heartbeat (the relay that cuts valves and pump outside the process),
+// or the explicit opt-out.
+TEST(ConfigErrors, HardwareWithoutAHeartbeatIsRefusedAtTheGpioSection) {
+  const Config config =
+      load_config_from_strings({{"main.toml", "[boom]\nnozzles = 4\n[gpio]\nchip = \"x\"\n"}});
+  try {
+    (void)require_heartbeat(config);
+    FAIL() << "accepted without a heartbeat";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.file(), "main.toml");
+    EXPECT_EQ(e.line(), 4);
+    EXPECT_EQ(e.key(), "gpio.heartbeat_name");
+    EXPECT_NE(std::string(e.what()).find("hardware mode needs a heartbeat output"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(ConfigErrors, HeartbeatSetToNoneIsRefusedThere) {
+  const Config config =
+      load_config_from_strings({{"main.toml", "[gpio]\n\nheartbeat_offset = -1\n"}});
+  try {
+    (void)require_heartbeat(config);
+    FAIL() << "accepted without a heartbeat";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_EQ(e.key(), "gpio.heartbeat_offset");
+  }
+}
+
+TEST(ConfigErrors, HeartbeatOrItsOptOutLetsHardwareStart) {
+  EXPECT_FALSE(require_heartbeat(
+      load_config_from_strings({{"main.toml", "[gpio]\nheartbeat_name = \"HB\"\n"}})));
+  EXPECT_FALSE(require_heartbeat(
+      load_config_from_strings({{"main.toml", "[gpio]\nheartbeat_offset = 7\n"}})));
+  // The opt-out allows the start and says so (the caller warns).
+  EXPECT_TRUE(require_heartbeat(
+      load_config_from_strings({{"main.toml", "[gpio]\nheartbeat_opt_out = true\n"}})));
+}
+
 TEST(ConfigErrors, UnknownSection) {
   const auto e = parse_error({{"main.toml", "\n[presure]\nsetpoint_mpa = 0.3\n"}});
   EXPECT_EQ(e.line(), 2);

@@ -56,6 +56,18 @@ TEST(StateMachine, FaultLatchesSafeUntilAlarmsCleared) {
   EXPECT_EQ(sm.state(), SprayerState::kIdle);
 }
 
+TEST(StateMachine, ACalibrationRunsThePumpInIdleOnlyNeverInFault) {
+  StateMachine sm;
+  EXPECT_FALSE(sm.pump_enabled(true)) << "Starting: pump off even for a calibration";
+  sm.handle(StateEvent::kSetupDone);
+  EXPECT_TRUE(sm.pump_enabled(true)) << "Idle: a calibration runs the pump";
+  EXPECT_FALSE(sm.valves_enabled());
+  // A Fault during the calibration: the pump is off at once, whatever the calibration asks.
+  EXPECT_TRUE(sm.handle(StateEvent::kFault).accepted);
+  EXPECT_FALSE(sm.pump_enabled(true));
+  EXPECT_FALSE(sm.valves_enabled());
+}
+
 TEST(StateMachine, FaultDuringStartup) {
   StateMachine sm;
   EXPECT_TRUE(sm.handle(StateEvent::kFault).accepted);
