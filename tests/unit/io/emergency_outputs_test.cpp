@@ -82,9 +82,25 @@ int run_child(const std::filesystem::path& file, Death how, int signal, bool arm
   return status;
 }
 
+// Whether a child with no handler installed dies of `signal` raised on itself: qemu-user
+// (the arm64 tests) keeps some real-time signals for itself and never delivers them.
+bool delivered_here(int signal) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::raise(signal);
+    ::_exit(91);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  return WIFSIGNALED(status) && WTERMSIG(status) == signal;
+}
+
 class FatalExit : public ::testing::TestWithParam<int> {};
 
 TEST_P(FatalExit, WritesTheSafeValueAndDiesOfTheSameSignal) {
+  if (!delivered_here(GetParam())) {
+    GTEST_SKIP() << "signal " << GetParam() << " is not delivered on this machine (an emulator)";
+  }
   const auto file = std::filesystem::temp_directory_path() /
                     ("weedspray_emergency_" + std::to_string(GetParam()));
   const int status = run_child(file, Death::kSignal, GetParam(), true);
