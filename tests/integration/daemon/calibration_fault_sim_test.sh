@@ -23,10 +23,10 @@ call StartCatchTest d 60
 for _ in $(seq 1 30); do prop NozzleDuty | grep -q '^3 100 100 100$' && break; sleep 0.1; done
 prop NozzleDuty | grep -q '^3 100 100 100$' || fail "catch test valves: $(prop NozzleDuty)"
 sleep 1  # the pump at its set-point, the line flowing
-[ "$(prop Alarms)" = "0" ] || fail "alarms before the fault: $(prop Alarms)"
+expect_alarms  # none before the fault
 call InjectSimFault s filter_blocked
 wait_state Fault 10
-[ "$(prop Alarms)" = '1 "no_flow"' ] || fail "Alarms: $(prop Alarms)"
+expect_alarms no_flow
 prop Calibration | grep -q '^"cancelled"' || fail "Calibration in Fault: $(prop Calibration)"
 # The status published with the Fault may carry the control loop's cycle before it.
 for _ in $(seq 1 10); do [ "$(prop NozzleDuty)" = "3 0 0 0" ] && break; sleep 0.1; done

@@ -195,7 +195,7 @@ for _ in $(seq 1 50); do
   sleep 0.2
 done
 [ "$(prop State)" = '"Fault"' ] || fail "no Fault after the sensor wire broke"
-[ "$(prop Alarms)" = '1 "pressure_sensor_fault"' ] || fail "Alarms: $(prop Alarms)"
+expect_alarms pressure_sensor_fault
 [ "$(prop NozzleDuty)" = "4 0 0 0 0" ] || fail "valves commanded open in Fault: $(prop NozzleDuty)"
 if "$SPRAYCTL" --user start 2>/dev/null; then fail "Start accepted in Fault"; fi
 sleep 0.5

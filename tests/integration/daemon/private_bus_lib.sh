@@ -45,6 +45,17 @@ prop() {  # prop NAME -> value as busctl prints it, without the type signature
   busctl --user get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
     org.weedspray.Sprayer1 "$1" | cut -d' ' -f2-
 }
+expect_alarms() {  # expect_alarms [NAME...]: Alarms holds these, and besides them at most
+  # control_overruns, the warning a loaded test machine's late control cycles raise
+  local alarms
+  alarms=$(prop Alarms)
+  /usr/bin/python3 - "$alarms" "$@" <<'PYEOF' || fail "Alarms: $alarms, expected: ${*:-none}"
+import shlex, sys
+items = set(shlex.split(sys.argv[1])[1:]) - {"control_overruns"}
+assert items == set(sys.argv[2:]), items
+PYEOF
+}
+
 call() {  # call METHOD [SIGNATURE ARGS...]
   busctl --user call org.weedspray.Sprayer1 /org/weedspray/Sprayer1 org.weedspray.Sprayer1 "$@"
 }
