@@ -44,6 +44,14 @@ std::string format_value(const DefaultValue& value) {
   return out.str();
 }
 
+// A range bound as a reader types it: 16777216, 1000000 or 0.35, not 1.67772e+07.
+std::string bound_text(double bound) {
+  std::ostringstream out;
+  out.precision(15);
+  out << bound;
+  return out.str();
+}
+
 // "number, MPa, range 0..2; default 0.3": type, unit, range, choices and default of a key.
 template <class Root>
 std::string key_summary(const KeySpec<Root>& spec) {
@@ -53,7 +61,7 @@ std::string key_summary(const KeySpec<Root>& spec) {
   const auto type = spec.type();
   if (type == KeyType::kInt || type == KeyType::kDouble || type == KeyType::kIntList ||
       type == KeyType::kDoubleList) {
-    out << ", range " << spec.min << ".." << spec.max;
+    out << ", range " << bound_text(spec.min) << ".." << bound_text(spec.max);
   }
   if (!spec.choices.empty()) {
     out << ", one of";

@@ -607,5 +607,21 @@ TEST(DefaultConfigFile, ParsesAndDocumentsEveryKey) {
   }
 }
 
+// Ranges read as typed: "range 4096..2147483647", never "2.14748e+09" (6 significant digits).
+TEST(DefaultConfigFile, RangesAreWrittenInFull) {
+  const std::string text = documented_config();
+  std::istringstream lines(text);
+  int ranges = 0;
+  for (std::string line; std::getline(lines, line);) {
+    const auto at = line.find(", range ");
+    if (at == std::string::npos) continue;
+    ++ranges;
+    const std::string range = line.substr(at, line.find(';', at) - at);
+    EXPECT_EQ(range.find("e+"), std::string::npos) << line;
+  }
+  EXPECT_GT(ranges, 100);
+  EXPECT_NE(text.find("range 4096..2147483647"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace weedspray::daemon
