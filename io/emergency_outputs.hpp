@@ -8,7 +8,7 @@
 // dump, systemd's Restart=on-failure, the exit status). kill -9 and power loss run nothing in the
 // process: the exit watcher (the same writes on copies of these descriptors,
 // daemon/backends/emergency_write_handoff.hpp), ExecStopPost (weedspray-safe-outputs) and the
-// optional heartbeat relay cover those. Hand-written because it must run inside a signal handler:
+// heartbeat relay cover those. Hand-written because it must run inside a signal handler:
 // fixed storage, no allocation.
 #pragma once
 

@@ -260,7 +260,8 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "alarm LED line by name instead of offset (empty = use the offset)"},
     {WS_KEY(gpio, heartbeat_offset), -1, -1, 1023, "line",
      "heartbeat output (-1 = none): a square wave from the valve thread while the real-time "
-     "core runs, low when it stops; drives a retriggerable relay that powers the valves"},
+     "core runs, low when it stops, while a Fault is latched and after a refused valve or pump "
+     "write; drives a retriggerable relay that powers the valves (and the pump)"},
     {WS_KEY(gpio, heartbeat_name), std::string(""), 0, 0, "",
      "heartbeat line by name instead of offset (empty = use the offset)"},
     {WS_KEY(gpio, heartbeat_hz), 50.0, 1, 250, "Hz",
