@@ -32,8 +32,7 @@ std::vector<std::string> time_model_use(const Config& config, int frames) {
   const SingleThreadedOpenCv one_thread;
   for (std::size_t i = 0; i < config.cameras.size(); ++i) {
     const CameraSection& camera = config.cameras[i];
-    const vision::PipelineConfig pipeline_config_i = pipeline_config(config, camera);
-    vision::Pipeline pipeline(pipeline_config_i, config.model->onnx);
+    vision::Pipeline pipeline(pipeline_config(config, camera), config.model->onnx);
     // A plain soil-coloured frame: the network's cost does not depend on what it sees.
     std::vector<std::uint8_t> pixels(static_cast<std::size_t>(camera.width) * camera.height * 3);
     for (std::size_t p = 0; p < pixels.size(); p += 3) {
