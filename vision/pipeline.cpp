@@ -89,6 +89,8 @@ void validate(const PipelineConfig& config) {
   }
   require(config.crop_margin_px >= 0 && config.crop_margin_px <= 1000,
           "crop_margin_px must lie in [0, 1000]");
+  require(config.min_plant_px >= 1 && config.min_plant_px <= 1000000,
+          "min_plant_px must lie in [1, 1000000]");
 }
 
 Pipeline::Pipeline(const PipelineConfig& config, std::span<const std::uint8_t> model_onnx_bytes)

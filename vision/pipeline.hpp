@@ -39,9 +39,10 @@ struct PipelineConfig {
   // What zone_density counts (see vision/weed_source.hpp).
   WeedSource weed_source = WeedSource::kVegetation;
   InterRowRule inter_row_rule{};  // kInterRow
-  DnnModelSpec dnn{};             // kDnn, kHybrid
-  double frame_mm_per_px = 0.0;   // kDnn, kHybrid: the camera's ground scale; 0 = unknown
+  DnnModelSpec dnn{};             // kDnn, kHybrid, kPlants
+  double frame_mm_per_px = 0.0;   // kDnn, kHybrid, kPlants: the camera's ground scale; 0 = unknown
   int crop_margin_px = 0;         // kHybrid: crop mask dilated by this many frame pixels
+  int min_plant_px = 1;           // kPlants: smaller connected vegetation is not a plant
 };
 
 // The project's default: the index and threshold the daemon uses unless configured otherwise

@@ -1,6 +1,7 @@
 #include "vision/weed_classifier.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <exception>
 #include <opencv2/imgproc.hpp>
 
@@ -10,11 +11,12 @@
 namespace weedspray::vision {
 
 struct WeedClassifier::Masks {
-  cv::Mat converted;   // the region as BGR when the frame is YUYV or grey
-  cv::Mat vegetation;  // hybrid, region resolution, 0/255
-  cv::Mat near_crop;   // hybrid: the network's crop at region resolution, grown by the margin
-  cv::Mat crop;        // hybrid: vegetation within near_crop
-  cv::Mat weed;        // hybrid: vegetation outside near_crop
+  cv::Mat converted;      // the region as BGR when the frame is YUYV or grey
+  cv::Mat vegetation;     // hybrid, region resolution, 0/255
+  cv::Mat near_crop;      // hybrid: the network's crop at region resolution, grown by the margin
+  cv::Mat crop;           // hybrid: vegetation within near_crop
+  cv::Mat plant_classes;  // plants: class ids at region resolution
+  cv::Mat weed;           // hybrid: vegetation outside near_crop
   cv::Mat margin_kernel;
   cv::Mat scratch;
 };
@@ -26,6 +28,15 @@ struct ZoneRect {
   double pixels() const { return static_cast<double>(x_end - x_begin) * (y_end - y_begin); }
   cv::Rect rect() const { return {x_begin, y_begin, x_end - x_begin, y_end - y_begin}; }
 };
+
+// Plants are the colour vegetation grown by about a millimetre on the ground (1 px where the
+// scale is unknown).
+int plant_join_px(double frame_mm_per_px) {
+  constexpr double kJoinMm = 1.0;
+  return frame_mm_per_px > 0.0
+             ? std::max(1, static_cast<int>(std::lround(kJoinMm / frame_mm_per_px)))
+             : 1;
+}
 
 // Zone (row, col) of a rows x cols grid over a width x height image, as Pipeline cuts it.
 ZoneRect zone_rect(int row, int col, int rows, int cols, int width, int height) {
@@ -82,7 +93,10 @@ void densities_from_classes(const cv::Mat& classes, FrameResult& result) {
 
 WeedClassifier::WeedClassifier(const PipelineConfig& config,
                                std::span<const std::uint8_t> model_onnx_bytes)
-    : config_(config), tracker_(config.inter_row_rule), masks_(std::make_unique<Masks>()) {
+    : config_(config),
+      tracker_(config.inter_row_rule),
+      plants_(config.min_plant_px, plant_join_px(config.frame_mm_per_px)),
+      masks_(std::make_unique<Masks>()) {
   if (needs_model(config_.weed_source)) {
     network_ =
         std::make_unique<WeedNetwork>(config_.dnn, model_onnx_bytes, config_.frame_mm_per_px);
@@ -112,6 +126,10 @@ bool WeedClassifier::classify(const ImageView& frame, const PixelRect& region,
       case WeedSource::kHybrid:
         classify_dnn(frame, result);
         classify_hybrid(index, level, result);
+        break;
+      case WeedSource::kPlants:
+        classify_dnn(frame, result);
+        classify_plants(index, level, result);
         break;
     }
   } catch (const std::exception& failure) {
@@ -186,6 +204,16 @@ void WeedClassifier::classify_hybrid(const std::uint8_t* index, std::uint8_t lev
   }
 }
 
+void WeedClassifier::classify_plants(const std::uint8_t* index, std::uint8_t level,
+                                     FrameResult& result) {
+  Masks& m = *masks_;
+  const cv::Mat index_image(region_.height, region_.width, CV_8UC1,
+                            const_cast<std::uint8_t*>(index));
+  cv::compare(index_image, level, m.vegetation, cv::CMP_GT);
+  plants_.classify(m.vegetation, network_->segment_result(), m.plant_classes);
+  densities_from_classes(m.plant_classes, result);
+}
+
 PixelRect WeedClassifier::class_map_rect() const {
   if (config_.weed_source == WeedSource::kDnn) {
     const cv::Mat& classes = network_->segment_result();
@@ -226,6 +254,9 @@ ImageView WeedClassifier::class_map(const std::uint8_t* index, std::uint8_t leve
       map.setTo(kClassSoil);
       map.setTo(kClassCrop, m.crop);
       map.setTo(kClassWeed, m.weed);
+      break;
+    case WeedSource::kPlants:
+      m.plant_classes.copyTo(map);
       break;
   }
   return {out.data(), size.width, size.height, static_cast<std::size_t>(size.width),

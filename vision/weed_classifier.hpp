@@ -1,4 +1,4 @@
-// Weed and crop densities per zone for the inter_row, dnn and hybrid weed sources, from the
+// Weed and crop densities per zone for the inter_row, dnn, hybrid and plants weed sources, from the
 // frame, its vegetation index image and threshold (internal to vision/; Pipeline owns one).
 #pragma once
 
@@ -10,6 +10,7 @@
 
 #include "vision/image_view.hpp"
 #include "vision/pipeline.hpp"
+#include "vision/plant_classes.hpp"
 #include "vision/weed_inter_row.hpp"
 
 namespace weedspray::vision {
@@ -44,15 +45,17 @@ class WeedClassifier {
   void classify_inter_row(const std::uint8_t* index, std::uint8_t level, FrameResult& result);
   void classify_dnn(const ImageView& frame, FrameResult& result);
   void classify_hybrid(const std::uint8_t* index, std::uint8_t level, FrameResult& result);
+  void classify_plants(const std::uint8_t* index, std::uint8_t level, FrameResult& result);
 
   PipelineConfig config_;
   PixelRect region_{};
   CropRowTracker tracker_;
   std::vector<std::uint32_t> zone_row_columns_;  // inter_row: per zone row, per column
   std::vector<std::uint8_t> in_band_;            // inter_row: column lies in a crop-row band
-  std::unique_ptr<WeedNetwork> network_;         // dnn, hybrid
+  std::unique_ptr<WeedNetwork> network_;         // dnn, hybrid, plants
+  PlantClasses plants_;                          // plants
   struct Masks;
-  std::unique_ptr<Masks> masks_;  // OpenCV buffers (hybrid masks, class map)
+  std::unique_ptr<Masks> masks_;  // OpenCV buffers (hybrid and plants masks, class map)
 };
 
 }  // namespace weedspray::vision

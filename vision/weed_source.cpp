@@ -7,7 +7,8 @@
 namespace weedspray::vision {
 namespace {
 
-constexpr std::array<std::string_view, 4> kNames = {"vegetation", "inter_row", "dnn", "hybrid"};
+constexpr std::array<std::string_view, 5> kNames = {"vegetation", "inter_row", "dnn", "hybrid",
+                                                    "plants"};
 
 }  // namespace
 
@@ -28,7 +29,14 @@ std::span<const std::string_view> weed_source_names() {
 }
 
 bool needs_model(WeedSource source) {
-  return source == WeedSource::kDnn || source == WeedSource::kHybrid;
+  return source == WeedSource::kDnn || source == WeedSource::kHybrid ||
+         source == WeedSource::kPlants;
+}
+
+int area_in_pixels(double area_cm2, double mm_per_px, int fallback_px) {
+  if (!(mm_per_px > 0.0)) return fallback_px;
+  const double pixels = area_cm2 * 100.0 / (mm_per_px * mm_per_px);
+  return static_cast<int>(std::clamp(std::lround(pixels), 1L, 1000000L));
 }
 
 std::optional<std::string> validate_dnn_spec(const DnnModelSpec& spec) {

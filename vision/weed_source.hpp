@@ -1,6 +1,7 @@
 // What the spray decision counts as weed: every green pixel (vegetation), vegetation between
 // tracked crop rows (the 2018 paper's inter-row rule), a segmentation network's weed class
-// (dnn), or colour vegetation minus the network's crop mask (hybrid).
+// (dnn), colour vegetation minus the network's crop mask (hybrid), or colour-segmented plants
+// each classified by the network's votes (plants).
 #pragma once
 
 #include <array>
@@ -18,13 +19,14 @@ enum class WeedSource : std::uint8_t {
   kInterRow,    // vegetation outside the crop-row bands is weed
   kDnn,         // the network's weed class
   kHybrid,      // colour vegetation; crop where it lies within a margin of the network's crop
+  kPlants,      // colour vegetation, each connected plant crop or weed by the network's votes
 };
 
-// Config names: "vegetation", "inter_row", "dnn", "hybrid".
+// Config names: "vegetation", "inter_row", "dnn", "hybrid", "plants".
 std::optional<WeedSource> parse_weed_source(std::string_view name);
 std::string_view to_string(WeedSource source);
 std::span<const std::string_view> weed_source_names();
-// dnn and hybrid need a model.
+// dnn, hybrid and plants need a model.
 bool needs_model(WeedSource source);
 
 // Class ids the pipeline reports per pixel (Pipeline::class_map), whatever the source.
@@ -71,6 +73,10 @@ struct NetworkInputSize {
 // input_width x input_height.
 NetworkInputSize network_input_size(const DnnModelSpec& spec, double frame_mm_per_px,
                                     int region_width, int region_height);
+
+// An area on the ground, in cm2, as a count of pixels mm_per_px on a side (at least 1);
+// fallback_px where the scale is unknown (mm_per_px = 0).
+int area_in_pixels(double area_cm2, double mm_per_px, int fallback_px = 1);
 
 // The 2018 paper's inter-row rule with crop rows tracked from frame to frame. Rows are peaks
 // of the (smoothed) column histogram of the vegetation mask; vegetation within a band of

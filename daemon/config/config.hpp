@@ -54,9 +54,10 @@ struct VisionSection {
   std::string threshold;
   int fixed_threshold;
   int grid_rows;
-  std::string weed_source;  // vegetation|inter_row|dnn|hybrid
+  std::string weed_source;  // vegetation|inter_row|dnn|hybrid|plants
   double row_band_cm;       // inter_row: width of a crop-row band on the ground
   double crop_margin_cm;    // hybrid: the network's crop mask grown by this much
+  double min_plant_cm2;     // plants: smaller connected vegetation is not a plant
   std::string model;        // ONNX file (dnn, hybrid); relative: see resolve_model_path()
   int model_input_width;
   int model_input_height;

@@ -119,8 +119,10 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "inter_row: vegetation between the crop rows, rows found as peaks of the column histogram "
      "and tracked from frame to frame (row crops; see row_band_cm); dnn: the weed class of the "
      "segmentation network in model; hybrid: colour vegetation minus the network's crop class "
-     "grown by crop_margin_cm. The rate law uses each zone's weed density",
-     {"vegetation", "inter_row", "dnn", "hybrid"}},
+     "grown by crop_margin_cm; plants: colour vegetation at the camera's resolution, each "
+     "connected plant crop or weed by the network's votes (plants the network cannot resolve "
+     "are weed; see min_plant_cm2). The rate law uses each zone's weed density",
+     {"vegetation", "inter_row", "dnn", "hybrid", "plants"}},
     {WS_KEY(vision, row_band_cm), 30.0, 1, 500, "cm",
      "inter_row: width on the ground of the band around each crop row that counts as crop "
      "(converted to pixels with the camera's ground scale, camera.ground_mm_per_px or its "
@@ -129,6 +131,10 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "hybrid: the network's crop mask is grown by this much on the ground before it is removed "
      "from the vegetation (converted to pixels with the camera's ground scale, "
      "camera.ground_mm_per_px or its mount geometry)"},
+    {WS_KEY(vision, min_plant_cm2), 0.25, 0.01, 100, "cm2",
+     "plants: connected vegetation smaller than this on the ground is a colour speck, not a "
+     "plant (sprays nothing); also the least area the network must call weed inside a plant it "
+     "calls crop for that part to stay weed (converted with the camera's ground scale)"},
     {WS_KEY(vision, model), std::string("weed-peanut.onnx"), 0, 0, "path",
      "dnn, hybrid: the segmentation network, an ONNX file OpenCV DNN loads (checked with one "
      "forward pass at load), with its spec in NAME.json beside it (input size, normalisation, "

@@ -322,6 +322,7 @@ vision::PipelineConfig pipeline_config_with(const Config& config, const CameraSe
   c.dnn = spec;
   c.frame_mm_per_px = camera_ground_mm_per_px(camera);
   c.crop_margin_px = static_cast<int>(std::lround(v.crop_margin_cm * 10.0 / c.frame_mm_per_px));
+  c.min_plant_px = vision::area_in_pixels(v.min_plant_cm2, c.frame_mm_per_px);
   return c;
 }
 
@@ -392,8 +393,9 @@ std::shared_ptr<const LoadedModel> check_weed_source(const Config& config) {
     try {
       vision::validate(pipeline_config_with(config, camera, spec));
     } catch (const std::invalid_argument& error) {
-      const std::string key =
-          *source == vision::WeedSource::kHybrid ? "vision.crop_margin_cm" : "vision.weed_source";
+      const std::string key = *source == vision::WeedSource::kHybrid   ? "vision.crop_margin_cm"
+                              : *source == vision::WeedSource::kPlants ? "vision.min_plant_cm2"
+                                                                       : "vision.weed_source";
       throw VisionKeyError(key, which + ": " + error.what());
     }
   }

@@ -106,8 +106,9 @@ class OwnModel : public ::testing::Test {
 TEST_F(OwnModel, PipelineGetsTheModelsSpecAndGroundDistancesInPixels) {
   describe(kBgrSpec);
   // The camera's own ground scale converts ground distances, not the nozzles' span (4 x 0.5 m).
-  const Config config = parse_weed_config(dnn("crop_margin_cm = 2.0\nrow_band_cm = 30.0\n") +
-                                          "[[camera]]\nground_mm_per_px = 1.25\n");
+  const Config config =
+      parse_weed_config(dnn("crop_margin_cm = 2.0\nrow_band_cm = 30.0\nmin_plant_cm2 = 0.5\n") +
+                        "[[camera]]\nground_mm_per_px = 1.25\n");
   ASSERT_EQ(config.cameras.size(), 1U);
   ASSERT_NE(config.model, nullptr);
   EXPECT_EQ(config.model->licence, "MIT");
@@ -115,6 +116,7 @@ TEST_F(OwnModel, PipelineGetsTheModelsSpecAndGroundDistancesInPixels) {
   EXPECT_EQ(c.weed_source, vision::WeedSource::kDnn);
   EXPECT_EQ(c.cols, 4);
   EXPECT_EQ(c.crop_margin_px, 16);                               // 20 mm / 1.25 mm
+  EXPECT_EQ(c.min_plant_px, 32);                                 // 50 mm2 / 1.5625 mm2
   EXPECT_DOUBLE_EQ(c.inter_row_rule.row_band_fraction, 0.1875);  // 30 cm of 1280 x 1.25 mm
   EXPECT_FALSE(c.dnn.rgb);
   EXPECT_EQ(c.dnn.weed_class, 1);

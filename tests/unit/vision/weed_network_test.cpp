@@ -1,5 +1,5 @@
-// dnn and hybrid weed sources with tests/data/tiny-3class.onnx, a hand-set network whose class
-// k is the strongest of input channels R, G, B (after the spec's mean, scale and order).
+// dnn, hybrid and plants weed sources with tests/data/tiny-3class.onnx, a hand-set network whose
+// class k is the strongest of input channels R, G, B (after the spec's mean, scale and order).
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -271,6 +271,28 @@ TEST_F(HybridMargin, AWeedNextToTheCropIsRemovedWithinTheMarginAndKeptOutsideIt)
   EXPECT_NEAR(weed_pixels(8), 4.0, 1e-9);  // inside an 8 px margin; the far weed stays
   EXPECT_EQ(near_weed_class, kClassCrop);  // protected vegetation is attributed to the crop
   EXPECT_NEAR(weed_pixels(20), 0.0, 1e-9);
+}
+
+TEST_F(HybridMargin, PlantsKeepWeedsTooSmallForTheNetworkAndDropSpecks) {
+  const auto run = [&](int min_plant_px) {
+    PipelineConfig config = dnn_config(WeedSource::kPlants);
+    config.cols = 1;
+    config.dnn.mean_rgb = {0, 100, 0};
+    config.threshold = ThresholdMethod::kFixed;
+    config.threshold_params.fixed_threshold = 150;
+    config.min_plant_px = min_plant_px;
+    Pipeline pipeline(config, tiny_model());
+    const FrameResult result = pipeline.process(frame.view());
+    EXPECT_TRUE(pipeline.last_frame_ok()) << pipeline.last_error();
+    EXPECT_GE(result.crop_density[0], 16.0 / 64.0);  // the stripe, its grown edge included
+    const ImageView classes = pipeline.class_map();
+    EXPECT_EQ(classes.data[10 * classes.stride + 41], min_plant_px <= 12 ? kClassWeed : kClassSoil);
+    return result.zone_density[0] * 64 * 64;
+  };
+  // Each 2x2 patch, grown by the 1 px join, is a 12 px plant the network calls soil: weed
+  // at a least plant of 12 px, a speck at 13.
+  EXPECT_NEAR(run(12), 24.0, 1e-9);
+  EXPECT_NEAR(run(13), 0.0, 1e-9);
 }
 
 TEST_F(HybridMargin, TheDnnAloneMissesWeedsItDoesNotKnow) {
