@@ -1,6 +1,6 @@
 // bench-vision: time per 1280x800 BGR frame of the default pipeline, against a straightforward
 // OpenCV-primitives version of the same pipeline (cv::transform, cv::threshold with Otsu,
-// cv::countNonZero per zone); with --pipeline, of a weed source (inter_row, dnn, hybrid).
+// cv::countNonZero per zone); with --pipeline, of a weed source (inter_row, dnn, hybrid, plants).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -163,6 +163,8 @@ int run_bench(const BenchOptions& options) {
       options.frame_mm_per_px >= 0
           ? options.frame_mm_per_px
           : daemon::camera_ground_mm_per_px(daemon::default_config().cameras.front());
+  config.min_plant_px = vision::area_in_pixels(daemon::default_config().vision.min_plant_cm2,
+                                               config.frame_mm_per_px, kDefaultMinPlantPx);
   WeedModel model;
   if (!options.model.empty()) {
     model = read_weed_model(options.model);
@@ -255,11 +257,11 @@ void add_bench_vision_command(CLI::App& app) {
       "baseline, or a weed source)");
   bench
       ->add_option("--pipeline", options->pipeline,
-                   "Weed source: vegetation (the default pipeline), inter_row, dnn, hybrid")
+                   "Weed source: vegetation (the default pipeline), inter_row, dnn, hybrid, plants")
       ->capture_default_str();
   bench
       ->add_option("--model", options->model,
-                   "ONNX weed model for dnn and hybrid (spec from FILE.json)")
+                   "ONNX weed model for dnn, hybrid and plants (spec from FILE.json)")
       ->check(CLI::ExistingFile);
   bench->add_option("--crop-margin-px", options->crop_margin_px, "hybrid: crop margin in pixels")
       ->capture_default_str();

@@ -101,7 +101,7 @@ void add_vision_commands(CLI::App& app) {
   CLI::App* eval = app.add_subcommand(
       "vision-eval",
       "Every vegetation index x threshold against hand-labelled masks; with --classes or "
-      "--weed-sources, the weed sources (vegetation, inter_row, dnn, hybrid)");
+      "--weed-sources, the weed sources (vegetation, inter_row, dnn, hybrid, plants)");
   eval->add_option("--images", weeds.images_dir, "Folder of field images")
       ->required()
       ->check(CLI::ExistingDirectory);
@@ -121,10 +121,10 @@ void add_vision_commands(CLI::App& app) {
   eval->add_flag("--weed-sources", eval_options->weed_sources,
                  "Evaluate the weed sources' vegetation (crop or weed) against plant masks");
   eval->add_option("--model", weeds.model,
-                   "ONNX weed model (spec from FILE.json): adds dnn and hybrid")
+                   "ONNX weed model (spec from FILE.json): adds dnn, hybrid and plants")
       ->check(CLI::ExistingFile);
   eval->add_option("--weed-source", weeds.weed_source,
-                   "Evaluate only this source: vegetation, inter_row, dnn, hybrid");
+                   "Evaluate only this source: vegetation, inter_row, dnn, hybrid, plants");
   eval->add_option("--config", weeds.config,
                    "weedsprayd configuration: [vision] keys of the first camera, its model and "
                    "spray.decision_threshold")
@@ -139,6 +139,9 @@ void add_vision_commands(CLI::App& app) {
                    "Ground mm per pixel of the images (default: the model's training photos', "
                    "its JSON's training.dataset_mm_per_px); frames are resampled to the model's "
                    "ground scale as the daemon does");
+  eval->add_option("--frame-mm-per-px", weeds.frame_mm_per_px,
+                   "Resample the images and masks to this ground scale first, as a camera at "
+                   "that scale sees the same ground (the daemon's default camera: 1.0077)");
   eval->add_option("--weedy-share", weeds.weedy_share,
                    "A zone is weedy when at least this share of it is weed")
       ->capture_default_str();
@@ -146,6 +149,11 @@ void add_vision_commands(CLI::App& app) {
                    "hybrid: crop mask grown by this many pixels (default: vision.crop_margin_cm, "
                    "the daemon's or --config's, at the images' ground scale; " +
                        std::to_string(kDefaultCropMarginPx) + " where that is unknown)");
+  eval->add_option("--min-plant-px", weeds.min_plant_px,
+                   "plants: smaller connected vegetation is a speck (default: "
+                   "vision.min_plant_cm2, the daemon's or --config's, at the images' ground "
+                   "scale; " +
+                       std::to_string(kDefaultMinPlantPx) + " where that is unknown)");
   eval->add_option("--row-band", weeds.row_band_fraction,
                    "inter_row: crop-row band width as a share of the frame width");
   eval->add_flag("--bounds", eval_options->bounds,

@@ -80,6 +80,21 @@ WeedEvalRow evaluate_weed_source(const std::vector<LabelledImage>& images,
   return row;
 }
 
+// The images and masks as a camera of frame_mm_per_px would see the same ground: images
+// averaged (INTER_AREA, or INTER_LINEAR when enlarged), masks' class ids kept (nearest).
+void resample_to_scale(std::vector<LabelledImage>& images, double image_mm_per_px,
+                       double frame_mm_per_px) {
+  const double factor = image_mm_per_px / frame_mm_per_px;
+  const int interpolation = factor < 1.0 ? cv::INTER_AREA : cv::INTER_LINEAR;
+  for (LabelledImage& image : images) {
+    const cv::Size size(std::max(2, static_cast<int>(std::lround(image.bgr.cols * factor))),
+                        std::max(2, static_cast<int>(std::lround(image.bgr.rows * factor))));
+    cv::resize(image.bgr, image.bgr, size, 0, 0, interpolation);
+    cv::resize(image.plant, image.plant, size, 0, 0, cv::INTER_NEAREST);
+    cv::resize(image.mask, image.mask, size, 0, 0, cv::INTER_NEAREST);
+  }
+}
+
 int crop_margin_px_at(double crop_margin_cm, double image_mm_per_px, int fallback_px) {
   if (!(image_mm_per_px > 0)) return fallback_px;
   return static_cast<int>(std::lround(crop_margin_cm * 10.0 / image_mm_per_px));

@@ -36,6 +36,11 @@ ImageIntervals image_intervals(const WeedEvalRow& row);
 // the daemon converts vision.crop_margin_cm for a camera; fallback_px where the scale is unknown.
 int crop_margin_px_at(double crop_margin_cm, double image_mm_per_px, int fallback_px);
 
+// The images and masks as a camera of frame_mm_per_px would see the same ground: images
+// averaged (INTER_AREA, or INTER_LINEAR when enlarged), masks' ids kept (nearest).
+void resample_to_scale(std::vector<LabelledImage>& images, double image_mm_per_px,
+                       double frame_mm_per_px);
+
 // Runs `config` (its weed_source, with the rule's zone grid) over every image, each one a
 // fresh start for the row tracker (the photos are not a sequence). With class_masks, the
 // masks hold class ids (0 soil, 1 crop, 2 weed) and give scores and zones; a mask with other

@@ -1,6 +1,8 @@
 #include "lab/weed_eval_command.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <stdexcept>
 #include <vector>
@@ -20,12 +22,14 @@ struct Setup {
   std::vector<vision::WeedSource> sources;
   ZoneRule zones;
   double dataset_mm_per_px = 0;
+  double image_mm_per_px = 0;  // the images' own ground scale; 0 = unknown
 };
 
 Setup setup_from(const WeedEvalOptions& options) {
   Setup setup;
   setup.zones.decision_threshold = default_decision_threshold();
   double crop_margin_cm = daemon::default_config().vision.crop_margin_cm;
+  double min_plant_cm2 = daemon::default_config().vision.min_plant_cm2;
   if (!options.config.empty()) {
     DaemonVisionSetup daemon = read_daemon_vision_setup(options.config);
     setup.base = daemon.pipeline;
@@ -35,6 +39,7 @@ Setup setup_from(const WeedEvalOptions& options) {
     setup.zones.cols = setup.base.cols;
     setup.dataset_mm_per_px = daemon.dataset_mm_per_px;
     crop_margin_cm = daemon.crop_margin_cm;
+    min_plant_cm2 = daemon.min_plant_cm2;
   }
   if (!options.model.empty()) {
     WeedModel model = read_weed_model(options.model);
@@ -43,11 +48,22 @@ Setup setup_from(const WeedEvalOptions& options) {
     setup.dataset_mm_per_px = model.dataset_mm_per_px;
   }
   if (options.image_mm_per_px < 0) throw std::runtime_error("--image-mm-per-px must be >= 0");
-  // The images are photos, not the configured camera's frames: their own scale.
-  setup.base.frame_mm_per_px =
+  // The images are photos, not the configured camera's frames: their own scale, unless they
+  // are resampled to a camera's.
+  setup.image_mm_per_px =
       options.image_mm_per_px > 0 ? options.image_mm_per_px : setup.dataset_mm_per_px;
+  if (options.frame_mm_per_px < 0) throw std::runtime_error("--frame-mm-per-px must be >= 0");
+  if (options.frame_mm_per_px > 0 && !(setup.image_mm_per_px > 0)) {
+    throw std::runtime_error(
+        "--frame-mm-per-px needs the images' own scale: give --image-mm-per-px (or a --model "
+        "whose JSON states training.dataset_mm_per_px)");
+  }
+  setup.base.frame_mm_per_px =
+      options.frame_mm_per_px > 0 ? options.frame_mm_per_px : setup.image_mm_per_px;
   setup.base.crop_margin_px =
       crop_margin_px_at(crop_margin_cm, setup.base.frame_mm_per_px, kDefaultCropMarginPx);
+  setup.base.min_plant_px =
+      vision::area_in_pixels(min_plant_cm2, setup.base.frame_mm_per_px, kDefaultMinPlantPx);
   if (!options.grid.empty()) {
     parse_grid_option("--grid", options.grid, setup.zones.rows, setup.zones.cols);
   }
@@ -57,6 +73,7 @@ Setup setup_from(const WeedEvalOptions& options) {
   }
   setup.zones.weedy_share = options.weedy_share;
   if (options.crop_margin_px >= 0) setup.base.crop_margin_px = options.crop_margin_px;
+  if (options.min_plant_px >= 1) setup.base.min_plant_px = options.min_plant_px;
   if (options.row_band_fraction >= 0) {
     setup.base.inter_row_rule.row_band_fraction = options.row_band_fraction;
   }
@@ -70,6 +87,7 @@ Setup setup_from(const WeedEvalOptions& options) {
     if (!setup.onnx.empty()) {
       setup.sources.push_back(vision::WeedSource::kDnn);
       setup.sources.push_back(vision::WeedSource::kHybrid);
+      setup.sources.push_back(vision::WeedSource::kPlants);
     }
   }
   for (const vision::WeedSource source : setup.sources) {
@@ -129,12 +147,16 @@ void print_table(const WeedEvalOptions& options, std::size_t images,
   const ZoneRule& zones = setup.zones;
   std::printf("%zu images from %s%s%s\n", images, options.images_dir.c_str(),
               options.list.empty() ? "" : ", list ", options.list.c_str());
+  if (options.frame_mm_per_px > 0) {
+    std::printf("resampled from %.3g to %.4g mm/px, as a camera at that scale sees them\n",
+                setup.image_mm_per_px, options.frame_mm_per_px);
+  }
   if (options.class_masks) {
     std::printf(
         "zones %dx%d: weedy when >= %.2f %% of the zone is weed; sprayed when the weed density "
-        ">= %.4f (decision threshold); hybrid margin %d px; one thread\n\n",
+        ">= %.4f (decision threshold); hybrid margin %d px; least plant %d px; one thread\n\n",
         zones.rows, zones.cols, 100.0 * zones.weedy_share, zones.decision_threshold,
-        setup.base.crop_margin_px);
+        setup.base.crop_margin_px, setup.base.min_plant_px);
     std::printf("%-11s %7s %7s %7s %7s %7s %8s %6s %7s %10s %9s %9s %9s\n", "weed_source",
                 "IoU_soil", "crop", "weed", "MIoU", "MPA", "veg_IoU", "weedy", "recall",
                 "clean_dry", "crop_dry", "bare_dry", "ms/image");
@@ -216,8 +238,11 @@ int run_weed_eval(const WeedEvalOptions& options) {
   cv::setNumThreads(1);  // ms_per_image as on the daemon's camera worker
   const std::vector<std::string> stems =
       options.list.empty() ? std::vector<std::string>{} : read_stem_list(options.list);
-  const std::vector<LabelledImage> images =
+  std::vector<LabelledImage> images =
       load_labelled_images(options.images_dir, options.masks_dir, stems);
+  if (options.frame_mm_per_px > 0) {
+    resample_to_scale(images, setup.image_mm_per_px, options.frame_mm_per_px);
+  }
   std::vector<WeedEvalRow> rows;
   for (const vision::WeedSource source : setup.sources) {
     vision::PipelineConfig config = setup.base;

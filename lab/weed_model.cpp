@@ -47,6 +47,7 @@ DaemonVisionSetup read_daemon_vision_setup(const std::filesystem::path& config_f
   }
   setup.decision_threshold = config.spray.decision_threshold;
   setup.crop_margin_cm = config.vision.crop_margin_cm;
+  setup.min_plant_cm2 = config.vision.min_plant_cm2;
   return setup;
 }
 

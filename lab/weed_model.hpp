@@ -33,6 +33,7 @@ struct DaemonVisionSetup {
   double decision_threshold = 0;
   double dataset_mm_per_px = 0;  // the model's training photos' ground scale; 0 = not stated
   double crop_margin_cm = 0;     // vision.crop_margin_cm, to convert at the images' own scale
+  double min_plant_cm2 = 0;      // vision.min_plant_cm2, likewise
 };
 DaemonVisionSetup read_daemon_vision_setup(const std::filesystem::path& config_file);
 

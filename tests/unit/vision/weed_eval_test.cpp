@@ -117,5 +117,26 @@ TEST(WeedEval, CropMarginIsAGroundDistanceAtTheImagesScale) {
   EXPECT_EQ(crop_margin_px_at(2.0, 0.0, 3), 3);  // scale unknown: the fallback
 }
 
+TEST(WeedEval, ResamplingToACamerasScaleKeepsTheGroundAndTheClassIds) {
+  LabelledImage image;
+  image.name = "square";
+  image.bgr = cv::Mat(120, 160, CV_8UC3, cv::Scalar(30, 60, 90));
+  image.mask = cv::Mat::zeros(120, 160, CV_8UC1);
+  image.mask(cv::Rect(40, 40, 40, 40)).setTo(1);   // crop
+  image.mask(cv::Rect(100, 40, 20, 20)).setTo(2);  // weed
+  image.plant = image.mask != 0;
+  std::vector<LabelledImage> images{image};
+  resample_to_scale(images, 0.25, 1.0);  // 40 mm x 30 mm of ground at 1 mm/px
+  EXPECT_EQ(images[0].bgr.size(), cv::Size(40, 30));
+  EXPECT_EQ(images[0].mask.size(), cv::Size(40, 30));
+  EXPECT_EQ(images[0].plant.size(), cv::Size(40, 30));
+  double lowest = 0, highest = 0;
+  cv::minMaxLoc(images[0].mask, &lowest, &highest);
+  EXPECT_EQ(highest, 2.0);                                // ids, not blends of them
+  EXPECT_EQ(cv::countNonZero(images[0].mask == 1), 100);  // 10 mm x 10 mm
+  EXPECT_EQ(cv::countNonZero(images[0].mask == 2), 25);
+  EXPECT_EQ(cv::countNonZero(images[0].mask > 2), 0);
+}
+
 }  // namespace
 }  // namespace weedspray::lab
