@@ -5,6 +5,7 @@
 #include "daemon/backends/sim_faults.hpp"
 #include "daemon/config/config.hpp"
 #include "daemon/config/config_schema.hpp"
+#include "daemon/config/hardware_check.hpp"
 #include "daemon/config/model_timing.hpp"
 #include "daemon/config/options.hpp"
 #include "daemon/config/vision_config.hpp"
@@ -20,6 +21,10 @@ int main(int argc, char** argv) {
   app.add_flag("--resume", options.resume,
                "sim: continue the last simulation's totals (otherwise they start from zero)");
   app.add_flag("--check-config", options.check_config, "validate the configuration and exit");
+  app.add_flag("--hardware", options.check_hardware,
+               "with --check-config: also check what hardware mode needs (valve lines, the "
+               "heartbeat, the wheel line) and that every device named exists; every problem "
+               "is listed");
   app.add_flag("--dump-config", options.dump_config, "print the effective configuration");
   app.add_flag("--print-default-config", options.print_default_config,
                "print every key, documented, at its default");
@@ -59,20 +64,34 @@ int main(int argc, char** argv) {
     std::cout << documented_config();
     return 0;
   }
+  if (options.check_hardware && !options.check_config) {
+    std::cerr << "weedsprayd: --hardware needs --check-config\n";
+    return 1;
+  }
   if (options.check_config || options.dump_config) {
     try {
       const Config config = load_config(options.config_path);
       if (options.dump_config) {
         std::cout << dump_config(config);
-      } else {
-        if (!options.sim && require_heartbeat(config))
-          std::cerr << "weedsprayd: warning: " << kNoHeartbeatWarning << "\n";
-        std::cout << "configuration OK:";
-        for (const auto& file : config.files) std::cout << " " << file;
-        std::cout << "\n";
-        for (const auto& line : describe_model_use(config)) std::cout << line << "\n";
-        for (const auto& line : time_model_use(config)) std::cout << line << "\n";
+        return 0;
       }
+      if (options.check_hardware) {
+        const std::vector<ConfigError> problems = check_hardware(config);
+        for (const auto& problem : problems) std::cerr << "weedsprayd: " << problem.what() << "\n";
+        if (!problems.empty()) {
+          std::cerr << "weedsprayd: " << problems.size()
+                    << " problem(s) keep hardware mode from starting\n";
+          return 1;
+        }
+      }
+      if (!options.sim && require_heartbeat(config))
+        std::cerr << "weedsprayd: warning: " << kNoHeartbeatWarning << "\n";
+      std::cout << "configuration OK" << (options.check_hardware ? " for hardware mode" : "")
+                << ":";
+      for (const auto& file : config.files) std::cout << " " << file;
+      std::cout << "\n";
+      for (const auto& line : describe_model_use(config)) std::cout << line << "\n";
+      for (const auto& line : time_model_use(config)) std::cout << line << "\n";
       return 0;
     } catch (const VisionKeyError& error) {
       std::cerr << "weedsprayd: " << error.key() << ": " << error.what() << "\n";

@@ -11,6 +11,7 @@ struct Options {
   bool config_given = false;  // --config was on the command line
   bool resume = false;        // sim: continue the last simulation's totals
   bool check_config = false;
+  bool check_hardware = false;  // --hardware: with --check-config, what hardware mode needs
   bool dump_config = false;
   bool print_default_config = false;
   bool sim = false;              // simulated hydraulics, pulses and camera
