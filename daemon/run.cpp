@@ -490,6 +490,14 @@ class Daemon final : public CommandHandler {
         [&](Calibrations& c) { return c.calibrate_nozzles(calibration_context()); });
   }
 
+  void bus_lost() override {
+    spdlog::critical(
+        "D-Bus connection lost: sprayctl can no longer stop the sprayer, so it stops now "
+        "(valves closed, pump off) and exits for systemd to restart it Idle");
+    exit_code_ = 1;
+    sd_event_exit(event_, 1);
+  }
+
   CommandResult inject_sim_fault(const std::string& name) override {
     if (!backends_.with_plant)
       return {kErrorNotPermitted, "InjectSimFault: only a simulation (--sim) takes faults"};

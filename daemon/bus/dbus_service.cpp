@@ -161,12 +161,24 @@ DbusService::DbusService(sd_event* event, bool user_bus, CommandHandler& handler
   if (r < 0) throw bus_error("cannot register the D-Bus object", r);
   r = sd_bus_request_name(bus_, kBusName, 0);
   if (r < 0) throw bus_error("cannot own the name org.weedspray.Sprayer1", r);
+  // sd-bus reports a closed connection as this local signal (sd_bus_set_exit_on_disconnect
+  // would end the event loop without telling the daemon why).
+  r = sd_bus_match_signal(bus_, &disconnected_slot_, nullptr, "/org/freedesktop/DBus/Local",
+                          "org.freedesktop.DBus.Local", "Disconnected",
+                          &DbusService::on_disconnected, this);
+  if (r < 0) throw bus_error("cannot watch the bus connection", r);
   r = sd_bus_attach_event(bus_, event, SD_EVENT_PRIORITY_NORMAL);
   if (r < 0) throw bus_error("cannot attach the bus to the event loop", r);
 }
 
+int DbusService::on_disconnected(sd_bus_message*, void* userdata, sd_bus_error*) {
+  static_cast<DbusService*>(userdata)->handler_.bus_lost();
+  return 0;
+}
+
 DbusService::~DbusService() {
   if (slot_ != nullptr) sd_bus_slot_unref(slot_);
+  if (disconnected_slot_ != nullptr) sd_bus_slot_unref(disconnected_slot_);
   if (bus_ != nullptr) {
     sd_bus_flush(bus_);
     sd_bus_detach_event(bus_);

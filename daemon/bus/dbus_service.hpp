@@ -27,7 +27,8 @@ namespace weedspray::daemon {
 class DbusService {
  public:
   // Connects to the system bus (or the session bus), registers the object, takes the name
-  // and attaches to `event`. Throws std::runtime_error with the sd-bus error.
+  // and attaches to `event`; a lost connection calls handler.bus_lost(). Throws
+  // std::runtime_error with the sd-bus error.
   DbusService(sd_event* event, bool user_bus, CommandHandler& handler);
   ~DbusService();
   DbusService(const DbusService&) = delete;
@@ -48,8 +49,11 @@ class DbusService {
   static int method(sd_bus_message* message, void* userdata, sd_bus_error* error);
 
  private:
+  static int on_disconnected(sd_bus_message* message, void* userdata, sd_bus_error* error);
+
   sd_bus* bus_ = nullptr;
   sd_bus_slot* slot_ = nullptr;
+  sd_bus_slot* disconnected_slot_ = nullptr;
   CommandHandler& handler_;
   Status status_;
   Status emitted_;

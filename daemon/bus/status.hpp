@@ -125,6 +125,9 @@ class CommandHandler {
   virtual CommandResult start_catch_test(double seconds) = 0;
   virtual CommandResult calibrate_meter(double volume_l) = 0;
   virtual CommandResult calibrate_nozzles() = 0;
+  // The bus connection is gone (the bus daemon stopped or died): nobody can stop the sprayer
+  // any more, so it must stop by itself.
+  virtual void bus_lost() = 0;
 };
 
 }  // namespace weedspray::daemon

@@ -48,6 +48,7 @@ class Handler final : public weedspray::daemon::CommandHandler {
     return {};
   }
   CommandResult calibrate_nozzles() override { return {}; }
+  void bus_lost() override {}
   // One camera; its reply at once (the daemon's comes from a later main-loop tick).
   CommandResult snapshot(std::uint32_t camera, weedspray::daemon::SnapshotReply reply) override {
     if (camera != 0) return {weedspray::daemon::kErrorInvalidArgument, "no such camera"};

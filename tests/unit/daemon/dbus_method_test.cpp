@@ -50,6 +50,7 @@ class RecordingHandler final : public CommandHandler {
     ++nozzle_calibrations;
     return {kErrorNotPermitted, "spraying"};
   }
+  void bus_lost() override {}
   double catch_test_s = -1;
   double meter_volume_l = -1;
   int nozzle_calibrations = 0;
