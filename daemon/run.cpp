@@ -32,6 +32,7 @@
 #include "daemon/logging.hpp"
 #include "daemon/records/as_applied_log.hpp"
 #include "daemon/records/map_geometry.hpp"
+#include "daemon/records/run_marker.hpp"
 #include "daemon/records/totals.hpp"
 #include "daemon/sprayer/calibrations.hpp"
 #include "daemon/sprayer/live_view.hpp"
@@ -125,6 +126,14 @@ class Daemon final : public CommandHandler {
     }
     totals_file_ = std::filesystem::path(config_.daemon.state_dir) / "totals.toml";
     std::filesystem::create_directories(config_.daemon.state_dir);
+    run_marker_.emplace(std::filesystem::path(config_.daemon.state_dir) / "running");
+    // A fresh simulation starts from nothing, its last run's end included.
+    previous_run_unfinished_ =
+        run_marker_->previous_run_unfinished() && !(options_.sim && !options_.resume);
+    if (previous_run_unfinished_)
+      spdlog::warn(
+          "the last run did not end in an orderly stop (a crash, kill -9, the watchdog or a "
+          "power cut): the sprayer waits for Start whatever daemon.autostart says");
     std::string totals_error;
     if (options_.sim && !options_.resume) {
       spdlog::info("simulation: totals start from zero in {} (--resume continues them)",
@@ -197,7 +206,9 @@ class Daemon final : public CommandHandler {
     const int r = sd_event_loop(event_);
     sd_notify(0, "STOPPING=1");
     shutdown();
-    return r < 0 ? 1 : exit_code_;
+    const int status = r < 0 ? 1 : exit_code_;
+    if (status == 0) run_marker_->finish();
+    return status;
   }
 
   // Called on every exit path: threads stopped, outputs forced safe, state persisted.
@@ -389,7 +400,10 @@ class Daemon final : public CommandHandler {
     if (state_.state() == SprayerState::kStarting && pressure.cycles > 0 && control.cycles > 0) {
       transition(StateEvent::kSetupDone, "loops running");
       sd_notify(0, "READY=1");
-      if (config_.daemon.autostart) transition(StateEvent::kStart, "daemon.autostart");
+      if (config_.daemon.autostart && previous_run_unfinished_)
+        spdlog::warn("daemon.autostart skipped after an unfinished run: send Start");
+      else if (config_.daemon.autostart)
+        transition(StateEvent::kStart, "daemon.autostart");
       if (start_when_ready_) transition(StateEvent::kStart, "Start while starting up");
       start_when_ready_ = false;
     }
@@ -1025,6 +1039,8 @@ class Daemon final : public CommandHandler {
   double last_print_s_ = -1e9;
   double last_persist_s_ = 0;
   int exit_code_ = 0;
+  std::optional<RunMarker> run_marker_;  // present once the state folder is set up
+  bool previous_run_unfinished_ = false;
   std::optional<OutputWriteWatch> output_watch_;
   SafeWriteErrors unsafe_outputs_{};  // -errno of safe writes that failed and still do
   std::array<std::uint64_t, kOutputRoleCount> main_thread_write_failures_{};

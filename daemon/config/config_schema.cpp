@@ -77,7 +77,9 @@ const std::vector<KeySpec<Config>>& config_keys() {
   static const std::vector<KeySpec<Config>> keys = {
     // [daemon]
     {WS_KEY(daemon, autostart), false, 0, 1, "",
-     "start spraying as soon as the daemon is set up (otherwise wait for Start or the key)"},
+     "start spraying as soon as the daemon is set up (otherwise wait for Start or the key); "
+     "not after a run that did not end in an orderly stop (a crash, kill -9, the watchdog, a "
+     "power cut, a lost D-Bus connection): then it waits for Start"},
     {WS_KEY(daemon, log_level), std::string("info"), 0, 0, "",
      "minimum level logged to the journal or console",
      {"trace", "debug", "info", "warn", "error"}},
