@@ -503,6 +503,14 @@ void print_status(const Properties& p, bool json) {
         << ' ' << (*v)[2] << " m";
     return out.str();
   };
+  // A receiver that is not configured has no position to show.
+  const std::string gnss_line =
+      get("GnssFix") == "off"
+          ? std::string("GNSS:          off (gnss.enabled = false)\n")
+          : "GNSS:          " + get("GnssFix") + " fix, position " + get_precise("Position") +
+                ", " + get("GnssSpeed") + " m/s, course " + get("Course") + " deg, " +
+                get("GnssSatellites") + " satellites, HDOP " + get("GnssHdop") + ", yaw rate " +
+                get("YawRate") + " deg/s\n";
   std::cout << "State:         " << get("State") << " (" << get("Mode") << ")\n"
             << "Pressure:      " << get("Pressure") << " MPa (set-point " << get("PressureSetpoint")
             << " MPa)\n"
@@ -521,11 +529,7 @@ void print_status(const Properties& p, bool json) {
             << " m^2, saving " << get("SavingsPercent") << " %\n"
             << "Vision:        " << get("FrameRate") << " fps, latency " << get("VisionLatencyMs")
             << " ms (p99 " << get("VisionLatencyP99Ms") << " ms)\n"
-            << "GNSS:          " << get("GnssFix") << " fix, position " << get_precise("Position")
-            << ", " << get("GnssSpeed") << " m/s, course " << get("Course") << " deg, "
-            << get("GnssSatellites") << " satellites, HDOP " << get("GnssHdop") << ", yaw rate "
-            << get("YawRate") << " deg/s\n"
-            << "Overruns:      " << get("ControlOverruns") << "\n"
+            << gnss_line << "Overruns:      " << get("ControlOverruns") << "\n"
             << "Calibration:   " << get("Calibration") << "\n"
             << "Flow meter:    " << get("MeterCalibration") << "\n"
             << "Alarms:        " << get("Alarms") << "\n";

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The quick start as a newcomer runs it on a fresh machine as root (no session bus): the
 # simulated daemon under tools/with-session-bus.sh (what `./dev sim` runs) prints one line;
-# pasted into another shell, `sprayctl --user status` shows the live sprayer with no alarm.
+# pasted into another shell, `sprayctl --user status` shows the live sprayer with no alarm and
+# nothing unreadable.
 set -euo pipefail
 BUILD=$1
 SOURCE=$2
@@ -31,4 +32,7 @@ done
 echo "$status"
 echo "$status" | grep -q "^State: *Idle (sim)" || fail "sprayctl status: $status"
 echo "$status" | grep -q "^Alarms: *none" || fail "the first screen carries an alarm"
+# Nothing a newcomer cannot read: a subsystem that is off says so, no "nan" placeholders.
+echo "$status" | grep -q "^GNSS: *off (gnss.enabled = false)$" || fail "GNSS line: $status"
+if echo "$status" | grep -qi "nan"; then fail "the first screen shows nan"; fi
 echo "ok: the printed line reaches the simulated sprayer; Idle, no alarm"
