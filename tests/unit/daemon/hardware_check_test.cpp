@@ -103,5 +103,20 @@ TEST_F(HardwareCheck, ACounterIsFoundByItsNameAndTheOptOutStandsForTheHeartbeat)
   EXPECT_TRUE(problems.empty()) << problems.front().what();
 }
 
+TEST_F(HardwareCheck, TheExampleMachineConfigSetsEveryKeyHardwareModeNeeds) {
+  const Config config =
+      load_config(fs::path(WEEDSPRAY_SOURCE_DIR) / "etc/examples/pi4-boom-4-nozzles.toml");
+  EXPECT_EQ(
+      keys(check_hardware(config, roots())),
+      (std::set<std::string>{"gpio.chip", "camera[0].device", "adc.iio_device", "dac.iio_device"}))
+      << "with no devices only the devices are missing";
+  for (const char* device : {"dev/gpiochip0", "dev/video0", "sys/bus/iio/devices/iio:device0",
+                             "sys/bus/iio/devices/iio:device1"}) {
+    make(device);
+  }
+  const std::vector<ConfigError> problems = check_hardware(config, roots());
+  EXPECT_TRUE(problems.empty()) << problems.front().what();
+}
+
 }  // namespace
 }  // namespace weedspray::daemon
