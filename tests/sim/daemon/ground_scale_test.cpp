@@ -112,5 +112,18 @@ TEST(GroundScale, TheShippedModelAtTheDefaultCameraKeepsItsHeldOutFigures) {
             << "; squeezed: MIoU " << squeezed.miou << ", crop " << squeezed.iou[1] << "\n";
 }
 
+// The shipped 4 mm/px model with the plants source at the default camera: about 13 ms of
+// network per frame instead of 200, the small weeds from colour (docs/vision.md).
+TEST(GroundScale, TheFourMillimetreModelWithPlantsAtTheDefaultCameraTellsCropFromWeed) {
+  const Scores plants = segment_held_out_ground(
+      "[vision]\nweed_source = \"plants\"\nmodel = \"weed-peanut-4mm.onnx\"\n");
+  EXPECT_GE(plants.iou[1], 0.7) << "crop IoU";
+  EXPECT_GE(plants.iou[2], 0.35) << "weed IoU";
+  EXPECT_GE(plants.miou, 0.7);
+  std::cout << "weed-peanut-4mm.onnx, plants, at the default camera: MIoU " << plants.miou
+            << ", IoU soil " << plants.iou[0] << " crop " << plants.iou[1] << " weed "
+            << plants.iou[2] << "\n";
+}
+
 }  // namespace
 }  // namespace weedspray::daemon
