@@ -67,6 +67,8 @@ int main(int argc, char** argv) {
       } else {
         if (!options.sim && require_heartbeat(config))
           std::cerr << "weedsprayd: warning: " << kNoHeartbeatWarning << "\n";
+        if (!options.sim && require_estop(config))
+          std::cerr << "weedsprayd: warning: " << kNoEstopWarning << "\n";
         std::cout << "configuration OK:";
         for (const auto& file : config.files) std::cout << " " << file;
         std::cout << "\n";
