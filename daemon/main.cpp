@@ -86,6 +86,8 @@ int main(int argc, char** argv) {
       }
       if (!options.sim && require_heartbeat(config))
         std::cerr << "weedsprayd: warning: " << kNoHeartbeatWarning << "\n";
+      if (!options.sim && require_estop(config))
+        std::cerr << "weedsprayd: warning: " << kNoEstopWarning << "\n";
       std::cout << "configuration OK" << (options.check_hardware ? " for hardware mode" : "")
                 << ":";
       for (const auto& file : config.files) std::cout << " " << file;

@@ -298,6 +298,8 @@ class Daemon final : public CommandHandler {
   }
 
   CommandResult clear_alarms() override {
+    if (sprayer_ && !sprayer_->reset_estop())
+      spdlog::warn("E-stop circuit still open: the stop stays latched (close it, then clear)");
     const AlarmMask cleared = alarms_.clear();
     if (sprayer_) sprayer_->resume_heartbeat();
     ++trip_reset_;
@@ -617,6 +619,8 @@ class Daemon final : public CommandHandler {
     in.nozzle_flow_fault =
         control.nozzle_flow_fault >= 0 && control.nozzle_health_reset == trip_reset_;
     in.calibration_ratio = control.calibration_ratio;
+    const EstopStatus estop = sprayer_->estop();
+    in.estop_latched = estop.latched;
 
     const AlarmMask raised = alarms_.evaluate(in);
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
@@ -632,6 +636,14 @@ class Daemon final : public CommandHandler {
             "for {:.1f} s: a valve leaks, sticks open or its wire does not close it; fault: "
             "valves closed, pump off)",
             name, in.flow_l_per_min, in.valves_closed_s);
+      } else if (id == AlarmId::kEstop) {
+        spdlog::error(
+            "alarm raised: {} (the E-stop circuit opened: valves and pump written safe {:.3f} ms "
+            "after the edge (largest {:.3f} ms), {} safe write(s) refused; latched until the "
+            "circuit is closed and the alarms are cleared)",
+            name, std::chrono::duration<double, std::milli>(estop.last_reaction).count(),
+            std::chrono::duration<double, std::milli>(estop.max_reaction).count(),
+            estop.safe_write_errors);
       } else if (is_fault(id)) {
         spdlog::error("alarm raised: {} (fault: valves closed, pump off)", name);
       } else if (id == AlarmId::kControlOverruns) {
@@ -922,6 +934,10 @@ class Daemon final : public CommandHandler {
     s.flow_trim_correction = control.flow_trim_correction;
     s.calibration_ratio = control.calibration_ratio_known ? control.calibration_ratio : 0.0;
     s.flow_trim_active = control.flow_trim_active;
+    const EstopStatus estop = sprayer_->estop();
+    s.estop_circuit_closed = estop.circuit_closed;
+    s.estop_latched = estop.latched;
+    s.estop_reaction_ms = std::chrono::duration<double, std::milli>(estop.last_reaction).count();
     return s;
   }
 
@@ -1065,15 +1081,18 @@ int run_daemon(const Options& options) {
 #endif
   Config config;
   bool no_heartbeat = false;
+  bool no_estop = false;
   try {
     config = load_with_overrides(options);
     if (!options.sim) no_heartbeat = require_heartbeat(config);
+    if (!options.sim) no_estop = require_estop(config);
   } catch (const ConfigError& error) {
     std::fprintf(stderr, "weedsprayd: %s\n", error.what());
     return 1;
   }
   setup_logging(config.daemon.log_level);
   if (no_heartbeat) spdlog::warn("{}", kNoHeartbeatWarning);
+  if (no_estop) spdlog::warn("{}", kNoEstopWarning);
   if (install_test_crash_hook())
     spdlog::warn("test crash hook enabled (WEEDSPRAY_TEST_CRASH_HOOK)");
   if (options.sim && !options.config_given && !std::filesystem::exists(options.config_path)) {

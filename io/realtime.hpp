@@ -18,6 +18,7 @@
 namespace weedspray::io {
 
 enum class ThreadRole {
+  kEstop,         // the emergency-stop input: its reaction writes valves and pump safe
   kValvePwm,      // valve edges: the tightest deadline in the system
   kPulseInput,    // flow meter / wheel edge readers
   kAnalogIo,      // the pressure converters' blocking I/O (IIO on I2C, Modbus modules)
@@ -39,7 +40,8 @@ struct ThreadPriority {
 // The one table. The loops sit above the kernel's threaded IRQ handlers (50) so device
 // interrupts cannot delay a deadline; each only runs briefly and then sleeps (a blocked read,
 // e.g. an I2C conversion, sleeps too, so the IRQ thread that completes it still runs).
-inline constexpr std::array<ThreadPriority, 10> kThreadPriorities{{
+inline constexpr std::array<ThreadPriority, 11> kThreadPriorities{{
+    {ThreadRole::kEstop, "ws-estop", 85},
     {ThreadRole::kValvePwm, "ws-valve-pwm", 80},
     {ThreadRole::kPulseInput, "ws-pulses", 70},
     {ThreadRole::kAnalogIo, "ws-analog", 65},

@@ -62,6 +62,11 @@ struct ValvePwmDriverConfig {
   // only while the wave comes, so a stopped real-time core or a Fault cuts them in hardware.
   DigitalOutputBank* heartbeat = nullptr;
   std::chrono::nanoseconds heartbeat_half_period = std::chrono::milliseconds(10);
+  // While *hold_safe is true (a latched emergency stop) the valves stay closed and the
+  // heartbeat low. Checked at every wake, and so also straight after every valve write (the
+  // loop goes round without sleeping): a write that raced the flag's setter, which writes the
+  // valves safe itself, is undone before this thread sleeps.
+  const std::atomic<bool>* hold_safe = nullptr;
 };
 
 struct ValvePwmStats {
@@ -76,6 +81,7 @@ struct ValvePwmStats {
   std::uint64_t heartbeat_write_errors = 0;  // heartbeat output writes refused
   std::uint64_t commands_applied = 0;
   std::uint64_t deadman_expiries = 0;
+  std::uint64_t holds = 0;  // times hold_safe closed the valves
   std::chrono::nanoseconds max_lateness{0};
   std::uint32_t last_mask = 0;
   std::chrono::nanoseconds last_mask_written_at{0};  // clock time just after the write
@@ -132,18 +138,22 @@ class ValvePwmDriver {
       }
 
       const std::chrono::nanoseconds expires_at = refreshed_at + config_.command_expiry;
-      if (!have_command || now >= expires_at) {
+      const bool held = held_safe();
+      if (held || !have_command || now >= expires_at) {
+        if (held && !holding_) ++stats_.holds;
+        holding_ = held;
         if (!stats_.expired) {
           schedule_.force_closed();
           if (bank_.force_safe() != 0) count_write_error();
           stats_.last_mask = bank_.safe_mask();
           stats_.expired = true;
-          ++stats_.deadman_expiries;
+          if (!held) ++stats_.deadman_expiries;
         }
         publish_stats();
         clock_.sleep_until(std::min(now + config_.max_sleep, next_beat_));
         continue;
       }
+      holding_ = false;
       if (stats_.expired) {
         // Fresh commands after start-up or an expiry: restart the staggered phases now.
         stats_.expired = false;
@@ -195,6 +205,9 @@ class ValvePwmDriver {
     if (bank_.write(mask) != 0) count_write_error();
     stats_.last_mask = mask;
   }
+  bool held_safe() const noexcept {
+    return config_.hold_safe != nullptr && config_.hold_safe->load();
+  }
   // A valve may be stuck open: the relay must cut the valves' power.
   void count_write_error() noexcept {
     ++stats_.write_errors;
@@ -207,7 +220,7 @@ class ValvePwmDriver {
       next_beat_ = std::chrono::nanoseconds::max();
       return;
     }
-    if (heartbeat_stopped_.load()) {
+    if (heartbeat_stopped_.load() || held_safe()) {
       if (!stats_.heartbeat_stopped) {
         stats_.heartbeat_stopped = true;
         beat_level_ = false;
@@ -233,6 +246,7 @@ class ValvePwmDriver {
   ValvePwmStats stats_;
   std::chrono::nanoseconds next_beat_ = std::chrono::nanoseconds::max();
   bool beat_level_ = false;
+  bool holding_ = false;
   std::atomic<bool> heartbeat_stopped_{false};
 };
 

@@ -16,6 +16,7 @@
 #include "io/clock.hpp"
 #include "io/digital_input.hpp"
 #include "io/digital_output.hpp"
+#include "io/estop_input.hpp"
 #include "io/gnss.hpp"
 #include "io/pulse_input.hpp"
 #include "io/signal_conversion.hpp"
@@ -42,6 +43,7 @@ struct Backends {
   io::PulseInput* flow = nullptr;           // null: no flow meter
   io::PulseInput* wheel = nullptr;          // null: fixed speed
   io::DigitalInput* key = nullptr;          // null: no start/stop key
+  io::EstopInput* estop = nullptr;          // null: no emergency-stop input
   io::TankLevelSensor* tank = nullptr;      // null: no tank sensor
   io::GnssReceiver* gnss = nullptr;         // null: gnss.enabled = false
   io::YawRateSensor* yaw_sensor = nullptr;  // null: turn.yaw_source is not "imu"

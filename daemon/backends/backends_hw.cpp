@@ -7,6 +7,7 @@
 #include "daemon/backends/hw_output_lines.hpp"
 #include "io/linux/counter_pulse_input.hpp"
 #include "io/linux/gpio_digital_input.hpp"
+#include "io/linux/gpio_estop_input.hpp"
 #include "io/linux/gpio_output_bank.hpp"
 #include "io/linux/gpio_pulse_input.hpp"
 #include "io/linux/modbus_tank_level.hpp"
@@ -82,6 +83,14 @@ Backends make_hw_backends(const Config& config) {
     key.line.offset = gpio.key_offset;
     key.line.active_low = gpio.key_active_low;
     b.key = keep(b, std::make_shared<io::hw::GpioDigitalInput>(key));
+  }
+  if (wired(gpio.estop_name, gpio.estop_offset)) {
+    io::hw::GpioEstopInputConfig estop;
+    estop.chip = gpio.chip;
+    estop.line.name = gpio.estop_name;
+    estop.line.offset = gpio.estop_offset;
+    estop.line.active_low = gpio.estop_active_low;
+    b.estop = keep(b, std::make_shared<io::hw::GpioEstopInput>(estop));
   }
 
   PressureConverters converters = make_hw_pressure_converters(config, *b.clock);

@@ -13,6 +13,7 @@
 #include "daemon/config/vision_config.hpp"
 #include "daemon/sprayer/geometry.hpp"
 #include "io/sim/hydraulic_rig.hpp"
+#include "io/sim/manual_estop_input.hpp"
 #include "io/sim/memory_output_bank.hpp"
 #include "io/sim/paced_clock.hpp"
 #include "io/sim/replay_camera.hpp"
@@ -71,6 +72,8 @@ Backends make_sim_backends(const Config& config, const Options& options) {
   auto led = std::make_shared<io::sim::MemoryOutputBank>(1, 0, *clock);
   // Keeps its last 4096 edges so tests can see the wave.
   auto heartbeat = std::make_shared<io::sim::MemoryOutputBank>(1, 0, *clock, 4096);
+  // The simulated machine's E-stop circuit, closed: the estop_open fault opens it.
+  auto estop = std::make_shared<io::sim::ManualEstopInput>(*clock);
   b.valves = valves.get();
   b.pump = pump.get();
   b.pressure_adc = adc.get();
@@ -81,11 +84,12 @@ Backends make_sim_backends(const Config& config, const Options& options) {
   b.buzzer = buzzer.get();
   b.led = led.get();
   b.heartbeat = heartbeat.get();
+  b.estop = estop.get();
   for (std::shared_ptr<void> p :
        {std::shared_ptr<void>(valves), std::shared_ptr<void>(pump), std::shared_ptr<void>(adc),
         std::shared_ptr<void>(dac), std::shared_ptr<void>(flow), std::shared_ptr<void>(wheel),
         std::shared_ptr<void>(tank), std::shared_ptr<void>(buzzer), std::shared_ptr<void>(led),
-        std::shared_ptr<void>(heartbeat)}) {
+        std::shared_ptr<void>(heartbeat), std::shared_ptr<void>(estop)}) {
     b.owned.push_back(p);
   }
   b.sensor = pressure_sensor_config(config);
@@ -173,8 +177,10 @@ Backends make_sim_backends(const Config& config, const Options& options) {
     b.owned.push_back(camera);
     replay_cameras.push_back(camera);
   }
-  b.device_fault = [tank, replay_cameras](const std::string& fault) {
-    if (fault == "tank_silent" || fault == "tank_ok") {
+  b.device_fault = [tank, replay_cameras, estop](const std::string& fault) {
+    if (fault == "estop_open" || fault == "estop_closed") {
+      estop->set_closed(fault == "estop_closed");
+    } else if (fault == "tank_silent" || fault == "tank_ok") {
       tank->inject_timeouts(fault == "tank_silent" ? 1 << 30 : 0);
     } else if (fault == "camera_gone" || fault == "camera_back") {
       for (const auto& camera : replay_cameras) camera->set_unplugged(fault == "camera_gone");

@@ -45,7 +45,7 @@ std::optional<SimFault> parse_sim_fault(const std::string& text) {
   if (time.empty() || *end != '\0' || !(fault.at_s >= 0)) return std::nullopt;
   using Plant = control::plant::HydraulicPlant;
   if (fault.name == "camera_gone" || fault.name == "camera_back" || fault.name == "tank_silent" ||
-      fault.name == "tank_ok") {
+      fault.name == "tank_ok" || fault.name == "estop_open" || fault.name == "estop_closed") {
     fault.device = fault.name;
   } else if (fault.name == "sensor_ok") {
     fault.apply = [](Plant& p) {

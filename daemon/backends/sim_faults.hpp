@@ -23,7 +23,9 @@ struct SimFault {
   std::optional<OutputRole> output;
   int output_error = 0;
   int output_write_count = 0;  // "return_valve_write_fail_N": only its next N writes fail
-  // A simulated device's fault: "camera_gone", "camera_back", "tank_silent", "tank_ok".
+  // A simulated device's fault: "camera_gone", "camera_back", "tank_silent", "tank_ok", and
+  // the E-stop circuit opened ("estop_open": a pressed button or a cut wire) or closed again
+  // ("estop_closed").
   std::string device;
 };
 
@@ -34,7 +36,7 @@ inline constexpr const char* kSimFaultNames =
     "meter_drift_PP / meter_drift_minus_PP (the meter's true K off by PP %, 1..30), "
     "nozzles_worn_PP (every tip PP % more flow, 1..50), valveN_stuck_open (opens whatever it "
     "is commanded), valveN_freed, camera_gone, "
-    "camera_back, tank_silent, tank_ok; "
+    "camera_back, tank_silent, tank_ok, estop_open (the E-stop circuit opens), estop_closed; "
     "OUTPUT_write_fail / OUTPUT_write_ok with OUTPUT valve, pump, buzzer, led, heartbeat, "
     "return_valve; return_valve_write_fail_N (its next N writes fail, 1..99)";
 

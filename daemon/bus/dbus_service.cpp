@@ -93,6 +93,9 @@ std::vector<const char*> changed_properties(const Status& a, const Status& b) {
   check(a.flow_trim_correction != b.flow_trim_correction, "FlowTrim");
   check(a.flow_trim_active != b.flow_trim_active, "FlowTrimActive");
   check(a.calibration_ratio != b.calibration_ratio, "MeteredOverCalibrated");
+  check(a.estop_circuit_closed != b.estop_circuit_closed || a.estop_latched != b.estop_latched ||
+            a.estop_reaction_ms != b.estop_reaction_ms,
+        "Estop");
   return names;
 }
 
@@ -133,6 +136,7 @@ const sd_bus_vtable kVtable[] = {
     WS_PROPERTY("FlowTrim", "d"),
     WS_PROPERTY("FlowTrimActive", "b"),
     WS_PROPERTY("MeteredOverCalibrated", "d"),
+    WS_PROPERTY("Estop", "(bbd)"),
     SD_BUS_METHOD("Start", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("Stop", "", "", DbusService::method, kMethodFlags),
     SD_BUS_METHOD("SetPressureSetpoint", "d", "", DbusService::method, kMethodFlags),
@@ -226,6 +230,9 @@ int DbusService::get_property(sd_bus*, const char*, const char*, const char* pro
   if (p == "FlowTrim") return sd_bus_message_append(reply, "d", s.flow_trim_correction);
   if (p == "FlowTrimActive") return sd_bus_message_append(reply, "b", s.flow_trim_active ? 1 : 0);
   if (p == "MeteredOverCalibrated") return sd_bus_message_append(reply, "d", s.calibration_ratio);
+  if (p == "Estop")
+    return sd_bus_message_append(reply, "(bbd)", s.estop_circuit_closed ? 1 : 0,
+                                 s.estop_latched ? 1 : 0, s.estop_reaction_ms);
   if (p == "ZoneDensity") return append_doubles(reply, s.zone_density);
   if (p == "Alarms") return append_strings(reply, s.alarms);
   if (p == "VolumeSprayed") return sd_bus_message_append(reply, "d", s.volume_sprayed_l);

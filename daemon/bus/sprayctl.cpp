@@ -202,6 +202,17 @@ Value read_variant(sd_bus_message* m) {
     text << state << " " << std::fixed << std::setprecision(0) << progress * 100
          << " %: " << message;
     value = text.str();
+  } else if (sig == "(bbd)") {  // Estop: circuit closed, latched, latest reaction (ms)
+    int closed = 0, latched = 0;
+    double reaction_ms = 0;
+    check(sd_bus_message_read(m, "(bbd)", &closed, &latched, &reaction_ms), "read (bbd)");
+    std::ostringstream text;
+    text << (closed ? "circuit closed" : "circuit OPEN") << ", "
+         << (latched ? "LATCHED: valves closed, pump off" : "not latched");
+    if (reaction_ms > 0)
+      text << "; last trip safe " << std::fixed << std::setprecision(3) << reaction_ms
+           << " ms after the edge";
+    value = text.str();
   } else if (sig == "(sddd)") {  // MeterCalibration: source, K in use, configured K, error
     const char* source = nullptr;
     double in_use = 0, configured = 0, error_pct = 0;
@@ -525,6 +536,7 @@ void print_status(const Properties& p, bool json) {
             << (is_true("FlowTrimActive") ? "following the meter" : "held")
             << "); meter / calibrated nozzles " << get("MeteredOverCalibrated")
             << " (0: not yet known)\n"
+            << "E-stop:        " << get("Estop") << "\n"
             << "Sprayed:       " << get("VolumeSprayed") << " L over " << get("AreaCovered")
             << " m^2, saving " << get("SavingsPercent") << " %\n"
             << "Vision:        " << get("FrameRate") << " fps, latency " << get("VisionLatencyMs")

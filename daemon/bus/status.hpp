@@ -81,6 +81,12 @@ struct Status {
   // The meter's flow over what the calibrated nozzles promise (a minute's average; 0: not yet
   // known): what calibration_drift judges.
   double calibration_ratio = 0;
+  // The emergency stop: whether its circuit is closed (true when none is wired), whether the
+  // stop is latched, and the latest trip's time from the edge to valves and pump written safe
+  // (ms; 0 before the first trip).
+  bool estop_circuit_closed = true;
+  bool estop_latched = false;
+  double estop_reaction_ms = 0;
 
   bool operator==(const Status&) const = default;
 };

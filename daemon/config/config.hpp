@@ -144,6 +144,10 @@ struct GpioSection {
   int key_offset;
   std::string key_name;
   bool key_active_low;
+  int estop_offset;  // normally closed E-stop circuit; -1 = none
+  std::string estop_name;
+  bool estop_active_low;  // the closed circuit pulls the line low
+  bool estop_opt_out;     // hardware mode without an E-stop input: allowed, warned at start
   int flow_offset;
   std::string flow_name;
   int wheel_offset;
@@ -363,6 +367,14 @@ bool require_heartbeat(const Config& config);
 inline constexpr const char* kNoHeartbeatWarning =
     "gpio.heartbeat_opt_out = true: no heartbeat output, so nothing outside this "
     "process cuts valves and pump if it stops driving them";
+
+// Hardware mode needs an emergency-stop input (gpio.estop_offset or gpio.estop_name), likewise:
+// throws ConfigError when there is none and gpio.estop_opt_out is not set; returns true when
+// that opt-out is what allows the start (the caller warns).
+bool require_estop(const Config& config);
+inline constexpr const char* kNoEstopWarning =
+    "gpio.estop_opt_out = true: no emergency-stop input, so only the machine's own E-stop "
+    "wiring (if any) stops valves and pump";
 
 // Same, from in-memory documents (name, text) in order; used by tests and --check-config.
 [[nodiscard]] Config load_config_from_strings(

@@ -22,26 +22,47 @@ ConfigError::ConfigError(std::string file, int line, std::string key, const std:
       line_(line),
       key_(std::move(key)) {}
 
-bool require_heartbeat(const Config& config) {
-  const GpioSection& g = config.gpio;
-  if (g.heartbeat_offset >= 0 || !g.heartbeat_name.empty()) return false;
-  if (g.heartbeat_opt_out) return true;
-  const std::string message =
-      "hardware mode needs a heartbeat output: set gpio.heartbeat_name or "
-      "gpio.heartbeat_offset to the line that holds the relay powering valves and pump, or "
-      "gpio.heartbeat_opt_out = true to run without one";
-  // Located at a heartbeat key that says "none", else at the [gpio] section, else the file.
-  for (const char* key :
-       {"gpio.heartbeat_offset", "gpio.heartbeat_name", "gpio.heartbeat_opt_out"}) {
+namespace {
+
+// A safety line hardware mode needs (gpio.NAME_offset or gpio.NAME_name) unless
+// gpio.NAME_opt_out: false when wired, true when the opt-out allows the start, else throws
+// `message` located at one of its keys that says "none", else at the [gpio] section, else the
+// file.
+bool require_gpio_line(const Config& config, const std::string& name, int offset,
+                       const std::string& line_name, bool opt_out, const std::string& message) {
+  if (offset >= 0 || !line_name.empty()) return false;
+  if (opt_out) return true;
+  const std::string prefix = "gpio." + name;
+  for (const std::string& key : {prefix + "_offset", prefix + "_name", prefix + "_opt_out"}) {
     if (const auto s = config.sources.find(key); s != config.sources.end())
       throw ConfigError(s->second.file, s->second.line, key, message);
   }
   for (const auto& [key, source] : config.sources) {
     if (key.starts_with("gpio."))
-      throw ConfigError(source.file, source.line, "gpio.heartbeat_name", message);
+      throw ConfigError(source.file, source.line, prefix + "_name", message);
   }
-  throw ConfigError(config.files.empty() ? "<defaults>" : config.files.front(), 0,
-                    "gpio.heartbeat_name", message);
+  throw ConfigError(config.files.empty() ? "<defaults>" : config.files.front(), 0, prefix + "_name",
+                    message);
+}
+
+}  // namespace
+
+bool require_heartbeat(const Config& config) {
+  const GpioSection& g = config.gpio;
+  return require_gpio_line(
+      config, "heartbeat", g.heartbeat_offset, g.heartbeat_name, g.heartbeat_opt_out,
+      "hardware mode needs a heartbeat output: set gpio.heartbeat_name or "
+      "gpio.heartbeat_offset to the line that holds the relay powering valves and pump, or "
+      "gpio.heartbeat_opt_out = true to run without one");
+}
+
+bool require_estop(const Config& config) {
+  const GpioSection& g = config.gpio;
+  return require_gpio_line(
+      config, "estop", g.estop_offset, g.estop_name, g.estop_opt_out,
+      "hardware mode needs an emergency-stop input: set gpio.estop_name or gpio.estop_offset "
+      "to the line of the normally closed E-stop circuit, or gpio.estop_opt_out = true to run "
+      "without one");
 }
 
 std::filesystem::path Config::as_applied_dir() const {
@@ -324,6 +345,7 @@ class Loader {
           std::tuple{g.led_offset, &g.led_name, "led", true},
           std::tuple{g.heartbeat_offset, &g.heartbeat_name, "heartbeat", true},
           std::tuple{g.key_offset, &g.key_name, "key", true},
+          std::tuple{g.estop_offset, &g.estop_name, "estop", true},
           std::tuple{g.flow_offset, &g.flow_name, "flow", config_.flow.counter.empty()},
           std::tuple{g.wheel_offset, &g.wheel_name, "wheel", wheel_wired}}) {
       if (!used) continue;
@@ -376,6 +398,7 @@ class Loader {
           std::tuple{&c.gpio.led_name, c.gpio.led_offset, "gpio.led_name"},
           std::tuple{&c.gpio.heartbeat_name, c.gpio.heartbeat_offset, "gpio.heartbeat_name"},
           std::tuple{&c.gpio.key_name, c.gpio.key_offset, "gpio.key_name"},
+          std::tuple{&c.gpio.estop_name, c.gpio.estop_offset, "gpio.estop_name"},
           std::tuple{&c.gpio.flow_name, c.gpio.flow_offset, "gpio.flow_name"},
           std::tuple{&c.gpio.wheel_name, c.gpio.wheel_offset, "gpio.wheel_name"}}) {
       if (!name->empty() && offset >= 0) {

@@ -284,6 +284,18 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "start/stop key line by name instead of offset (empty = use the offset)"},
     {WS_KEY(gpio, key_active_low), true, 0, 1, "",
      "start/stop key pulls the line low when pressed"},
+    {WS_KEY(gpio, estop_offset), -1, -1, 1023, "line",
+     "emergency-stop input (-1 = none): a normally closed circuit; when it opens (a pressed "
+     "button, a cut wire) valves close and the pump stops within milliseconds, latched until "
+     "the circuit is closed again and the alarms are cleared"},
+    {WS_KEY(gpio, estop_name), std::string(""), 0, 0, "",
+     "emergency-stop line by name instead of offset (empty = use the offset)"},
+    {WS_KEY(gpio, estop_active_low), true, 0, 1, "",
+     "the closed E-stop circuit pulls the line low (contact to ground, pull-up resistor): an "
+     "open circuit reads high"},
+    {WS_KEY(gpio, estop_opt_out), false, 0, 1, "",
+     "hardware mode starts only with an emergency-stop input (estop_offset or estop_name); "
+     "true starts without one, with a warning at every start"},
     {WS_KEY(gpio, flow_offset), -1, -1, 1023, "line",
      "flow meter pulse input (-1 = none)"},
     {WS_KEY(gpio, flow_name), std::string(""), 0, 0, "",

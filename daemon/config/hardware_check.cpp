@@ -114,10 +114,12 @@ std::vector<ConfigError> check_hardware(const Config& config, const DeviceRoots&
                  "no valve lines to drive: set gpio.valve_offsets (line numbers) or "
                  "gpio.valve_names (line names), one per nozzle");
   }
-  try {
-    require_heartbeat(config);
-  } catch (const ConfigError& error) {
-    problems.add(error);
+  for (bool (*required)(const Config&) : {&require_heartbeat, &require_estop}) {
+    try {
+      required(config);
+    } catch (const ConfigError& error) {
+      problems.add(error);
+    }
   }
   if (config.wheel.source == "pulses" && !wired(gpio.wheel_name, gpio.wheel_offset)) {
     problems.add("gpio.wheel_offset",

@@ -116,7 +116,9 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
           controller_config(config))),
       schedule_(std::make_unique<control::PwmSchedule>(pwm_config(config))),
       flow_trim_(control::FlowTrimConfig{}),
-      calibration_ratio_(control::FlowTrimConfig{}) {
+      calibration_ratio_(control::FlowTrimConfig{}),
+      estop_(std::make_unique<EstopGuard>(*backends.clock, backends.estop, backends.valves,
+                                          backends.pump)) {
   // pressure.loop_hz goes down to 10 Hz: the watch waits three of the loop's periods, never less
   // than 50 ms (at 20 Hz a fixed 50 ms took the running loop for stalled and stopped the pump).
   pressure_watch_ = io::LoopWatch(std::max(kCrossWatchTimeout, 3 * pressure_period()));
@@ -131,6 +133,7 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
   };
   driver.on_wake_context = this;
   driver.heartbeat = io_.heartbeat;
+  driver.hold_safe = &estop_->held();
   driver.heartbeat_half_period = from_seconds(0.5 / config.gpio.heartbeat_hz);
   pwm_driver_ = std::make_unique<io::ValvePwmDriver<control::PwmSchedule>>(*io_.clock, *io_.valves,
                                                                            *schedule_, driver);
@@ -235,6 +238,8 @@ std::string Sprayer::vision_failures() const {
 void Sprayer::start() {
   stopped_ = false;
   safe_write_errors_ = io_.force_safe();  // outputs start safe, explicitly
+  // Before any loop runs: a circuit open at start-up holds the outputs from the first cycle.
+  if (io_.estop != nullptr) io_.estop->arm(estop_->reaction());
   const auto add = [this](io::ThreadRole role, std::string name, auto body) {
     threads_.emplace_back(role, std::move(body));
     thread_names_.push_back(std::move(name));
@@ -282,6 +287,7 @@ void Sprayer::stop() noexcept {
   for (auto& thread : threads_) thread.request_stop();
   for (auto& thread : threads_) thread.stop_and_join();
   threads_.clear();
+  if (io_.estop != nullptr) io_.estop->disarm();
   for (std::size_t i = 0; i < camera_count_; ++i) cameras_[i].camera->stop();
   safe_write_errors_ = io_.force_safe();
 }
@@ -367,8 +373,11 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
     // Over-pressure: pump off in this very cycle; the main loop raises the alarm.
     if (status.sensor_ok && status.pressure_mpa > params.over_pressure_mpa) status.tripped = true;
 
-    // A stalled valve thread may hold valves open or shut: no pump, return valve open.
-    if (params.pump_enabled && status.sensor_ok && !status.tripped && !valves_stalled) {
+    // A stalled valve thread may hold valves open or shut: no pump, return valve open. A
+    // latched emergency stop likewise (its reaction has already switched the pump off).
+    const bool estop_held = estop_->held().load();
+    if (params.pump_enabled && status.sensor_ok && !status.tripped && !valves_stalled &&
+        !estop_held) {
       // A refused write leaves the pump as it was: counted (output_write_failed), and tried
       // again next cycle.
       if (io_.pump != nullptr && !status.pump_on && io_.pump->write(1) != 0) {
@@ -376,6 +385,12 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
         pwm_driver_->stop_heartbeat();
       } else {
         status.pump_on = true;
+      }
+      // An emergency stop that came while the pump was being switched on: its safe write may
+      // have landed first. Off again at once; the next cycle takes the safe branch.
+      if (estop_->held().load() && io_.pump != nullptr) {
+        io_.pump->force_safe();
+        status.pump_on = false;
       }
       outputs_safe = false;
       if (!controller_->enabled()) {

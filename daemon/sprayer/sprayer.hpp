@@ -26,6 +26,7 @@
 #include "control/wheel_calibration.hpp"
 #include "daemon/backends/backends.hpp"
 #include "daemon/config/config.hpp"
+#include "daemon/sprayer/estop_guard.hpp"
 #include "daemon/sprayer/ground_speed.hpp"
 #include "daemon/sprayer/inference_gate.hpp"
 #include "daemon/sprayer/phase_windows.hpp"
@@ -96,6 +97,10 @@ class Sprayer {
   const LoopTiming& timing() const noexcept { return timing_; }
   // Times the valve thread found the pressure loop stalled with the pump on and switched it off.
   std::uint64_t pressure_loop_stalls() const noexcept { return pressure_loop_stalls_.load(); }
+  // The emergency stop (daemon/sprayer/estop_guard.hpp): its state and reaction times, and
+  // ClearAlarms' unlatching (false while the circuit is open).
+  EstopStatus estop() const noexcept { return estop_->status(); }
+  bool reset_estop() noexcept { return estop_->reset(); }
   // Threads that asked for SCHED_FIFO but did not get it.
   std::vector<std::string> realtime_warnings() const;
 
@@ -172,6 +177,7 @@ class Sprayer {
   control::FlowTrimWindows meter_windows_;
   control::FlowTrim flow_trim_;
   control::CalibrationRatio calibration_ratio_;
+  std::unique_ptr<EstopGuard> estop_;  // its latch is read by the valve and pressure loops
   std::optional<control::NozzleHealth> nozzle_health_;  // [nozzle_health] enabled; control loop
   std::vector<control::DutyQuantiser> quantisers_;
   std::array<CameraWorker, kMaxCameras> cameras_;

@@ -22,6 +22,7 @@ constexpr std::array<std::string_view, kAlarmCount> kNames = {
     "nozzle_flow_fault",
     "calibration_drift",
     "flow_with_valves_closed",
+    "estop",
 };
 
 double seconds(std::chrono::nanoseconds t) {
@@ -51,6 +52,7 @@ bool is_fault(AlarmId id) noexcept {
     case AlarmId::kCameraLost:
     case AlarmId::kOutputWriteFailed:
     case AlarmId::kFlowValvesClosed:
+    case AlarmId::kEstop:
       return true;
     default:
       return false;
@@ -134,6 +136,8 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
   set(AlarmId::kCalibrationDrift,
       std::abs(in.calibration_ratio - 1.0) * 100.0 > t.calibration_drift_pct, false);
   hold_s[static_cast<std::size_t>(AlarmId::kCalibrationDrift)] = t.calibration_drift_hold_s;
+  // A fault at once: the reaction has already written the outputs safe on the input's thread.
+  set(AlarmId::kEstop, in.estop_latched, false);
   set(AlarmId::kControlOverruns,
       in.overruns_last_second >= static_cast<std::uint64_t>(t.control_overrun_limit), false);
 

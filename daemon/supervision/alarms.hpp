@@ -30,8 +30,9 @@ enum class AlarmId : std::uint8_t {
   kNozzleFlowFault,    // one nozzle's flow off its baseline ([nozzle_health]; nozzle named)
   kCalibrationDrift,   // the flow trim has held the boom off its calibration: recalibrate
   kFlowValvesClosed,   // flow with every valve commanded closed: a leaking or stuck-open valve
+  kEstop,              // the emergency-stop circuit opened: outputs held safe until reset
 };
-inline constexpr std::size_t kAlarmCount = 16;
+inline constexpr std::size_t kAlarmCount = 17;
 
 using AlarmMask = std::uint32_t;
 constexpr AlarmMask alarm_bit(AlarmId id) noexcept {
@@ -73,6 +74,9 @@ struct AlarmInputs {
   // The line meter's flow over what the calibrated nozzles promise at the commanded duties,
   // averaged (control::CalibrationRatio; 1 = as calibrated, and while not yet known).
   double calibration_ratio = 1.0;
+  // The emergency stop is latched (daemon/sprayer/estop_guard.hpp): its circuit opened and
+  // it has not been reset since.
+  bool estop_latched = false;
 };
 
 class AlarmEvaluator {

@@ -33,12 +33,8 @@ struct GpioDigitalInput::Impl {
     std::array<gpiod_line_event, 16> events{};
     pollfd pfd{fd, POLLIN, 0};
     while (!stop.stop_requested()) {
-      int timeout_ms = 50;
-      if (debouncer.pending()) {
-        const auto left = debouncer.pending_until() - monotonic_now();
-        timeout_ms =
-            static_cast<int>(std::clamp<std::int64_t>(left.count() / 1'000'000 + 1, 0, timeout_ms));
-      }
+      const int timeout_ms = detail::poll_timeout_ms(debouncer.pending(), debouncer.pending_until(),
+                                                     monotonic_now(), 50);
       const int ready = poll(&pfd, 1, timeout_ms);
       if (ready < 0 && errno != EINTR) {
         ++s.error_count;

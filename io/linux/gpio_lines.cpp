@@ -1,5 +1,7 @@
 #include "io/linux/gpio_lines.hpp"
 
+#include <algorithm>
+#include <cstdint>
 #include <stdexcept>
 #include <system_error>
 
@@ -50,6 +52,12 @@ gpiod::line find_line(const std::string& chip, const GpioLineConfig& config) {
                        (consumer.empty() ? std::string("kernel") : consumer) + "')");
   }
   return line;
+}
+
+int poll_timeout_ms(bool change_pending, std::chrono::nanoseconds due, std::chrono::nanoseconds now,
+                    int max_ms) noexcept {
+  if (!change_pending) return max_ms;
+  return static_cast<int>(std::clamp<std::int64_t>((due - now).count() / 1'000'000 + 1, 0, max_ms));
 }
 
 std::bitset<32> bias_flags(GpioBias bias) {

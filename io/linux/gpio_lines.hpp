@@ -3,6 +3,7 @@
 #pragma once
 
 #include <bitset>
+#include <chrono>
 #include <gpiod.hpp>
 #include <stdexcept>
 #include <string>
@@ -35,5 +36,10 @@ gpiod::line find_line(const std::string& chip, const GpioLineConfig& line);
 std::string describe(const std::string& chip, const GpioLineConfig& line);
 
 std::bitset<32> bias_flags(GpioBias bias);
+
+// How long an edge reader may block in poll(): `max_ms`, or less when a debounced change
+// becomes due at `due` (rounded up to the next whole ms).
+int poll_timeout_ms(bool change_pending, std::chrono::nanoseconds due, std::chrono::nanoseconds now,
+                    int max_ms) noexcept;
 
 }  // namespace weedspray::io::hw::detail

@@ -53,7 +53,7 @@ modprobe gpio-sim || setup_failed "modprobe gpio-sim"
 # shellcheck source=../vm/gpio-sim-chip.sh
 . "$(dirname "$0")/gpio-sim-chip.sh" # make_gpio_sim_chip
 # One chip holds every line the daemon drives or reads ([gpio] chip), as on a board.
-gpio_lines=(valve0 valve1 valve2 valve3 pump buzzer lamp key flow wheel heartbeat)
+gpio_lines=(valve0 valve1 valve2 valve3 pump buzzer lamp key flow wheel heartbeat estop)
 make_gpio_sim_chip weedspray "${gpio_lines[@]}"
 sim_dir="/sys/kernel/config/gpio-sim/weedspray"
 gpio_chip="$(cat "$sim_dir/bank0/chip_name")"
@@ -154,6 +154,8 @@ key_name = "key"
 key_active_low = false
 wheel_name = "wheel"
 heartbeat_name = "heartbeat"
+# The E-stop circuit, closed: gpio-sim's default pull-down holds the line low.
+estop_name = "estop"
 
 [flow]
 counter = "interrupt-cnt"

@@ -62,7 +62,8 @@ count_dir=/sys/kernel/config/gpio-sim/weedspray-count
 [ -d "$sim_dir" ] && [ -d "$count_dir" ] || setup_failed "guest-test.sh made no gpio-sim chips"
 chip_dir="/sys/devices/platform/$(cat "$sim_dir/dev_name")/$(cat "$sim_dir/bank0/chip_name")"
 flow_chip_dir="/sys/devices/platform/$(cat "$count_dir/dev_name")/$(cat "$count_dir/bank0/chip_name")"
-# Offsets as guest-test.sh names them: valve0..3 pump buzzer lamp key flow wheel heartbeat.
+# Offsets as guest-test.sh names them: valve0..3 pump buzzer lamp key flow wheel heartbeat
+# estop.
 valve_lines=(0 1 2 3)
 pump_line=4
 counter_dir=""
@@ -136,6 +137,9 @@ key_name = "key"
 key_active_low = false
 wheel_name = "wheel"
 heartbeat_name = "heartbeat"
+# The E-stop circuit: closed while the line reads low (gpio-sim's pull-down); the step
+# estop_safe pulls it up, as a pressed button or a cut wire lets the board's pull-up do.
+estop_name = "estop"
 
 [flow]
 counter = "interrupt-cnt"
@@ -547,6 +551,57 @@ judge_fault() { # NAME SIGNAL PID LIMIT_MS FIGURE_KEY [exit]: prints the figure 
   step "$1" "$ok" "signal $2 to PID $3: every valve and the pump written 0 after $unsafe ms (limit $4), main thread gone after $gone ms, lines written open afterwards $reopened (longest open $longest ms, limit $reopen_limit_ms), all closed already at the signal: $wasclosed"
   [ "$ok" = 0 ] || info "$1 events of the watched lines: $(tr '\n' '|' <"$run_dir/fault-events.txt" | head -c 3000)"
 }
+
+# The E-stop circuit opens while spraying (its line pulled up: an edge the daemon's ws-estop
+# thread reads). Figure: from a trace marker written just before the pull changes to every
+# valve and the pump written 0 in the kernel's record (so it includes gpio-sim's edge delivery).
+# Then the stop must hold with the circuit closed again until sprayctl clear-alarms.
+estop_line=11
+estop_pull() { echo "$1" >"$chip_dir/sim_gpio$estop_line/pull"; }
+marker_to_safe() { # MARKER -> ms from the trace marker to every watched line written 0 (-1: never)
+  echo 0 >"$tracing/tracing_on"
+  awk -v marker="$1" -v watched="$watched" -v base="$gpio_base" -v init="$initial_mask" '
+    BEGIN {
+      n = split(watched, w, " "); for (i = 1; i <= n; i++) watch[w[i]] = 1
+      split(init, m, " ")
+      for (i = 0; i < 4; i++) latch[base + i] = int(m[1] / 2 ^ i) % 2
+      latch[base + 4] = m[2]
+      t0 = -1; safe = -1
+    }
+    function all_safe(   g) { for (g in watch) if (!(g in written) || latch[g] != 0) return 0; return 1 }
+    {
+      ts = ""; for (i = 1; i <= NF; i++) if ($i ~ /^[0-9]+\.[0-9]+:$/) { ts = substr($i, 1, length($i) - 1) + 0; break }
+      if (ts == "") next
+    }
+    / tracing_mark_write: / && t0 < 0 { if (index($0, marker)) t0 = ts; next }
+    / gpio_value: / {
+      for (i = 1; i <= NF; i++) if ($i == "gpio_value:") { g = $(i + 1); how = $(i + 2); v = $(i + 3) }
+      if (!(g in watch) || how != "set") next
+      latch[g] = v
+      if (t0 < 0) next
+      written[g] = 1
+      if (safe < 0 && all_safe()) safe = ts
+    }
+    END { print (t0 >= 0 && safe >= 0) ? sprintf("%.3f", (safe - t0) * 1000) : -1 }' "$tracing/trace"
+  echo 1 >"$tracing/tracing_on"
+}
+estop_pull pull-down
+start_spraying || info "estop: not spraying before it (State=$(bus_state))"
+trace_window_begin
+echo estop_open >"$tracing/trace_marker"
+estop_pull pull-up
+wait_for 10 state_is Fault
+estop_ms="$(marker_to_safe estop_open)"
+figure estop_safe_ms "$estop_ms"
+step estop_safe "$(awk -v ms="$estop_ms" 'BEGIN { print (ms >= 0 && ms <= 10) ? 0 : 1 }')" \
+  "E-stop line pulled up while spraying: every valve and the pump written 0 after $estop_ms ms (limit 10); the daemon's Estop (closed, latched, edge to safe ms): $(bus_value Estop); State=$(bus_state), Alarms $(bus_value Alarms)"
+estop_pull pull-down
+sleep 2
+step estop_latched "$([ "$(bus_state)" = Fault ] && [ "$(hil pump)" = 0 ]; echo $?)" \
+  "circuit closed again, no clear-alarms: State=$(bus_state), pump line $(hil pump), Estop $(bus_value Estop)"
+sprayctl clear-alarms >/dev/null 2>&1
+wait_for 10 state_is Idle
+step estop_reset "$?" "sprayctl clear-alarms with the circuit closed: State=$(bus_state), Estop $(bus_value Estop)"
 
 # kill -9: nothing runs in the daemon; ExecStopPost must write the lines safe.
 # (Each fault costs a restart, the slowest part on an emulated CPU: the orderly stop comes last.)

@@ -2,7 +2,8 @@
 # weedsprayd --check-config refuses trip limits that would let a fault pass (a cut sensor wire
 # read as a pressure, an over-pressure trip beyond the sensor's full scale), naming
 # file:line: key, as the daemon does at start, and a hardware configuration without a heartbeat
-# output unless its opt-out is set; the shipped configuration passes once one of them is.
+# output or without an emergency-stop input unless its opt-out is set; the shipped
+# configuration passes once each has a line or its opt-out.
 # usage: check_config_test.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
 BUILD=$(realpath "$1")
@@ -40,15 +41,27 @@ grep -q "^weedsprayd: $T/etc/weedspray.toml:$line: gpio.heartbeat_offset: hardwa
 echo "ok: start without a heartbeat refused: $(cat "$T/start.log")"
 "$BUILD/daemon/weedsprayd" --sim --check-config --config "$T/etc/weedspray.toml" >"$T/sim.log" 2>&1 ||
   fail "the shipped configuration is refused for a simulation"
-printf '[gpio]\nheartbeat_opt_out = true\n' >"$T/etc/conf.d/50-opt-out.toml"
+printf '[gpio]\nheartbeat_opt_out = true\nestop_opt_out = true\n' >"$T/etc/conf.d/50-opt-out.toml"
 "$BUILD/daemon/weedsprayd" --check-config --config "$T/etc/weedspray.toml" >"$T/opt-out.log" 2>&1 ||
-  fail "the heartbeat opt-out is refused"
+  fail "the opt-outs are refused"
 grep -q "^weedsprayd: warning: gpio.heartbeat_opt_out = true: no heartbeat output" "$T/opt-out.log" ||
-  fail "the opt-out is not warned about"
+  fail "the heartbeat opt-out is not warned about"
+grep -q "^weedsprayd: warning: gpio.estop_opt_out = true: no emergency-stop input" "$T/opt-out.log" ||
+  fail "the E-stop opt-out is not warned about"
+# With a heartbeat, the missing emergency-stop input is refused at its key.
 printf '[gpio]\nheartbeat_name = "HEARTBEAT"\n' >"$T/etc/conf.d/50-opt-out.toml"
+estop_line=$(grep -n '^estop_offset = -1$' "$T/etc/weedspray.toml" | cut -d: -f1)
+[ -n "$estop_line" ] || fail "the shipped configuration sets no estop_offset"
+if "$BUILD/daemon/weedsprayd" --check-config --config "$T/etc/weedspray.toml" >"$T/no_estop.log" 2>&1; then
+  fail "accepted without an emergency-stop input"
+fi
+grep -q "^weedsprayd: $T/etc/weedspray.toml:$estop_line: gpio.estop_offset: hardware mode needs an emergency-stop input" \
+  "$T/no_estop.log" || fail "no E-stop: not refused at its key: $(cat "$T/no_estop.log")"
+echo "ok: no E-stop refused: $(cat "$T/no_estop.log")"
+printf '[gpio]\nheartbeat_name = "HEARTBEAT"\nestop_name = "ESTOP"\n' >"$T/etc/conf.d/50-opt-out.toml"
 "$BUILD/daemon/weedsprayd" --check-config --config "$T/etc/weedspray.toml" >"$T/heartbeat.log" 2>&1 ||
-  fail "the shipped configuration with a heartbeat is refused"
-if grep -q "warning" "$T/heartbeat.log"; then fail "warned with a heartbeat: $(cat "$T/heartbeat.log")"; fi
+  fail "the shipped configuration with a heartbeat and an E-stop is refused"
+if grep -q "warning" "$T/heartbeat.log"; then fail "warned with both lines: $(cat "$T/heartbeat.log")"; fi
 rm -f "$T"/etc/conf.d/*.toml
 
 printf '[alarms]\nsensor_fault_low_ma = 0\n' >"$T/cut_wire.toml"

@@ -269,6 +269,23 @@ TEST(Alarms, CalibrationDriftWhenTheMeterAndTheNozzlesStayApart) {
   EXPECT_EQ(alarms.evaluate(at(in, 190s)), alarm_bit(AlarmId::kCalibrationDrift));
 }
 
+// A latched E-stop is a Fault at the first evaluation (its reaction already ran), and stays
+// raised after a ClearAlarms while the stop is still latched.
+TEST(Alarms, ALatchedEstopIsAFaultAtOnce) {
+  auto in = healthy(0s);
+  in.estop_latched = true;
+  AlarmEvaluator alarms(thresholds());
+  EXPECT_EQ(alarms.evaluate(at(in, 0s)), alarm_bit(AlarmId::kEstop));
+  EXPECT_TRUE(alarms.fault_latched());
+  EXPECT_EQ(alarm_name(AlarmId::kEstop), "estop");
+  alarms.clear();
+  EXPECT_EQ(alarms.evaluate(at(in, 1s)), alarm_bit(AlarmId::kEstop));
+  in.estop_latched = false;
+  alarms.clear();
+  EXPECT_EQ(alarms.evaluate(at(in, 2s)), 0U);
+  EXPECT_FALSE(alarms.fault_latched());
+}
+
 TEST(Alarms, NamesRoundTrip) {
   for (std::size_t i = 0; i < kAlarmCount; ++i) {
     const auto id = static_cast<AlarmId>(i);

@@ -227,6 +227,28 @@ TEST(ConfigErrors, HeartbeatOrItsOptOutLetsHardwareStart) {
       load_config_from_strings({{"main.toml", "[gpio]\nheartbeat_opt_out = true\n"}})));
 }
 
+// Hardware mode needs the emergency-stop input too, or its explicit opt-out.
+TEST(ConfigErrors, HardwareWithoutAnEstopIsRefusedAtItsKey) {
+  const Config config = load_config_from_strings(
+      {{"main.toml", "[gpio]\nheartbeat_name = \"HB\"\n\nestop_offset = -1\n"}});
+  try {
+    (void)require_estop(config);
+    FAIL() << "accepted without an E-stop";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(e.line(), 4);
+    EXPECT_EQ(e.key(), "gpio.estop_offset");
+    EXPECT_NE(std::string(e.what()).find("hardware mode needs an emergency-stop input"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(
+      require_estop(load_config_from_strings({{"main.toml", "[gpio]\nestop_name = \"ESTOP\"\n"}})));
+  EXPECT_FALSE(
+      require_estop(load_config_from_strings({{"main.toml", "[gpio]\nestop_offset = 3\n"}})));
+  EXPECT_TRUE(
+      require_estop(load_config_from_strings({{"main.toml", "[gpio]\nestop_opt_out = true\n"}})));
+}
+
 TEST(ConfigErrors, UnknownSection) {
   const auto e = parse_error({{"main.toml", "\n[presure]\nsetpoint_mpa = 0.3\n"}});
   EXPECT_EQ(e.line(), 2);
@@ -562,6 +584,9 @@ TEST(ConfigErrors, EveryGpioLineIsUsedOnceNamingBothKeys) {
   const auto names = parse_error(
       {{"m.toml", "[gpio]\nvalve_names = ['V0', 'V1', 'V2', 'V3']\nkey_name = 'V2'\n"}});
   EXPECT_EQ(names.key(), "gpio.key_name");
+  const auto estop =
+      parse_error({{"m.toml", "[gpio]\nvalve_offsets = [1, 2, 3, 4]\nestop_offset = 4\n"}});
+  EXPECT_EQ(estop.key(), "gpio.estop_offset");
   EXPECT_EQ(parse("[gpio]\nvalve_offsets = [1, 2, 3, 4]\npump_offset = 5\nflow_offset = 6\n")
                 .gpio.pump_offset,
             5);

@@ -56,6 +56,7 @@ TEST_F(HardwareCheck, TheShippedConfigNamesEveryMissingKeyAndDeviceAtItsLine) {
 
 constexpr const char* kWired =
     "[gpio]\nchip = \"gpiochip2\"\nvalve_offsets = [1, 2, 3, 4]\nheartbeat_offset = 9\n"
+    "estop_offset = 10\n"
     "wheel_offset = 7\n"
     "[[camera]]\ndevice = \"/dev/video3\"\n"
     "[adc]\niio_device = \"iio:device4\"\n"

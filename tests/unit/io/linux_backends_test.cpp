@@ -8,6 +8,7 @@
 #include <string>
 
 #include "io/linux/gpio_digital_input.hpp"
+#include "io/linux/gpio_estop_input.hpp"
 #include "io/linux/gpio_output_bank.hpp"
 #include "io/linux/gpio_pulse_input.hpp"
 #include "io/linux/iio_analog.hpp"
@@ -185,6 +186,14 @@ TEST(GpioBackends, MissingChipOrLineIsAClearError) {
   GpioDigitalInputConfig key;
   key.line.offset = 3;  // an offset without a chip
   EXPECT_THROW(GpioDigitalInput k(key), std::runtime_error);
+  GpioEstopInputConfig estop;
+  estop.line.name = "weedspray-no-such-estop";
+  try {
+    GpioEstopInput e(estop);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("weedspray-no-such-estop"), std::string::npos) << e.what();
+  }
   GpioOutputBankConfig empty;
   EXPECT_THROW(GpioOutputBank b(empty), std::runtime_error);
 }

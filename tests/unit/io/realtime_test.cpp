@@ -24,6 +24,12 @@ TEST(Realtime, PriorityTableIsComplete) {
   EXPECT_GT(thread_priority(ThreadRole::kValvePwm).fifo_priority,
             thread_priority(ThreadRole::kPressureLoop).fifo_priority);
   EXPECT_EQ(thread_priority(ThreadRole::kModbus).fifo_priority, 0);
+  // The E-stop's reaction writes the valves and pump safe: nothing of the daemon delays it.
+  for (const auto& p : kThreadPriorities) {
+    if (p.role != ThreadRole::kEstop) {
+      EXPECT_GT(thread_priority(ThreadRole::kEstop).fifo_priority, p.fifo_priority) << p.name;
+    }
+  }
 }
 
 TEST(Realtime, ThreadRunsWithAReportedStatus) {

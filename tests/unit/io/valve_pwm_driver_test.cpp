@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cerrno>
 #include <functional>
 #include <stop_token>
@@ -385,6 +386,125 @@ TEST(ValvePwmDriver, AFailedValveWriteStopsTheHeartbeat) {
   EXPECT_LT(last_toggle, failed_at + 100ms);
   EXPECT_TRUE(rig.driver.stats().heartbeat_stopped);
   EXPECT_EQ(rig.heartbeat.mask(), 0U);
+}
+
+// A driver with a 50 Hz heartbeat, a hold flag (the E-stop's latch) and commands refreshed
+// every 50 ms by refresh().
+struct HoldRig {
+  ScriptedClock clock;
+  sim::MemoryOutputBank heartbeat{1, 0, clock, 1000};
+  sim::MemoryOutputBank bank{4, 0, clock, 1000};
+  control::PwmConfig pwm_config{};
+  control::PwmSchedule schedule{pwm_config};
+  std::atomic<bool> hold{false};
+  ValvePwmDriver<control::PwmSchedule> driver{clock, bank, schedule, config()};
+  nanoseconds last_refresh{-1s};
+
+  ValvePwmDriverConfig config() {
+    ValvePwmDriverConfig c;
+    c.command_expiry = 10s;
+    c.heartbeat = &heartbeat;
+    c.heartbeat_half_period = 10ms;
+    c.hold_safe = &hold;
+    c.max_sleep = 2ms;
+    return c;
+  }
+  void refresh(nanoseconds now) {
+    if (now - last_refresh >= 50ms) {
+      last_refresh = now;
+      driver.command(Rig::command(now));
+    }
+  }
+};
+
+// While held, no valve opens and the heartbeat stays low, commands or not; released, the
+// valves follow their commands again and the heartbeat beats.
+TEST(ValvePwmDriver, AHoldClosesTheValvesAndStopsTheHeartbeatUntilReleased) {
+  HoldRig rig;
+  bool valve_open_while_held = false;
+  bool heartbeat_high_while_held = false;
+  rig.clock.on_sleep = [&](nanoseconds now) {
+    rig.refresh(now);
+    if (now >= 300ms && now < 700ms) rig.hold = true;
+    if (now >= 700ms) rig.hold = false;
+    // One wake (max_sleep) after the hold is set, everything must be safe.
+    if (now >= 303ms && now < 700ms) {
+      valve_open_while_held |= rig.bank.mask() != 0;
+      heartbeat_high_while_held |= rig.heartbeat.mask() != 0;
+    }
+  };
+  rig.clock.stop_at = 1s;
+  rig.driver.run(rig.clock.stop.get_token());
+
+  EXPECT_FALSE(valve_open_while_held);
+  EXPECT_FALSE(heartbeat_high_while_held);
+  EXPECT_EQ(rig.driver.stats().holds, 1U);
+  EXPECT_EQ(rig.driver.stats().deadman_expiries, 0U) << "a hold is not a dead-man expiry";
+  std::size_t opened_before = 0, opened_after = 0, beats_after = 0;
+  for (const auto& w : rig.bank.history()) {
+    if (w.mask != 0 && w.time < 300ms) ++opened_before;
+    if (w.mask != 0 && w.time > 700ms) ++opened_after;
+  }
+  for (const auto& w : rig.heartbeat.history())
+    if (w.time > 705ms) ++beats_after;
+  EXPECT_GT(opened_before, 3U) << "the valves were running before the hold";
+  EXPECT_GT(opened_after, 3U) << "and run again once it is released";
+  EXPECT_GT(beats_after, 20U);
+}
+
+// The hold's setter writes the valves safe itself; a valve write of this thread already on
+// its way lands after that safe write. The driver goes round its loop after each write, finds
+// the hold and writes the valves safe before it sleeps.
+class RacingBank final : public DigitalOutputBank {
+ public:
+  RacingBank(sim::MemoryOutputBank& inner, std::atomic<bool>& hold) : inner_(inner), hold_(hold) {}
+  std::size_t size() const noexcept override { return inner_.size(); }
+  int write(std::uint32_t mask) noexcept override {
+    if (mask != 0 && race_armed.exchange(false)) {
+      hold_.store(true);    // the E-stop's latch ...
+      inner_.force_safe();  // ... and its safe write, just before this write lands
+      raced = true;
+    }
+    return inner_.write(mask);
+  }
+  int force_safe() noexcept override { return inner_.force_safe(); }
+  std::uint32_t safe_mask() const noexcept override { return inner_.safe_mask(); }
+  std::atomic<bool> race_armed{false};
+  bool raced = false;
+
+ private:
+  sim::MemoryOutputBank& inner_;
+  std::atomic<bool>& hold_;
+};
+
+TEST(ValvePwmDriver, AValveWriteRacingTheHoldIsUndoneBeforeTheDriverSleeps) {
+  ScriptedClock clock;
+  sim::MemoryOutputBank memory{4, 0, clock, 100000};
+  std::atomic<bool> hold{false};
+  RacingBank bank(memory, hold);
+  control::PwmConfig pwm_config{};
+  control::PwmSchedule schedule{pwm_config};
+  ValvePwmDriverConfig config;
+  config.command_expiry = 10s;
+  config.hold_safe = &hold;
+  ValvePwmDriver<control::PwmSchedule> driver(clock, bank, schedule, config);
+  driver.command(Rig::command(0ns));
+  bool open_after_race = false;
+  int sleeps_after_race = 0;
+  clock.on_sleep = [&](nanoseconds now) {
+    if (now >= 200ms && !bank.raced) bank.race_armed = true;
+    if (bank.raced && ++sleeps_after_race == 1) open_after_race = memory.mask() != 0;
+  };
+  clock.stop_at = 400ms;
+  driver.run(clock.stop.get_token());
+
+  ASSERT_TRUE(bank.raced) << "the race was not reached";
+  EXPECT_FALSE(open_after_race) << "a valve was left open behind the hold's safe write";
+  for (const auto& w : memory.history()) {
+    if (w.time > 200ms + config.max_sleep) {
+      EXPECT_EQ(w.mask, 0U) << "at " << w.time.count();
+    }
+  }
 }
 
 }  // namespace
