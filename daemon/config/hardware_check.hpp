@@ -1,8 +1,8 @@
 // What hardware mode needs before the daemon starts, checked by `weedsprayd --check-config
 // --hardware`: the keys it requires (valve lines, the heartbeat and the E-stop input or their
-// opt-outs, the wheel line when speed comes from pulses) and that every device the configuration names exists (GPIO
-// chip, cameras, serial ports, IIO converters, the flow counter). Every problem is reported,
-// each located at its key.
+// opt-outs, the wheel line when speed comes from pulses) and that every device the configuration
+// names exists (GPIO chip, cameras, serial ports, IIO converters, the flow counter). Every problem
+// is reported, each located at its key.
 #pragma once
 
 #include <filesystem>

@@ -44,10 +44,10 @@ class HardwareCheck : public ::testing::Test {
 TEST_F(HardwareCheck, TheShippedConfigNamesEveryMissingKeyAndDeviceAtItsLine) {
   const Config config = load_config(fs::path(WEEDSPRAY_SOURCE_DIR) / "etc" / "weedspray.toml");
   const std::vector<ConfigError> problems = check_hardware(config, roots());
-  EXPECT_EQ(
-      keys(problems),
-      (std::set<std::string>{"gpio.valve_offsets", "gpio.heartbeat_offset", "gpio.wheel_offset",
-                             "gpio.chip", "camera[0].device", "adc.iio_device", "dac.iio_device"}));
+  EXPECT_EQ(keys(problems),
+            (std::set<std::string>{"gpio.valve_offsets", "gpio.heartbeat_offset",
+                                   "gpio.estop_offset", "gpio.wheel_offset", "gpio.chip",
+                                   "camera[0].device", "adc.iio_device", "dac.iio_device"}));
   for (const auto& problem : problems) {
     EXPECT_TRUE(problem.file().ends_with("weedspray.toml")) << problem.what();
     EXPECT_GT(problem.line(), 0) << problem.what();
