@@ -75,7 +75,7 @@ TEST(AsAppliedLog, WritesOneLinePerRecordAndRotates) {
             "course_deg,nozzle_width_m,latitude_deg_0,latitude_deg_1,latitude_deg_2,"
             "latitude_deg_3,longitude_deg_0,longitude_deg_1,longitude_deg_2,longitude_deg_3,"
             "rate_l_per_ha_0,rate_l_per_ha_1,rate_l_per_ha_2,rate_l_per_ha_3,speed_m_per_s_0,"
-            "speed_m_per_s_1,speed_m_per_s_2,speed_m_per_s_3");
+            "speed_m_per_s_1,speed_m_per_s_2,speed_m_per_s_3,seq");
   std::string line;
   std::getline(in, line);
   EXPECT_NE(line.find(",1.5000,"), std::string::npos) << line;
