@@ -8,6 +8,7 @@
 #include <systemd/sd-event.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -32,6 +33,7 @@
 #include "daemon/logging.hpp"
 #include "daemon/records/as_applied_log.hpp"
 #include "daemon/records/map_geometry.hpp"
+#include "daemon/records/records_space.hpp"
 #include "daemon/records/run_marker.hpp"
 #include "daemon/records/totals.hpp"
 #include "daemon/sprayer/calibrations.hpp"
@@ -190,7 +192,12 @@ class Daemon final : public CommandHandler {
     last_tick_time_ = start_time_;
     gnss_lost_fix_.emplace(start_time_, from_seconds(config_.gnss.lost_fix_timeout_s),
                            from_seconds(config_.gnss.first_fix_timeout_s));
-    log_thread_ = std::jthread([this](std::stop_token stop) { log_writer(stop); });
+    // [log] takes a restart: the writer keeps its own copy of the floor.
+    const std::uint64_t records_floor_bytes =
+        static_cast<std::uint64_t>(config_.log.min_free_mb) * 1'000'000;
+    log_thread_ = std::jthread([this, records_floor_bytes](std::stop_token stop) {
+      log_writer(stop, records_floor_bytes);
+    });
 
     uint64_t watchdog_usec = 0;
     if (sd_watchdog_enabled(0, &watchdog_usec) > 0)
@@ -617,8 +624,16 @@ class Daemon final : public CommandHandler {
     in.nozzle_flow_fault =
         control.nozzle_flow_fault >= 0 && control.nozzle_health_reset == trip_reset_;
     in.calibration_ratio = control.calibration_ratio;
+    in.records_at_risk = records_at_risk_.load();
 
     const AlarmMask raised = alarms_.evaluate(in);
+    for (std::size_t i = 0; i < kAlarmCount; ++i) {
+      const auto id = static_cast<AlarmId>(i);
+      if (!(alarms_.cleared_by_itself() & alarm_bit(id))) continue;
+      const std::string name(alarm_name(id));
+      spdlog::info("alarm cleared: {} (its condition ended)", name);
+      if (dbus_) dbus_->alarm_cleared(name.c_str());
+    }
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
       const auto id = static_cast<AlarmId>(i);
       if (!(raised & alarm_bit(id))) continue;
@@ -668,6 +683,11 @@ class Daemon final : public CommandHandler {
             c <= trim.min_correction || c >= trim.max_correction
                 ? " is at its limit: the dose is NOT held"
                 : " corrects the modulated nozzles by the boom's common change");
+      } else if (id == AlarmId::kRecordsDiskFull) {
+        spdlog::warn(
+            "alarm raised: {} (as-applied lines not written, or under log.min_free_mb = {} MB "
+            "free in {}; spraying goes on: export and delete old files)",
+            name, config_.log.min_free_mb, log_->dir().string());
       } else if (id == AlarmId::kVisionModelFailed) {
         spdlog::error(
             "alarm raised: {} ({}; that camera's nozzles stay closed until its frames "
@@ -956,18 +976,23 @@ class Daemon final : public CommandHandler {
     std::fflush(stdout);
   }
 
-  // As-applied writer (normal priority): drains the control loop's queue, flushes every second
-  // so a crash loses at most the last second.
-  void log_writer(std::stop_token stop) {
+  // As-applied writer (normal priority): drains the control loop's queue; once a second writes
+  // the lines held while writes failed, fdatasyncs (a crash loses at most the last second) and
+  // judges the free space (records_disk_full, raised and cleared by the main loop).
+  void log_writer(std::stop_token stop, std::uint64_t floor_bytes) {
     auto last_flush = std::chrono::steady_clock::now();
     bool reported = false;
+    AsAppliedHealth seen;
     const auto drain = [&] {
-      while (auto record = sprayer_->records().try_pop()) {
-        if (!log_->write(*record) && !reported) {
-          reported = true;
-          spdlog::error("as-applied log: cannot write {}", log_->current_file().string());
-        }
-      }
+      while (auto record = sprayer_->records().try_pop()) log_->write(*record);
+    };
+    const auto flush = [&] {
+      log_->flush();
+      const AsAppliedHealth health = log_->health();
+      const std::optional<std::uint64_t> available = available_bytes(log_->dir());
+      records_at_risk_.store(records_at_risk(health, available, floor_bytes));
+      report_records(seen, health, available);
+      seen = health;
     };
     // An exception must not end the process through std::terminate from this thread: log it
     // and keep draining (the control loop drops records only when the queue is full).
@@ -982,13 +1007,39 @@ class Daemon final : public CommandHandler {
     while (!stop.stop_requested()) {
       guarded(drain);
       if (std::chrono::steady_clock::now() - last_flush >= 1s) {
-        guarded([&] { log_->flush(); });
+        guarded(flush);
         last_flush = std::chrono::steady_clock::now();
       }
       std::this_thread::sleep_for(100ms);
     }
     guarded(drain);
-    guarded([&] { log_->flush(); });
+    guarded(flush);
+    if (seen.held_lines > 0)
+      spdlog::error("as-applied log: {} lines not written at exit ({})", seen.held_lines,
+                    std::strerror(seen.error));
+  }
+
+  // The journal lines for the as-applied log's changes since `seen`.
+  void report_records(const AsAppliedHealth& seen, const AsAppliedHealth& now,
+                      std::optional<std::uint64_t> available) const {
+    const std::string folder = log_->dir().string();
+    if (now.error != 0 && seen.error == 0) {
+      spdlog::error(
+          "as-applied log: cannot write in {} ({}; {} MB free): lines wait in memory (up to "
+          "{} MB) and are written once it works again",
+          folder, std::strerror(now.error), available.value_or(0) / 1'000'000,
+          kHeldLinesMaxBytes / 1'000'000);
+    }
+    if (now.dropped_lines != seen.dropped_lines) {
+      spdlog::error(
+          "as-applied log: {} lines dropped ({} in all), memory full: their seq numbers are "
+          "missing from the file",
+          now.dropped_lines - seen.dropped_lines, now.dropped_lines);
+    }
+    if (now.error == 0 && seen.error != 0) {
+      spdlog::info("as-applied log: writing again in {} ({} lines dropped in all)", folder,
+                   now.dropped_lines);
+    }
   }
 
   Options options_;
@@ -1003,6 +1054,7 @@ class Daemon final : public CommandHandler {
   sd_event_source* tick_source_ = nullptr;
   std::vector<sd_event_source*> signal_sources_;
   std::unique_ptr<AsAppliedLog> log_;
+  std::atomic<bool> records_at_risk_{false};  // from the writer thread
   std::jthread log_thread_;
   std::filesystem::path totals_file_;
   Totals base_totals_;

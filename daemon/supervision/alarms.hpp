@@ -30,8 +30,9 @@ enum class AlarmId : std::uint8_t {
   kNozzleFlowFault,    // one nozzle's flow off its baseline ([nozzle_health]; nozzle named)
   kCalibrationDrift,   // the flow trim has held the boom off its calibration: recalibrate
   kFlowValvesClosed,   // flow with every valve commanded closed: a leaking or stuck-open valve
+  kRecordsDiskFull,    // as-applied lines not written, or free space under log.min_free_mb
 };
-inline constexpr std::size_t kAlarmCount = 16;
+inline constexpr std::size_t kAlarmCount = 17;
 
 using AlarmMask = std::uint32_t;
 constexpr AlarmMask alarm_bit(AlarmId id) noexcept {
@@ -42,6 +43,8 @@ std::string_view alarm_name(AlarmId id) noexcept;  // "over_pressure", ...
 std::optional<AlarmId> parse_alarm(std::string_view name) noexcept;
 // Fault-class alarms latch the Fault state; the others are warnings.
 bool is_fault(AlarmId id) noexcept;
+// Unlatched by the evaluation that finds its condition gone, not only by ClearAlarms.
+bool clears_itself(AlarmId id) noexcept;
 
 struct AlarmInputs {
   std::chrono::nanoseconds now{};
@@ -73,6 +76,7 @@ struct AlarmInputs {
   // The line meter's flow over what the calibrated nozzles promise at the commanded duties,
   // averaged (control::CalibrationRatio; 1 = as calibrated, and while not yet known).
   double calibration_ratio = 1.0;
+  bool records_at_risk = false;  // see records_at_risk() (daemon/records/records_space.hpp)
 };
 
 class AlarmEvaluator {
@@ -82,6 +86,8 @@ class AlarmEvaluator {
 
   // Returns the alarms raised by this call (not already latched).
   AlarmMask evaluate(const AlarmInputs& in);
+  // The alarms the last evaluation unlatched because their condition ended (clears_itself).
+  AlarmMask cleared_by_itself() const noexcept { return cleared_by_itself_; }
   AlarmMask active() const noexcept { return latched_; }
   bool fault_latched() const noexcept;
   // Unlatches everything; a condition still present is raised again on the next evaluation
@@ -94,6 +100,7 @@ class AlarmEvaluator {
   AlarmsSection thresholds_;
   AlarmMask latched_ = 0;
   AlarmMask present_ = 0;
+  AlarmMask cleared_by_itself_ = 0;
   std::array<std::optional<std::chrono::nanoseconds>, kAlarmCount> condition_since_{};
 };
 
