@@ -76,9 +76,13 @@ int AsAppliedLog::open_new(std::uint32_t nozzles) {
   std::tm utc{};
   gmtime_r(&now, &utc);
   std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%SZ", &utc);
-  char name[64];
-  std::snprintf(name, sizeof name, "as-applied-%s-%03u.csv", stamp, file_number_++ % 1000);
-  path_ = dir_ / name;
+  // A new file every time: a restart within the same second must not append to the last run's.
+  std::error_code ec;
+  do {
+    char name[64];
+    std::snprintf(name, sizeof name, "as-applied-%s-%03u.csv", stamp, file_number_++ % 1000);
+    path_ = dir_ / name;
+  } while (std::filesystem::exists(path_, ec) && file_number_ % 1000 != 0);
   if (const int error = appender_.open(path_); error != 0) return error;
   nozzles_ = nozzles;
   format_header(nozzles);
