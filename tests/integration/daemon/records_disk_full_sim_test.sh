@@ -20,39 +20,21 @@ mkdir -p "$LOGS"
 mount -t tmpfs -o size=256k tmpfs "$LOGS" || { echo "skip: cannot mount a tmpfs"; exit 77; }
 unmount_logs() { umount "$LOGS"; }
 EXIT_HOOKS+=(unmount_logs)
-cat >"$T/weedspray.toml" <<'TOML'
-[daemon]
-autostart = true
-[boom]
-nozzles = 3
-[log]
-min_free_mb = 0
-TOML
+write_sim_config "[log]" "min_free_mb = 0"
 
-# wait_for PATTERN [TENTHS]: until the daemon's log has a line matching PATTERN.
-wait_for() {
-  local _
-  for _ in $(seq 1 "${2:-150}"); do
-    grep -q "$1" "$T/daemon.log" 2>/dev/null && return 0
-    sleep 0.1
-  done
-  fail "never logged: $1"
-}
-
-HOME="$T" "$BUILD/daemon/weedsprayd" --sim --no-bus --config "$T/weedspray.toml" \
-  --state-dir "$T/state" --run-seconds 60 >"$T/daemon.log" 2>&1 &
+resumed_sim daemon --run-seconds 60 &
 DAEMON_PID=$!
-wait_for "state Idle -> Spraying"
+wait_log "$T/daemon.log" "state Idle -> Spraying"
 sleep 1  # some lines written before the disk fills
 # Fill the disk to the last block: the next line lands short or not at all.
 dd if=/dev/zero of="$LOGS/filler" bs=1k 2>/dev/null || true
-wait_for "as-applied log: cannot write"
-wait_for "alarm raised: records_disk_full"
-wait_for "^Spraying .*ALARMS: records_disk_full"
+wait_log "$T/daemon.log" "as-applied log: cannot write"
+wait_log "$T/daemon.log" "alarm raised: records_disk_full"
+wait_log "$T/daemon.log" "^Spraying .*ALARMS: records_disk_full"
 sleep 2  # lines pile up in memory
 rm "$LOGS/filler"
-wait_for "as-applied log: writing again"
-wait_for "alarm cleared: records_disk_full"
+wait_log "$T/daemon.log" "as-applied log: writing again"
+wait_log "$T/daemon.log" "alarm cleared: records_disk_full"
 sleep 1
 kill -TERM "$DAEMON_PID"
 wait "$DAEMON_PID" || fail "the daemon did not stop in order"
