@@ -32,6 +32,7 @@
 #include "daemon/config/live_reload.hpp"
 #include "daemon/logging.hpp"
 #include "daemon/records/as_applied_log.hpp"
+#include "daemon/records/as_applied_reader.hpp"
 #include "daemon/records/map_geometry.hpp"
 #include "daemon/records/records_space.hpp"
 #include "daemon/records/run_marker.hpp"
@@ -157,6 +158,8 @@ class Daemon final : public CommandHandler {
         NozzlePlacement{
             config_.boom.nozzle_width_m,
             {config_.gnss.antenna_ahead_of_nozzles_m, config_.gnss.antenna_right_of_centre_m}});
+    reconcile_totals_with_log();
+    persist_totals();  // a mark in the log from the start: a crash in the first minute is matched
 
     check(sd_event_default(&event_), "sd_event_default");
     for (int signal : {SIGTERM, SIGINT, SIGHUP}) {
@@ -885,10 +888,40 @@ class Daemon final : public CommandHandler {
     return totals;
   }
 
+  // The log's records after the saved totals' mark, less what the totals already held of them,
+  // were sprayed after the last save (a crash or power cut: up to a minute): added back. The
+  // seq numbers run on after the log's last.
+  void reconcile_totals_with_log() noexcept {
+    const TotalsLogMark mark = base_totals_.log;
+    try {
+      if (!mark.known) {
+        log_->continue_after(last_as_applied_seq(log_->dir()));
+        return;
+      }
+      const AsAppliedSummary after = read_as_applied_after(log_->dir(), mark.seq);
+      log_->continue_after(std::max(after.last_seq, mark.seq));
+      const double missing_l = after.volume_l - mark.queued_l;
+      if (missing_l <= 0) return;
+      base_totals_.volume_l += missing_l;
+      spdlog::info(
+          "totals: {:.3f} L added from {} as-applied records (seq {}..{}) written after they "
+          "were last saved",
+          missing_l, after.records, after.first_seq, after.last_seq);
+    } catch (const std::exception& error) {
+      spdlog::warn("totals not reconciled with the as-applied log: {}", error.what());
+    }
+  }
+
   void persist_totals() noexcept {
     if (totals_file_.empty()) return;
     try {
-      save_totals(totals_file_, current_totals());
+      // The log's progress first: records handed to it after this are not in its mark.
+      const std::optional<AsAppliedProgress> logged =
+          log_ ? std::optional(log_->progress()) : std::nullopt;
+      Totals totals = current_totals();
+      const double this_run_l = totals.volume_l - base_totals_.volume_l;
+      if (logged) totals.log = {true, logged->seq, std::max(0.0, this_run_l - logged->volume_l)};
+      save_totals(totals_file_, totals);
     } catch (const std::exception& error) {
       spdlog::error("totals not saved: {}", error.what());
     }

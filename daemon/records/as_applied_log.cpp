@@ -166,7 +166,19 @@ void AsAppliedLog::format_record(const AppliedRecord& r) {
   for (std::uint32_t i = 0; i < r.nozzles; ++i) appendf(line_, ",%.4f", r.density[i]);
   for (std::uint32_t i = 0; i < r.nozzles; ++i) appendf(line_, ",%.4f", r.crop_density[i]);
   format_position(r);
+  const std::lock_guard lock(progress_mutex_);
+  volume_l_ += r.volume_l;
   appendf(line_, ",%" PRIu64 "\n", next_seq_++);
+}
+
+void AsAppliedLog::continue_after(std::uint64_t seq) {
+  const std::lock_guard lock(progress_mutex_);
+  next_seq_ = seq + 1;
+}
+
+AsAppliedProgress AsAppliedLog::progress() const {
+  const std::lock_guard lock(progress_mutex_);
+  return {next_seq_ - 1, volume_l_};
 }
 
 void AsAppliedLog::format_position(const AppliedRecord& r) {

@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <mutex>
 #include <string>
 
 #include "daemon/records/held_lines.hpp"
@@ -33,6 +34,12 @@ struct NozzlePlacement {
 // records a second (1.35 kB each; 2.5 minutes at the highest, 20), time to free space in the
 // field (export, delete old files); small beside the board's memory.
 inline constexpr std::size_t kHeldLinesMaxBytes = 4 << 20;
+
+// The records handed to the log by this run: the last one's seq and their summed volume.
+struct AsAppliedProgress {
+  std::uint64_t seq = 0;
+  double volume_l = 0;
+};
 
 struct AsAppliedHealth {
   int error = 0;  // errno of the last failed write, open or fdatasync; 0 once writes work again
@@ -57,6 +64,10 @@ class AsAppliedLog {
   bool write(const AppliedRecord& record);
   // Writes the held lines in order (until one fails), then fdatasyncs. Call once a second.
   void flush();
+  // Numbers the next record seq + 1 (the log's last at start, so seq runs on across runs).
+  void continue_after(std::uint64_t seq);
+  // Thread-safe: the totals read it from the main thread to mark where they stand in the log.
+  AsAppliedProgress progress() const;
   const std::filesystem::path& current_file() const { return path_; }
   const std::filesystem::path& dir() const { return dir_; }
   AsAppliedHealth health() const;
@@ -83,7 +94,9 @@ class AsAppliedLog {
   std::uint32_t nozzles_ = 0;
   std::uint64_t write_errors_ = 0;
   int error_ = 0;
-  std::uint64_t next_seq_ = 1;
+  mutable std::mutex progress_mutex_;
+  std::uint64_t next_seq_ = 1;  // guarded by progress_mutex_, with volume_l_
+  double volume_l_ = 0;
   unsigned file_number_ = 0;
 };
 
