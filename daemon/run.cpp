@@ -908,6 +908,7 @@ class Daemon final : public CommandHandler {
           "were last saved",
           missing_l, after.records, after.first_seq, after.last_seq);
     } catch (const std::exception& error) {
+      log_->continue_after(mark.seq);  // at least no seq the totals' mark names twice
       spdlog::warn("totals not reconciled with the as-applied log: {}", error.what());
     }
   }

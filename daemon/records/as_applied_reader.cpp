@@ -56,6 +56,7 @@ AsAppliedSummary read_file_after(const std::filesystem::path& file, std::uint64_
   const std::string text = buffer.str();
   AsAppliedSummary summary;
   summary.files = 1;
+  if (text.empty()) return summary;  // created, then a crash before its header went out
   std::size_t line_start = text.find('\n');
   const std::vector<std::string_view> header =
       split(std::string_view(text).substr(0, line_start == std::string::npos ? 0 : line_start));

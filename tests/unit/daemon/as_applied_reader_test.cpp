@@ -125,6 +125,16 @@ TEST_F(AsAppliedReaderTest, TheRecordsAfterASeqComeFromTheNewestFiles) {
   EXPECT_EQ(next_run.progress().seq, 201U);
 }
 
+// A crash between creating a file and writing its header leaves it empty: no records, no error.
+TEST_F(AsAppliedReaderTest, AnEmptyFileHoldsNoRecords) {
+  write_records(3);
+  std::ofstream(dir_ / "as-applied-99999999T999999Z-000.csv");
+  const AsAppliedSummary s = read_as_applied_dir(dir_);
+  EXPECT_EQ(s.files, 2U);
+  EXPECT_EQ(s.records, 3U);
+  EXPECT_EQ(last_as_applied_seq(dir_), 3U);
+}
+
 TEST_F(AsAppliedReaderTest, ANonLogFileIsNamed) {
   fs::create_directories(dir_);
   const fs::path file = dir_ / "as-applied-x.csv";
