@@ -8,6 +8,7 @@
 #include <systemd/sd-event.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -31,7 +32,9 @@
 #include "daemon/config/live_reload.hpp"
 #include "daemon/logging.hpp"
 #include "daemon/records/as_applied_log.hpp"
+#include "daemon/records/as_applied_reader.hpp"
 #include "daemon/records/map_geometry.hpp"
+#include "daemon/records/records_space.hpp"
 #include "daemon/records/run_marker.hpp"
 #include "daemon/records/totals.hpp"
 #include "daemon/sprayer/calibrations.hpp"
@@ -155,6 +158,8 @@ class Daemon final : public CommandHandler {
         NozzlePlacement{
             config_.boom.nozzle_width_m,
             {config_.gnss.antenna_ahead_of_nozzles_m, config_.gnss.antenna_right_of_centre_m}});
+    reconcile_totals_with_log();
+    persist_totals();  // a mark in the log from the start: a crash in the first minute is matched
 
     check(sd_event_default(&event_), "sd_event_default");
     for (int signal : {SIGTERM, SIGINT, SIGHUP}) {
@@ -190,7 +195,12 @@ class Daemon final : public CommandHandler {
     last_tick_time_ = start_time_;
     gnss_lost_fix_.emplace(start_time_, from_seconds(config_.gnss.lost_fix_timeout_s),
                            from_seconds(config_.gnss.first_fix_timeout_s));
-    log_thread_ = std::jthread([this](std::stop_token stop) { log_writer(stop); });
+    // [log] takes a restart: the writer keeps its own copy of the floor.
+    const std::uint64_t records_floor_bytes =
+        static_cast<std::uint64_t>(config_.log.min_free_mb) * 1'000'000;
+    log_thread_ = std::jthread([this, records_floor_bytes](std::stop_token stop) {
+      log_writer(stop, records_floor_bytes);
+    });
 
     uint64_t watchdog_usec = 0;
     if (sd_watchdog_enabled(0, &watchdog_usec) > 0)
@@ -621,8 +631,16 @@ class Daemon final : public CommandHandler {
     in.calibration_ratio = control.calibration_ratio;
     const EstopStatus estop = sprayer_->estop();
     in.estop_latched = estop.latched;
+    in.records_at_risk = records_at_risk_.load();
 
     const AlarmMask raised = alarms_.evaluate(in);
+    for (std::size_t i = 0; i < kAlarmCount; ++i) {
+      const auto id = static_cast<AlarmId>(i);
+      if (!(alarms_.cleared_by_itself() & alarm_bit(id))) continue;
+      const std::string name(alarm_name(id));
+      spdlog::info("alarm cleared: {} (its condition ended)", name);
+      if (dbus_) dbus_->alarm_cleared(name.c_str());
+    }
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
       const auto id = static_cast<AlarmId>(i);
       if (!(raised & alarm_bit(id))) continue;
@@ -680,6 +698,11 @@ class Daemon final : public CommandHandler {
             c <= trim.min_correction || c >= trim.max_correction
                 ? " is at its limit: the dose is NOT held"
                 : " corrects the modulated nozzles by the boom's common change");
+      } else if (id == AlarmId::kRecordsDiskFull) {
+        spdlog::warn(
+            "alarm raised: {} (as-applied lines not written, or under log.min_free_mb = {} MB "
+            "free in {}; spraying goes on: export and delete old files)",
+            name, config_.log.min_free_mb, log_->dir().string());
       } else if (id == AlarmId::kVisionModelFailed) {
         spdlog::error(
             "alarm raised: {} ({}; that camera's nozzles stay closed until its frames "
@@ -877,10 +900,41 @@ class Daemon final : public CommandHandler {
     return totals;
   }
 
+  // The log's records after the saved totals' mark, less what the totals already held of them,
+  // were sprayed after the last save (a crash or power cut: up to a minute): added back. The
+  // seq numbers run on after the log's last.
+  void reconcile_totals_with_log() noexcept {
+    const TotalsLogMark mark = base_totals_.log;
+    try {
+      if (!mark.known) {
+        log_->continue_after(last_as_applied_seq(log_->dir()));
+        return;
+      }
+      const AsAppliedSummary after = read_as_applied_after(log_->dir(), mark.seq);
+      log_->continue_after(std::max(after.last_seq, mark.seq));
+      const double missing_l = after.volume_l - mark.queued_l;
+      if (missing_l <= 0) return;
+      base_totals_.volume_l += missing_l;
+      spdlog::info(
+          "totals: {:.3f} L added from {} as-applied records (seq {}..{}) written after they "
+          "were last saved",
+          missing_l, after.records, after.first_seq, after.last_seq);
+    } catch (const std::exception& error) {
+      log_->continue_after(mark.seq);  // at least no seq the totals' mark names twice
+      spdlog::warn("totals not reconciled with the as-applied log: {}", error.what());
+    }
+  }
+
   void persist_totals() noexcept {
     if (totals_file_.empty()) return;
     try {
-      save_totals(totals_file_, current_totals());
+      // The log's progress first: records handed to it after this are not in its mark.
+      const std::optional<AsAppliedProgress> logged =
+          log_ ? std::optional(log_->progress()) : std::nullopt;
+      Totals totals = current_totals();
+      const double this_run_l = totals.volume_l - base_totals_.volume_l;
+      if (logged) totals.log = {true, logged->seq, std::max(0.0, this_run_l - logged->volume_l)};
+      save_totals(totals_file_, totals);
     } catch (const std::exception& error) {
       spdlog::error("totals not saved: {}", error.what());
     }
@@ -972,18 +1026,23 @@ class Daemon final : public CommandHandler {
     std::fflush(stdout);
   }
 
-  // As-applied writer (normal priority): drains the control loop's queue, flushes every second
-  // so a crash loses at most the last second.
-  void log_writer(std::stop_token stop) {
+  // As-applied writer (normal priority): drains the control loop's queue; once a second writes
+  // the lines held while writes failed, fdatasyncs (a crash loses at most the last second) and
+  // judges the free space (records_disk_full, raised and cleared by the main loop).
+  void log_writer(std::stop_token stop, std::uint64_t floor_bytes) {
     auto last_flush = std::chrono::steady_clock::now();
     bool reported = false;
+    AsAppliedHealth seen;
     const auto drain = [&] {
-      while (auto record = sprayer_->records().try_pop()) {
-        if (!log_->write(*record) && !reported) {
-          reported = true;
-          spdlog::error("as-applied log: cannot write {}", log_->current_file().string());
-        }
-      }
+      while (auto record = sprayer_->records().try_pop()) log_->write(*record);
+    };
+    const auto flush = [&] {
+      log_->flush();
+      const AsAppliedHealth health = log_->health();
+      const std::optional<std::uint64_t> available = available_bytes(log_->dir());
+      records_at_risk_.store(records_at_risk(health, available, floor_bytes));
+      report_records(seen, health, available);
+      seen = health;
     };
     // An exception must not end the process through std::terminate from this thread: log it
     // and keep draining (the control loop drops records only when the queue is full).
@@ -998,13 +1057,39 @@ class Daemon final : public CommandHandler {
     while (!stop.stop_requested()) {
       guarded(drain);
       if (std::chrono::steady_clock::now() - last_flush >= 1s) {
-        guarded([&] { log_->flush(); });
+        guarded(flush);
         last_flush = std::chrono::steady_clock::now();
       }
       std::this_thread::sleep_for(100ms);
     }
     guarded(drain);
-    guarded([&] { log_->flush(); });
+    guarded(flush);
+    if (seen.held_lines > 0)
+      spdlog::error("as-applied log: {} lines not written at exit ({})", seen.held_lines,
+                    std::strerror(seen.error));
+  }
+
+  // The journal lines for the as-applied log's changes since `seen`.
+  void report_records(const AsAppliedHealth& seen, const AsAppliedHealth& now,
+                      std::optional<std::uint64_t> available) const {
+    const std::string folder = log_->dir().string();
+    if (now.error != 0 && seen.error == 0) {
+      spdlog::error(
+          "as-applied log: cannot write in {} ({}; {} MB free): lines wait in memory (up to "
+          "{} MB) and are written once it works again",
+          folder, std::strerror(now.error), available.value_or(0) / 1'000'000,
+          kHeldLinesMaxBytes / 1'000'000);
+    }
+    if (now.dropped_lines != seen.dropped_lines) {
+      spdlog::error(
+          "as-applied log: {} lines dropped ({} in all), memory full: their seq numbers are "
+          "missing from the file",
+          now.dropped_lines - seen.dropped_lines, now.dropped_lines);
+    }
+    if (now.error == 0 && seen.error != 0) {
+      spdlog::info("as-applied log: writing again in {} ({} lines dropped in all)", folder,
+                   now.dropped_lines);
+    }
   }
 
   Options options_;
@@ -1019,6 +1104,7 @@ class Daemon final : public CommandHandler {
   sd_event_source* tick_source_ = nullptr;
   std::vector<sd_event_source*> signal_sources_;
   std::unique_ptr<AsAppliedLog> log_;
+  std::atomic<bool> records_at_risk_{false};  // from the writer thread
   std::jthread log_thread_;
   std::filesystem::path totals_file_;
   Totals base_totals_;

@@ -285,6 +285,7 @@ struct LogSection {
   std::string dir;  // "" = <daemon.state_dir>/as-applied
   int rotate_bytes;
   int keep_files;
+  int min_free_mb;  // under this much free space: records_disk_full
 };
 
 struct SimSection {

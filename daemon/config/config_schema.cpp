@@ -537,6 +537,12 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "rotated as-applied files kept (oldest deleted); the default 150 x 10 MB holds about 6 days "
      "of 8 h with 24 nozzles (1.35 kB a record, 5 records a second), so a week's work can be "
      "exported before it goes"},
+    {WS_KEY(log, min_free_mb), 64, 0, 1000000, "MB",
+     "free space in the as-applied folder's file system under this raises records_disk_full, a "
+     "warning that clears itself: spraying goes on; export and delete old files (the default "
+     "64 MB holds about 2.5 h of 24 nozzles); 0 = only a failing write raises it. While writes "
+     "fail, lines wait in memory (about 10 min of 24 nozzles) and are written once space "
+     "returns; beyond that they are dropped and counted (the seq column shows the gap)"},
     // [sim]
     {WS_KEY(sim, speed_profile), std::string("sine"), 0, 0, "",
      "simulated travel speed over time", {"constant", "sine", "ramp"}},

@@ -26,10 +26,19 @@ bool parse_double(std::string_view text, double& out) {
   return ec == std::errc() && end == text.data() + text.size();
 }
 
+bool parse_seq(std::string_view text, std::uint64_t& out) {
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), out);
+  return !text.empty() && ec == std::errc() && end == text.data() + text.size();
+}
+
 void merge(AsAppliedSummary& into, const AsAppliedSummary& file) {
   if (file.records > 0) {
-    if (into.records == 0) into.first_time_s = file.first_time_s;
+    if (into.records == 0) {
+      into.first_time_s = file.first_time_s;
+      into.first_seq = file.first_seq;
+    }
     into.last_time_s = file.last_time_s;
+    into.last_seq = file.last_seq;
   }
   into.files += file.files;
   into.records += file.records;
@@ -38,9 +47,8 @@ void merge(AsAppliedSummary& into, const AsAppliedSummary& file) {
   into.damaged_lines += file.damaged_lines;
 }
 
-}  // namespace
-
-AsAppliedSummary read_as_applied_file(const std::filesystem::path& file) {
+// `after_seq`: only records numbered after it count (0: every record).
+AsAppliedSummary read_file_after(const std::filesystem::path& file, std::uint64_t after_seq) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw std::runtime_error(file.string() + ": cannot be read");
   std::stringstream buffer;
@@ -48,6 +56,7 @@ AsAppliedSummary read_as_applied_file(const std::filesystem::path& file) {
   const std::string text = buffer.str();
   AsAppliedSummary summary;
   summary.files = 1;
+  if (text.empty()) return summary;  // created, then a crash before its header went out
   std::size_t line_start = text.find('\n');
   const std::vector<std::string_view> header =
       split(std::string_view(text).substr(0, line_start == std::string::npos ? 0 : line_start));
@@ -56,6 +65,7 @@ AsAppliedSummary read_as_applied_file(const std::filesystem::path& file) {
   };
   const std::size_t time_col = column("time_s");
   const std::size_t volume_col = column("volume_l");
+  const std::size_t seq_col = column("seq");
   if (line_start == std::string::npos || time_col >= header.size() || volume_col >= header.size())
     throw std::runtime_error(file.string() +
                              ": not an as-applied log (header lacks time_s/volume_l)");
@@ -76,15 +86,34 @@ AsAppliedSummary read_as_applied_file(const std::filesystem::path& file) {
       ++(last ? summary.torn_tail_lines : summary.damaged_lines);
       continue;
     }
-    if (summary.records == 0) summary.first_time_s = time_s;
+    std::uint64_t seq = 0;
+    if (seq_col < header.size() && !parse_seq(fields[seq_col], seq)) {
+      ++(last ? summary.torn_tail_lines : summary.damaged_lines);
+      continue;
+    }
+    if (after_seq != 0 && seq <= after_seq) continue;
+    if (summary.records == 0) {
+      summary.first_time_s = time_s;
+      summary.first_seq = seq;
+    }
     summary.last_time_s = time_s;
+    summary.last_seq = seq;
     ++summary.records;
     summary.volume_l += volume_l;
   }
   return summary;
 }
 
-AsAppliedSummary read_as_applied_dir(const std::filesystem::path& dir) {
+}  // namespace
+
+AsAppliedSummary read_as_applied_file(const std::filesystem::path& file) {
+  return read_file_after(file, 0);
+}
+
+namespace {
+
+// Every as-applied-*.csv in `dir`, in name (= creation) order.
+std::vector<std::filesystem::path> as_applied_files(const std::filesystem::path& dir) {
   std::vector<std::filesystem::path> files;
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
@@ -93,9 +122,39 @@ AsAppliedSummary read_as_applied_dir(const std::filesystem::path& dir) {
   }
   if (ec) throw std::runtime_error(dir.string() + ": " + ec.message());
   std::sort(files.begin(), files.end());
+  return files;
+}
+
+}  // namespace
+
+AsAppliedSummary read_as_applied_dir(const std::filesystem::path& dir) {
   AsAppliedSummary summary;
-  for (const auto& file : files) merge(summary, read_as_applied_file(file));
+  for (const auto& file : as_applied_files(dir)) merge(summary, read_as_applied_file(file));
   return summary;
+}
+
+AsAppliedSummary read_as_applied_after(const std::filesystem::path& dir, std::uint64_t seq) {
+  const std::vector<std::filesystem::path> files = as_applied_files(dir);
+  std::vector<AsAppliedSummary> newest_first;
+  for (auto file = files.rbegin(); file != files.rend(); ++file) {
+    const AsAppliedSummary whole = read_file_after(*file, 0);
+    if (whole.records > 0 && whole.last_seq == 0) break;  // written before the seq column
+    newest_first.push_back(whole.first_seq > seq ? whole : read_file_after(*file, seq));
+    if (whole.records > 0 && whole.first_seq <= seq) break;
+  }
+  AsAppliedSummary summary;
+  for (auto file = newest_first.rbegin(); file != newest_first.rend(); ++file)
+    merge(summary, *file);
+  return summary;
+}
+
+std::uint64_t last_as_applied_seq(const std::filesystem::path& dir) {
+  const std::vector<std::filesystem::path> files = as_applied_files(dir);
+  for (auto file = files.rbegin(); file != files.rend(); ++file) {
+    const AsAppliedSummary summary = read_file_after(*file, 0);
+    if (summary.records > 0) return summary.last_seq;
+  }
+  return 0;
 }
 
 }  // namespace weedspray::daemon

@@ -20,6 +20,8 @@ struct AsAppliedSummary {
   double last_time_s = 0;
   std::uint64_t torn_tail_lines = 0;  // a cut last line of a file (tolerated)
   std::uint64_t damaged_lines = 0;    // malformed lines elsewhere
+  std::uint64_t first_seq = 0;        // seq of the first and the last record (0: no seq column)
+  std::uint64_t last_seq = 0;
 };
 
 // One file. Throws std::runtime_error naming the file when it cannot be read or its header is
@@ -27,5 +29,11 @@ struct AsAppliedSummary {
 AsAppliedSummary read_as_applied_file(const std::filesystem::path& file);
 // Every as-applied-*.csv in `dir`, in name (= creation) order.
 AsAppliedSummary read_as_applied_dir(const std::filesystem::path& dir);
+// The records numbered after `seq` (the seq column), read from the newest file back to the
+// first that starts at or before it, so a start reads one or two files, not the folder. A file
+// without the seq column ends the search.
+AsAppliedSummary read_as_applied_after(const std::filesystem::path& dir, std::uint64_t seq);
+// The seq of the newest record (0: none), from the newest file holding one.
+std::uint64_t last_as_applied_seq(const std::filesystem::path& dir);
 
 }  // namespace weedspray::daemon

@@ -2,14 +2,26 @@
 // nominal dose would have used. Stored as a small TOML file, written atomically (temp + rename).
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 
 namespace weedspray::daemon {
+
+// Where saved totals stand in the as-applied log: the seq of the last record handed to the log,
+// and the volume the totals already held beyond it (records still queued for the writer). At
+// start the log's records after `seq`, less `queued_l`, are the volume sprayed after the save
+// (a crash or power cut loses up to the minute between saves): it is added back.
+struct TotalsLogMark {
+  bool known = false;  // false: saved without a mark, nothing to match
+  std::uint64_t seq = 0;
+  double queued_l = 0;
+};
 
 struct Totals {
   double area_m2 = 0;
   double volume_l = 0;
   double uniform_volume_l = 0;
+  TotalsLogMark log;
 
   // 100 (1 - sprayed / uniform); 0 before anything was sprayed.
   double savings_pct() const noexcept;

@@ -23,6 +23,7 @@ constexpr std::array<std::string_view, kAlarmCount> kNames = {
     "calibration_drift",
     "flow_with_valves_closed",
     "estop",
+    "records_disk_full",
 };
 
 double seconds(std::chrono::nanoseconds t) {
@@ -57,6 +58,11 @@ bool is_fault(AlarmId id) noexcept {
     default:
       return false;
   }
+}
+
+bool clears_itself(AlarmId id) noexcept {
+  // The records catch up by themselves once space returns: nothing for the user to clear.
+  return id == AlarmId::kRecordsDiskFull;
 }
 
 bool AlarmEvaluator::fault_latched() const noexcept {
@@ -140,13 +146,20 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
   set(AlarmId::kEstop, in.estop_latched, false);
   set(AlarmId::kControlOverruns,
       in.overruns_last_second >= static_cast<std::uint64_t>(t.control_overrun_limit), false);
+  // A warning: records are no safety function, spraying goes on while they wait in memory.
+  set(AlarmId::kRecordsDiskFull, in.records_at_risk, false);
 
   AlarmMask raised = 0;
   present_ = 0;
+  cleared_by_itself_ = 0;
   for (std::size_t i = 0; i < kAlarmCount; ++i) {
     const auto id = static_cast<AlarmId>(i);
     if (!condition[i]) {
       condition_since_[i].reset();
+      if (clears_itself(id) && (latched_ & alarm_bit(id))) {
+        latched_ &= ~alarm_bit(id);
+        cleared_by_itself_ |= alarm_bit(id);
+      }
       continue;
     }
     if (!condition_since_[i]) condition_since_[i] = in.now;

@@ -31,8 +31,9 @@ enum class AlarmId : std::uint8_t {
   kCalibrationDrift,   // the flow trim has held the boom off its calibration: recalibrate
   kFlowValvesClosed,   // flow with every valve commanded closed: a leaking or stuck-open valve
   kEstop,              // the emergency-stop circuit opened: outputs held safe until reset
+  kRecordsDiskFull,    // as-applied lines not written, or free space under log.min_free_mb
 };
-inline constexpr std::size_t kAlarmCount = 17;
+inline constexpr std::size_t kAlarmCount = 18;
 
 using AlarmMask = std::uint32_t;
 constexpr AlarmMask alarm_bit(AlarmId id) noexcept {
@@ -43,6 +44,8 @@ std::string_view alarm_name(AlarmId id) noexcept;  // "over_pressure", ...
 std::optional<AlarmId> parse_alarm(std::string_view name) noexcept;
 // Fault-class alarms latch the Fault state; the others are warnings.
 bool is_fault(AlarmId id) noexcept;
+// Unlatched by the evaluation that finds its condition gone, not only by ClearAlarms.
+bool clears_itself(AlarmId id) noexcept;
 
 struct AlarmInputs {
   std::chrono::nanoseconds now{};
@@ -77,6 +80,7 @@ struct AlarmInputs {
   // The emergency stop is latched (daemon/sprayer/estop_guard.hpp): its circuit opened and
   // it has not been reset since.
   bool estop_latched = false;
+  bool records_at_risk = false;  // see records_at_risk() (daemon/records/records_space.hpp)
 };
 
 class AlarmEvaluator {
@@ -86,6 +90,8 @@ class AlarmEvaluator {
 
   // Returns the alarms raised by this call (not already latched).
   AlarmMask evaluate(const AlarmInputs& in);
+  // The alarms the last evaluation unlatched because their condition ended (clears_itself).
+  AlarmMask cleared_by_itself() const noexcept { return cleared_by_itself_; }
   AlarmMask active() const noexcept { return latched_; }
   bool fault_latched() const noexcept;
   // Unlatches everything; a condition still present is raised again on the next evaluation
@@ -98,6 +104,7 @@ class AlarmEvaluator {
   AlarmsSection thresholds_;
   AlarmMask latched_ = 0;
   AlarmMask present_ = 0;
+  AlarmMask cleared_by_itself_ = 0;
   std::array<std::optional<std::chrono::nanoseconds>, kAlarmCount> condition_since_{};
 };
 

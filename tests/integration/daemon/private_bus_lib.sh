@@ -3,7 +3,8 @@
 # the daemon and the bus the script started ($DAEMON_PID, $BUS_PID) and whatever the script
 # adds to EXIT_HOOKS (commands, run after the daemon is killed), fail() with the tails of the
 # logs in FAIL_LOGS (default: $T/daemon.log), start_private_bus, prop/call/wait_state on the
-# sprayer's object, start_sim_daemon and stop_daemon.
+# sprayer's object, start_sim_daemon and stop_daemon; resumed_sim and wait_log for a daemon
+# without a bus.
 # usage: . private_bus_lib.sh NAME   ($T is /tmp/weedspray-NAME-test.XXXXXX; KEEP=1 keeps it)
 T=$(mktemp -d "/tmp/weedspray-$1-test.XXXXXX")
 DAEMON_PID=
@@ -59,6 +60,30 @@ PYEOF
 call() {  # call METHOD [SIGNATURE ARGS...]
   busctl --user call org.weedspray.Sprayer1 /org/weedspray/Sprayer1 org.weedspray.Sprayer1 "$@"
 }
+# $T/weedspray.toml for the sim: spraying from the start (daemon.autostart), 3 nozzles, then
+# the TOML lines given.
+write_sim_config() {  # write_sim_config [TOML LINE...]
+  printf '%s\n' "[daemon]" "autostart = true" "[boom]" "nozzles = 3" "$@" >"$T/weedspray.toml"
+}
+# weedsprayd --sim without a bus on $T/weedspray.toml and the state folder $T/state, with
+# --resume as a restart does, logging to $T/NAME.log (BUILD set by the script). It execs the
+# daemon: after `resumed_sim NAME &`, $! is the daemon itself (a kill reaches it, not a
+# subshell); `(resumed_sim NAME ARGS...)` waits for it and returns its status.
+resumed_sim() {  # resumed_sim NAME [WEEDSPRAYD ARGS...]
+  local name=$1
+  shift
+  HOME="$T" exec "$BUILD/daemon/weedsprayd" --sim --no-bus --resume --config "$T/weedspray.toml" \
+    --state-dir "$T/state" "$@" >"$T/$name.log" 2>&1
+}
+wait_log() {  # wait_log FILE PATTERN [TENTHS]: until FILE has a line matching PATTERN (15 s)
+  local _
+  for _ in $(seq 1 "${3:-150}"); do
+    grep -q "$2" "$1" 2>/dev/null && return 0
+    sleep 0.1
+  done
+  fail "$(basename "$1"): never logged: $2"
+}
+
 # weedsprayd --sim on $T/weedspray.toml with its state in $T/state, logging to $T/daemon.log,
 # until Idle (WEEDSPRAYD set by the script).
 start_sim_daemon() {  # start_sim_daemon [WEEDSPRAYD ARGS...]

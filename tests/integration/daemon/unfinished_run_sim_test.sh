@@ -7,30 +7,15 @@ set -euo pipefail
 BUILD=$(realpath "$1")
 . "$(dirname "$0")/private_bus_lib.sh" unfinished-run  # $T and fail(); no bus is started
 FAIL_LOGS=("$T/first.log" "$T/after_kill.log" "$T/after_orderly_stop.log")
-cat >"$T/weedspray.toml" <<'TOML'
-[daemon]
-autostart = true
-[boom]
-nozzles = 3
-TOML
-run() {  # run NAME [ARGS...]: the sim on the shared state folder, --resume as a restart does
-  local name=$1
-  shift
-  HOME="$T" "$BUILD/daemon/weedsprayd" --sim --no-bus --resume --config "$T/weedspray.toml" \
-    --state-dir "$T/state" "$@" >"$T/$name.log" 2>&1
-}
+write_sim_config
+resumed_sim first &
+DAEMON_PID=$!
+wait_log "$T/first.log" "state Idle -> Spraying"
+kill -KILL "$DAEMON_PID"
+wait "$DAEMON_PID" 2>/dev/null || true
+DAEMON_PID=
 
-run first &
-pid=$!
-for _ in $(seq 1 150); do
-  grep -q "state Idle -> Spraying" "$T/first.log" 2>/dev/null && break
-  sleep 0.1
-done
-grep -q "state Idle -> Spraying" "$T/first.log" || fail "first: never sprayed"
-kill -KILL "$pid"
-wait "$pid" 2>/dev/null || true
-
-run after_kill --run-seconds 4 || fail "after_kill: exit status $?"
+(resumed_sim after_kill --run-seconds 4) || fail "after_kill: exit status $?"
 grep -q "the last run did not end in an orderly stop" "$T/after_kill.log" ||
   fail "after_kill: no word of the unfinished run"
 grep -q "daemon.autostart skipped" "$T/after_kill.log" || fail "after_kill: autostart not skipped"
@@ -38,7 +23,7 @@ if grep -q "state Idle -> Spraying" "$T/after_kill.log"; then
   fail "after_kill: sprayed by itself after a kill -9"
 fi
 
-run after_orderly_stop --run-seconds 4 || fail "after_orderly_stop: exit status $?"
+(resumed_sim after_orderly_stop --run-seconds 4) || fail "after_orderly_stop: exit status $?"
 grep -q "state Idle -> Spraying" "$T/after_orderly_stop.log" ||
   fail "after_orderly_stop: autostart did not spray after an orderly stop"
 echo "ok: kill -9 -> the next start waits for Start; an orderly stop -> autostart sprays"

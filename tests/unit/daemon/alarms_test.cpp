@@ -244,6 +244,36 @@ TEST(Alarms, VisionModelFailedIsAWarningUntilCleared) {
   EXPECT_EQ(alarms.present(), 0U);
 }
 
+// Records are no safety function: a warning, and it clears itself once the lines are written
+// again and space is above the floor (the held lines catch up by themselves).
+TEST(Alarms, RecordsDiskFullIsAWarningThatClearsItself) {
+  AlarmEvaluator alarms(thresholds());
+  EXPECT_EQ(alarm_name(AlarmId::kRecordsDiskFull), "records_disk_full");
+  auto in = healthy(1s);
+  EXPECT_EQ(alarms.evaluate(in), 0U);
+  in.records_at_risk = true;
+  EXPECT_EQ(alarms.evaluate(at(in, 2s)), alarm_bit(AlarmId::kRecordsDiskFull));
+  EXPECT_FALSE(alarms.fault_latched());
+  EXPECT_EQ(alarms.evaluate(at(in, 3s)), 0U) << "raised once";
+  EXPECT_EQ(alarms.cleared_by_itself(), 0U);
+  in.records_at_risk = false;
+  EXPECT_EQ(alarms.evaluate(at(in, 4s)), 0U);
+  EXPECT_EQ(alarms.cleared_by_itself(), alarm_bit(AlarmId::kRecordsDiskFull));
+  EXPECT_EQ(alarms.active(), 0U);
+  EXPECT_EQ(alarms.evaluate(at(in, 5s)), 0U);
+  EXPECT_EQ(alarms.cleared_by_itself(), 0U) << "cleared once";
+  in.records_at_risk = true;
+  EXPECT_EQ(alarms.evaluate(at(in, 6s)), alarm_bit(AlarmId::kRecordsDiskFull)) << "again";
+}
+
+// Only records_disk_full clears itself: the others wait for ClearAlarms.
+TEST(Alarms, OnlyRecordsDiskFullClearsItself) {
+  for (std::size_t i = 0; i < kAlarmCount; ++i) {
+    const auto id = static_cast<AlarmId>(i);
+    EXPECT_EQ(clears_itself(id), id == AlarmId::kRecordsDiskFull) << alarm_name(id);
+  }
+}
+
 // The meter and the calibrated nozzles more than 5 % apart for 30 s (the defaults) ask for a
 // recalibration: a warning, in any state (the average is held between sprays), and a shorter
 // excursion raises nothing.

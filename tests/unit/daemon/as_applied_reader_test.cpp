@@ -88,6 +88,53 @@ TEST_F(AsAppliedReaderTest, DamageInsideTheFileIsCountedApart) {
   EXPECT_EQ(s.torn_tail_lines, 0U);
 }
 
+// A start reads the records after the totals' mark from the newest files only, and the seq
+// runs on from the log's last record.
+TEST_F(AsAppliedReaderTest, TheRecordsAfterASeqComeFromTheNewestFiles) {
+  {
+    AsAppliedLog log(dir_, 4096, 100);  // ~40 records a file
+    for (int i = 0; i < 200; ++i) {
+      AppliedRecord r;
+      r.time = std::chrono::milliseconds(100 * i);
+      r.volume_l = 0.01 * (i + 1);  // record seq s holds 0.01 s L
+      r.nozzles = 2;
+      ASSERT_TRUE(log.write(r));
+    }
+    log.flush();
+  }
+  const AsAppliedSummary whole = read_as_applied_dir(dir_);
+  ASSERT_GT(whole.files, 3U);
+  EXPECT_EQ(whole.first_seq, 1U);
+  EXPECT_EQ(whole.last_seq, 200U);
+  const AsAppliedSummary after = read_as_applied_after(dir_, 150);
+  EXPECT_EQ(after.records, 50U);
+  EXPECT_EQ(after.first_seq, 151U);
+  EXPECT_EQ(after.last_seq, 200U);
+  EXPECT_NEAR(after.volume_l, 0.01 * (151 + 200) * 50 / 2, 1e-9);
+  EXPECT_LT(after.files, whole.files) << "the older files are not read";
+  EXPECT_EQ(read_as_applied_after(dir_, 0).records, 200U);
+  EXPECT_EQ(read_as_applied_after(dir_, 200).records, 0U);
+  EXPECT_EQ(last_as_applied_seq(dir_), 200U);
+  AsAppliedLog next_run(dir_, 4096, 100);
+  next_run.continue_after(last_as_applied_seq(dir_));
+  AppliedRecord r;
+  r.nozzles = 2;
+  ASSERT_TRUE(next_run.write(r));
+  next_run.flush();
+  EXPECT_EQ(read_as_applied_after(dir_, 200).first_seq, 201U);
+  EXPECT_EQ(next_run.progress().seq, 201U);
+}
+
+// A crash between creating a file and writing its header leaves it empty: no records, no error.
+TEST_F(AsAppliedReaderTest, AnEmptyFileHoldsNoRecords) {
+  write_records(3);
+  std::ofstream(dir_ / "as-applied-99999999T999999Z-000.csv");
+  const AsAppliedSummary s = read_as_applied_dir(dir_);
+  EXPECT_EQ(s.files, 2U);
+  EXPECT_EQ(s.records, 3U);
+  EXPECT_EQ(last_as_applied_seq(dir_), 3U);
+}
+
 TEST_F(AsAppliedReaderTest, ANonLogFileIsNamed) {
   fs::create_directories(dir_);
   const fs::path file = dir_ / "as-applied-x.csv";

@@ -25,12 +25,29 @@ TEST(Totals, SaveAndRestore) {
   const fs::path dir = temp_dir("totals");
   const fs::path file = dir / "totals.toml";
   EXPECT_EQ(load_totals(file).area_m2, 0.0);  // missing: zeros
-  save_totals(file, Totals{.area_m2 = 1234.5, .volume_l = 10.25, .uniform_volume_l = 20.5});
+  save_totals(file,
+              Totals{.area_m2 = 1234.5, .volume_l = 10.25, .uniform_volume_l = 20.5, .log = {}});
   const Totals back = load_totals(file);
   EXPECT_DOUBLE_EQ(back.area_m2, 1234.5);
   EXPECT_DOUBLE_EQ(back.volume_l, 10.25);
   EXPECT_DOUBLE_EQ(back.savings_pct(), 50.0);
   EXPECT_FALSE(fs::exists(dir / "totals.toml.tmp"));
+  fs::remove_all(dir);
+}
+
+TEST(Totals, TheLogMarkIsSavedAndRestored) {
+  const fs::path dir = temp_dir("totals-mark");
+  const fs::path file = dir / "totals.toml";
+  save_totals(file, Totals{.area_m2 = 0,
+                           .volume_l = 3,
+                           .uniform_volume_l = 0,
+                           .log = {.known = true, .seq = 12345678901, .queued_l = 0.125}});
+  const Totals back = load_totals(file);
+  EXPECT_TRUE(back.log.known);
+  EXPECT_EQ(back.log.seq, 12345678901U);
+  EXPECT_DOUBLE_EQ(back.log.queued_l, 0.125);
+  std::ofstream(file) << "volume_l = 2.0\n";  // saved without a mark
+  EXPECT_FALSE(load_totals(file).log.known);
   fs::remove_all(dir);
 }
 
@@ -75,7 +92,7 @@ TEST(AsAppliedLog, WritesOneLinePerRecordAndRotates) {
             "course_deg,nozzle_width_m,latitude_deg_0,latitude_deg_1,latitude_deg_2,"
             "latitude_deg_3,longitude_deg_0,longitude_deg_1,longitude_deg_2,longitude_deg_3,"
             "rate_l_per_ha_0,rate_l_per_ha_1,rate_l_per_ha_2,rate_l_per_ha_3,speed_m_per_s_0,"
-            "speed_m_per_s_1,speed_m_per_s_2,speed_m_per_s_3");
+            "speed_m_per_s_1,speed_m_per_s_2,speed_m_per_s_3,seq");
   std::string line;
   std::getline(in, line);
   EXPECT_NE(line.find(",1.5000,"), std::string::npos) << line;
