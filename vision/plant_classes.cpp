@@ -8,7 +8,8 @@
 namespace weedspray::vision {
 
 namespace {
-// Plants reserved up front so that a busy frame does not allocate on the camera thread.
+// Per-plant tables reserved up front, so that they keep their capacity from frame to frame
+// (OpenCV's labelling still allocates its own work buffers each frame, as the network does).
 constexpr std::size_t kReservedPlants = 1 << 16;
 
 cv::Mat disc(int radius_px) {

@@ -34,6 +34,18 @@ io::PulseInput* pulse_line(Backends& b, const GpioSection& gpio, const std::stri
   return keep(b, std::make_shared<io::hw::GpioPulseInput>(config));
 }
 
+// An input line's configuration (the key, the E-stop) on gpio.chip, by name or offset.
+template <typename InputConfig>
+InputConfig input_line(const GpioSection& gpio, const std::string& name, int offset,
+                       bool active_low) {
+  InputConfig input;
+  input.chip = gpio.chip;
+  input.line.name = name;
+  input.line.offset = offset;
+  input.line.active_low = active_low;
+  return input;
+}
+
 }  // namespace
 
 Backends make_hw_backends(const Config& config) {
@@ -77,20 +89,14 @@ Backends make_hw_backends(const Config& config) {
         "wheel.source = \"pulses\" needs gpio.wheel_offset or gpio.wheel_name");
   }
   if (wired(gpio.key_name, gpio.key_offset)) {
-    io::hw::GpioDigitalInputConfig key;
-    key.chip = gpio.chip;
-    key.line.name = gpio.key_name;
-    key.line.offset = gpio.key_offset;
-    key.line.active_low = gpio.key_active_low;
-    b.key = keep(b, std::make_shared<io::hw::GpioDigitalInput>(key));
+    b.key = keep(
+        b, std::make_shared<io::hw::GpioDigitalInput>(input_line<io::hw::GpioDigitalInputConfig>(
+               gpio, gpio.key_name, gpio.key_offset, gpio.key_active_low)));
   }
   if (wired(gpio.estop_name, gpio.estop_offset)) {
-    io::hw::GpioEstopInputConfig estop;
-    estop.chip = gpio.chip;
-    estop.line.name = gpio.estop_name;
-    estop.line.offset = gpio.estop_offset;
-    estop.line.active_low = gpio.estop_active_low;
-    b.estop = keep(b, std::make_shared<io::hw::GpioEstopInput>(estop));
+    b.estop =
+        keep(b, std::make_shared<io::hw::GpioEstopInput>(input_line<io::hw::GpioEstopInputConfig>(
+                    gpio, gpio.estop_name, gpio.estop_offset, gpio.estop_active_low)));
   }
 
   PressureConverters converters = make_hw_pressure_converters(config, *b.clock);
