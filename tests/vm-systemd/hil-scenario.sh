@@ -474,9 +474,15 @@ rm -f /etc/weedspray/conf.d/90-broken.toml
 #              pulses while the cross-watch had the pump off, say)
 # The events of the watched lines around the signal (writer thread, ms from the signal, line,
 # value) go to $run_dir/fault-events.txt for the step's failure report.
-trace_window_begin() {
+trace_window_begin() { # [PID]: with a PID, that thread's scheduling is traced too
   echo 0 >"$tracing/tracing_on"
   echo >"$tracing/trace"
+  if [ -n "${1:-}" ]; then
+    echo "prev_pid == $1 || next_pid == $1" >"$tracing/events/sched/sched_switch/filter"
+    echo 1 >"$tracing/events/sched/sched_switch/enable"
+  else
+    echo 0 >"$tracing/events/sched/sched_switch/enable"
+  fi
   # What the lines hold when the window opens (the plant's last sample).
   initial_mask="$(hil valve_mask) $(hil pump)"
   echo 1 >"$tracing/tracing_on"
@@ -490,7 +496,7 @@ trace_analyse() { # SIGNAL PID
       split(init, m, " ")
       for (i = 0; i < 4; i++) latch[base + i] = int(m[1] / 2 ^ i) % 2
       latch[base + 4] = m[2]
-      t0 = -1; safe = -1; gone = -1; reopened = 0; longest = 0; wasclosed = 0; last = 0; nb = 0
+      t0 = -1; safe = -1; gone = -1; reopened = 0; longest = 0; wasclosed = 0; last = 0; nb = 0; off = -1; offcpu = 0
       printf "" > events
     }
     function open_lines(   g, c) { c = 0; for (g in watch) if (latch[g] == 1) c++; return c }
@@ -527,10 +533,19 @@ trace_analyse() { # SIGNAL PID
       next
     }
     / sched_process_exit: / && t0 >= 0 && gone < 0 { if ($0 ~ (" pid=" pid " ")) gone = ts }
+    # The faulting thread off its CPU between the signal and the safe writes: who ran instead.
+    / sched_switch: / && t0 >= 0 && safe < 0 {
+      if ($0 ~ (" prev_pid=" pid " ")) {
+        off = ts; match($0, /next_comm=[^ ]* next_pid=[0-9]+ next_prio=[0-9]+/); by = substr($0, RSTART, RLENGTH)
+        match($0, /prev_state=[^ ]*/); printf "%s %+.3f ms off CPU (%s) for %s\n", $1, (ts - t0) * 1000, substr($0, RSTART, RLENGTH), by >> events
+      } else if ($0 ~ (" next_pid=" pid " ") && off >= 0) {
+        offcpu += ts - off; off = -1; printf "%s %+.3f ms back on CPU\n", $1, (ts - t0) * 1000 >> events
+      }
+    }
     END {
       for (g in opened) if (last - opened[g] + 1 > longest) longest = last - opened[g] + 1
-      printf "%s %s %d %.3f %d\n", (t0 >= 0 && safe >= 0) ? sprintf("%.3f", (safe - t0) * 1000) : -1,
-        (t0 >= 0 && gone >= 0) ? sprintf("%.3f", (gone - t0) * 1000) : -1, reopened, longest * 1000, wasclosed
+      printf "%s %s %d %.3f %d %.3f\n", (t0 >= 0 && safe >= 0) ? sprintf("%.3f", (safe - t0) * 1000) : -1,
+        (t0 >= 0 && gone >= 0) ? sprintf("%.3f", (gone - t0) * 1000) : -1, reopened, longest * 1000, wasclosed, offcpu * 1000
     }' "$tracing/trace"
   echo 1 >"$tracing/tracing_on"
 }
@@ -542,13 +557,13 @@ trace_analyse() { # SIGNAL PID
 # handler holds it open until the process is gone and the exit watcher writes (tens of ms).
 reopen_limit_ms=1
 judge_fault() { # NAME SIGNAL PID LIMIT_MS FIGURE_KEY [exit]: prints the figure and the step
-  local result unsafe gone reopened longest wasclosed ok
+  local result unsafe gone reopened longest wasclosed offcpu ok
   result="$(trace_analyse "$2" "$3")"
-  read -r unsafe gone reopened longest wasclosed <<<"$result"
+  read -r unsafe gone reopened longest wasclosed offcpu <<<"$result"
   figure "$5" "$unsafe"
   ok="$(awk -v u="$unsafe" -v g="$gone" -v r="$longest" -v lim="$4" -v rlim="$reopen_limit_ms" -v needexit="${6:-}" \
     'BEGIN { bad = (u < 0 || u > lim || r >= rlim); if (needexit != "" && (g < 0 || u > g)) bad = 1; print bad }')"
-  step "$1" "$ok" "signal $2 to PID $3: every valve and the pump written 0 after $unsafe ms (limit $4), main thread gone after $gone ms, lines written open afterwards $reopened (longest open $longest ms, limit $reopen_limit_ms), all closed already at the signal: $wasclosed"
+  step "$1" "$ok" "signal $2 to PID $3: every valve and the pump written 0 after $unsafe ms (limit $4), main thread gone after $gone ms, lines written open afterwards $reopened (longest open $longest ms, limit $reopen_limit_ms), all closed already at the signal: $wasclosed, the faulting thread off its CPU before the safe writes for $offcpu ms"
   [ "$ok" = 0 ] || info "$1 events of the watched lines: $(tr '\n' '|' <"$run_dir/fault-events.txt" | head -c 3000)"
 }
 
@@ -623,7 +638,7 @@ crash() { # NAME SIGNAL_TO_SEND EXPECTED_FATAL_SIGNAL LIMIT_MS FIGURE_KEY
   start_spraying || info "$1: not spraying before the fault (State=$(bus_state))"
   local pid
   pid="$(main_pid)"
-  trace_window_begin
+  trace_window_begin "$pid"
   kill -s "$2" "$pid"
   wait_for 120 active_with_new_pid "$pid"
   wait_for 15 state_is Idle
