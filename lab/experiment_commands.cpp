@@ -1,5 +1,5 @@
 // weedspray-lab experiment NAME [--json] [--plot OUT.png] [--raw] [--seed N] [--tune]
-// Reruns the papers' experiments on the simulated machine (control/experiments/).
+// Reruns the papers' experiments on the simulated machine (lab/experiments/).
 #include <array>
 #include <chrono>
 #include <cstdio>
@@ -12,11 +12,11 @@
 #include <tuple>
 #include <vector>
 
-#include "control/experiments/experiments.hpp"
-#include "control/experiments/fair_tuning.hpp"
 #include "lab/commands.hpp"
 #include "lab/experiment_field.hpp"
 #include "lab/experiment_plot.hpp"
+#include "lab/experiments/experiments.hpp"
+#include "lab/experiments/fair_tuning.hpp"
 #include "lab/vision_dataset.hpp"
 #include "lab/weed_eval_command.hpp"
 #include "lab/weed_model.hpp"
@@ -24,7 +24,7 @@
 namespace weedspray::lab {
 namespace {
 
-namespace ex = control::experiments;
+namespace ex = lab::experiments;
 
 struct ExperimentOptions {
   std::string name;
@@ -34,7 +34,7 @@ struct ExperimentOptions {
   bool tune = false;
   int tune_budget = 300;
   std::uint64_t seed = 1;
-  int plants = 0;  // > 0: over this many drawn machines (control/experiments/machines.hpp)
+  int plants = 0;  // > 0: over this many drawn machines (lab/experiments/machines.hpp)
   std::string images_dir;
   std::string masks_dir;
   std::string stems_file;

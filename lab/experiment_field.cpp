@@ -5,7 +5,7 @@
 
 namespace weedspray::lab {
 
-namespace ex = control::experiments;
+namespace ex = lab::experiments;
 
 std::vector<std::array<ex::ZoneTruth, kFieldNozzles>> mask_zone_truth(const cv::Mat& class_mask) {
   if (class_mask.empty() || class_mask.type() != CV_8UC1) {

@@ -11,7 +11,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "control/experiments/experiments.hpp"
+#include "lab/experiments/experiments.hpp"
 #include "lab/vision_dataset.hpp"
 #include "vision/pipeline.hpp"
 
@@ -23,12 +23,12 @@ inline constexpr int kFieldNozzles = 4;
 struct LabelledField {
   // Zones in track order: image i contributes its near (bottom) row, then its far row.
   std::vector<std::array<double, kFieldNozzles>> weed_density;  // what the sprayer acts on
-  std::vector<std::array<control::experiments::ZoneTruth, kFieldNozzles>> truth;
+  std::vector<std::array<lab::experiments::ZoneTruth, kFieldNozzles>> truth;
 };
 
 // The true weed and crop shares of each zone of a class-id mask (same zone bounds as the
 // vision pipeline's grid), in track order. Throws std::invalid_argument on an empty mask.
-std::vector<std::array<control::experiments::ZoneTruth, kFieldNozzles>> mask_zone_truth(
+std::vector<std::array<lab::experiments::ZoneTruth, kFieldNozzles>> mask_zone_truth(
     const cv::Mat& class_mask);
 
 // The field of the labelled photos in their order (LabelledImage::mask: class ids). The weed

@@ -23,7 +23,7 @@
 #include "io/tank_level.hpp"
 #include "io/yaw_rate_sensor.hpp"
 
-namespace weedspray::control::plant {
+namespace weedspray::sim::plant {
 class HydraulicPlant;
 }
 
@@ -68,7 +68,7 @@ struct Backends {
   // Sim only: a device fault by name (see SimFault::device); false for an unknown one.
   std::function<bool(const std::string& fault)> device_fault;
   // Sim only: runs fn on the plant, advanced to now and locked (ground truth, fault injection).
-  std::function<void(const std::function<void(control::plant::HydraulicPlant&)>&)> with_plant;
+  std::function<void(const std::function<void(sim::plant::HydraulicPlant&)>&)> with_plant;
 
   std::vector<std::shared_ptr<void>> owned;  // keeps the devices alive
 

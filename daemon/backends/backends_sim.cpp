@@ -8,7 +8,6 @@
 #include <stdexcept>
 
 #include "control/nozzle_scheduler.hpp"
-#include "control/plant/hydraulic_plant.hpp"
 #include "daemon/backends/backends.hpp"
 #include "daemon/config/vision_config.hpp"
 #include "daemon/sprayer/geometry.hpp"
@@ -17,6 +16,7 @@
 #include "io/sim/memory_output_bank.hpp"
 #include "io/sim/paced_clock.hpp"
 #include "io/sim/replay_camera.hpp"
+#include "sim/plant/hydraulic_plant.hpp"
 
 #ifndef WEEDSPRAY_DEFAULT_SIM_IMAGES
 #define WEEDSPRAY_DEFAULT_SIM_IMAGES "/usr/share/weedspray/images"
@@ -35,9 +35,9 @@ double sim_speed_m_per_s(const SimSection& sim, double t_s) {
 }
 
 Backends make_sim_backends(const Config& config, const Options& options) {
-  if (config.boom.nozzles > control::plant::kMaxNozzles) {
+  if (config.boom.nozzles > sim::plant::kMaxNozzles) {
     throw std::runtime_error(
-        "--sim: the plant model has at most " + std::to_string(control::plant::kMaxNozzles) +
+        "--sim: the plant model has at most " + std::to_string(sim::plant::kMaxNozzles) +
         " nozzles (boom.nozzles = " + std::to_string(config.boom.nozzles) + ")");
   }
   Backends b;
@@ -101,9 +101,9 @@ Backends make_sim_backends(const Config& config, const Options& options) {
   b.drive_world = [rig, speed, sim](double t_s) {
     const double v = sim_speed_m_per_s(sim, t_s);
     speed->store(v);
-    rig->with_plant([v](control::plant::HydraulicPlant& p) { p.set_ground_speed(v); });
+    rig->with_plant([v](sim::plant::HydraulicPlant& p) { p.set_ground_speed(v); });
   };
-  b.with_plant = [rig](const std::function<void(control::plant::HydraulicPlant&)>& fn) {
+  b.with_plant = [rig](const std::function<void(sim::plant::HydraulicPlant&)>& fn) {
     rig->with_plant(fn);
   };
   b.fail_output_writes = [rig, buzzer, led, heartbeat, dac](OutputRole role, int error, int count) {
@@ -133,7 +133,7 @@ Backends make_sim_backends(const Config& config, const Options& options) {
     double delivered = 0;
     double metered = 0;
     double meter_gain = 1;
-    rig->with_plant([&](control::plant::HydraulicPlant& p) {
+    rig->with_plant([&](sim::plant::HydraulicPlant& p) {
       delivered = p.total_delivered_l();
       metered = static_cast<double>(p.flow_meter_pulses()) / nominal_ppl;
       meter_gain = p.true_meter_pulses_per_l() / nominal_ppl;

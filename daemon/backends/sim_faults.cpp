@@ -6,7 +6,7 @@
 #include <string_view>
 #include <utility>
 
-#include "control/plant/hydraulic_plant.hpp"
+#include "sim/plant/hydraulic_plant.hpp"
 
 namespace weedspray::daemon {
 namespace {
@@ -43,7 +43,7 @@ std::optional<SimFault> parse_sim_fault(const std::string& text) {
   char* end = nullptr;
   fault.at_s = std::strtod(time.c_str(), &end);
   if (time.empty() || *end != '\0' || !(fault.at_s >= 0)) return std::nullopt;
-  using Plant = control::plant::HydraulicPlant;
+  using Plant = sim::plant::HydraulicPlant;
   if (fault.name == "camera_gone" || fault.name == "camera_back" || fault.name == "tank_silent" ||
       fault.name == "tank_ok" || fault.name == "estop_open" || fault.name == "estop_closed") {
     fault.device = fault.name;

@@ -8,7 +8,7 @@
 
 #include "daemon/supervision/output_write_watch.hpp"
 
-namespace weedspray::control::plant {
+namespace weedspray::sim::plant {
 class HydraulicPlant;
 }
 
@@ -17,7 +17,7 @@ namespace weedspray::daemon {
 struct SimFault {
   std::string name;
   double at_s = 0;
-  std::function<void(control::plant::HydraulicPlant&)> apply;  // a fault of the plant, or
+  std::function<void(sim::plant::HydraulicPlant&)> apply;  // a fault of the plant, or
   // an output whose writes start failing with EIO ("pump_write_fail"), or work again
   // ("<output>_write_ok"): output_error is then EIO or 0.
   std::optional<OutputRole> output;

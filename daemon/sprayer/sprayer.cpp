@@ -484,7 +484,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   std::array<double, io::kMaxValves> arc_extra_m{};  // nozzle's travel minus the centre line's
   std::array<double, io::kMaxValves> frame_odometer{};
   // One staggered phase (period / nozzles); the meter lags the valves by 30 ms (the lab's
-  // blockage experiment, control/experiments/closed_loop_rig.cpp: the valves' 15-25 ms delays).
+  // blockage experiment, lab/experiments/closed_loop_rig.cpp: the valves' 15-25 ms delays).
   PhaseWindows health_windows(
       from_seconds(1.0 / (config_.pwm.frequency_hz *
                           static_cast<double>(std::max<std::size_t>(nozzles, 1)))),

@@ -39,7 +39,8 @@ void HydraulicRig::advance() noexcept {
   advance_locked();
 }
 
-void HydraulicRig::with_plant(const std::function<void(control::plant::HydraulicPlant&)>& fn) {
+void HydraulicRig::with_plant(
+    const std::function<void(weedspray::sim::plant::HydraulicPlant&)>& fn) {
   std::lock_guard lock(mutex_);
   advance_locked();
   fn(plant_);

@@ -1,7 +1,7 @@
-// The simulated machine: owns a control::plant::HydraulicPlant and steps it up to the injected
-// clock's time whenever any simulated device touches it (so it follows a ManualClock as fast as
-// the loops run, or a PacedClock in real time). The device adapters below expose it through the
-// io interfaces, exactly as the Linux backends expose the real machine.
+// The simulated machine: owns a weedspray::sim::plant::HydraulicPlant and steps it up to the
+// injected clock's time whenever any simulated device touches it (so it follows a ManualClock as
+// fast as the loops run, or a PacedClock in real time). The device adapters below expose it through
+// the io interfaces, exactly as the Linux backends expose the real machine.
 //
 // Sim only: a priority-inheriting mutex serialises the plant between the loops' threads and the
 // main thread that drives the world; real-time guarantees are not a goal here, but a loop is
@@ -13,7 +13,6 @@
 #include <cstdint>
 #include <functional>
 
-#include "control/plant/hydraulic_plant.hpp"
 #include "io/analog.hpp"
 #include "io/clock.hpp"
 #include "io/digital_output.hpp"
@@ -21,11 +20,12 @@
 #include "io/signal_conversion.hpp"
 #include "io/sim/priority_inheriting_mutex.hpp"
 #include "io/tank_level.hpp"
+#include "sim/plant/hydraulic_plant.hpp"
 
 namespace weedspray::io::sim {
 
 struct RigConfig {
-  control::plant::PlantParams plant;
+  weedspray::sim::plant::PlantParams plant;
   std::uint64_t seed = 1;
   // Longest plant step per chunk; pulse edges are timestamped at chunk ends.
   std::chrono::nanoseconds max_chunk = std::chrono::microseconds(500);
@@ -39,7 +39,7 @@ class HydraulicRig {
   void advance() noexcept;
 
   // Runs `fn(plant)` with the plant advanced to now and locked (tests, fault injection, speed).
-  void with_plant(const std::function<void(control::plant::HydraulicPlant&)>& fn);
+  void with_plant(const std::function<void(weedspray::sim::plant::HydraulicPlant&)>& fn);
 
   // --- used by the adapters; each advances first ---
   void set_valves(std::uint32_t mask) noexcept;
@@ -68,7 +68,7 @@ class HydraulicRig {
   std::chrono::nanoseconds max_chunk_;
   int nozzle_count_;
   mutable PriorityInheritingMutex mutex_;
-  control::plant::HydraulicPlant plant_;
+  weedspray::sim::plant::HydraulicPlant plant_;
   std::chrono::nanoseconds start_;
   std::chrono::nanoseconds plant_time_;
   std::uint32_t valve_mask_ = 0;

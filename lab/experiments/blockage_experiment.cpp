@@ -4,9 +4,10 @@
 #include <random>
 #include <vector>
 
-#include "control/experiments/experiments.hpp"
+#include "lab/experiments/experiments.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 namespace {
 
 BlockageMachine blockage_once(const Machine& machine, std::uint64_t fleet_seed, int index,
@@ -103,4 +104,4 @@ BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet, const Blockage
   return r;
 }
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

@@ -1,11 +1,12 @@
-#include "control/boom_trim.hpp"
+#include "lab/experiments/boom_trim.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
-namespace weedspray::control {
+namespace weedspray::lab::experiments {
 namespace {
 
 // Relative noise per window assumed until the innovations have taught the filter its own.
@@ -133,4 +134,4 @@ bool BoomTrimWindows::tick(double dt_s, double promised_l_per_min, double slope_
   return steady && counted;
 }
 
-}  // namespace weedspray::control
+}  // namespace weedspray::lab::experiments

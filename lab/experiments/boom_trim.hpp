@@ -43,7 +43,7 @@
 #include <cstddef>
 #include <cstdint>
 
-namespace weedspray::control {
+namespace weedspray::lab::experiments {
 
 struct BoomTrimConfig {
   double prior_gain_sd = 0.05;   // k's sd as calibrated (wear, meter and pump drift since)
@@ -124,4 +124,4 @@ class BoomTrimWindows {
   BoomTrimWindow current_{};
 };
 
-}  // namespace weedspray::control
+}  // namespace weedspray::lab::experiments

@@ -8,9 +8,10 @@
 #include <utility>
 #include <vector>
 
-#include "control/experiments/experiments.hpp"
+#include "lab/experiments/experiments.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 namespace {
 
 RigConfig calibration_rig(const CalibrationOptions& options) {
@@ -140,4 +141,4 @@ std::vector<double> calibrated_full_flows(const CalibrationResult& calibration) 
   return flows;
 }
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

@@ -1,11 +1,12 @@
-#include "control/experiments/closed_loop_rig.hpp"
+#include "lab/experiments/closed_loop_rig.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 namespace {
 
 PwmConfig pwm_config(const RigConfig& c) {
@@ -364,4 +365,4 @@ void ClosedLoopRig::run_for(double duration_s) {
   }
 }
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

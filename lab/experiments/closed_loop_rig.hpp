@@ -16,17 +16,18 @@
 #include <utility>
 #include <vector>
 
-#include "control/boom_trim.hpp"
 #include "control/calibration.hpp"
-#include "control/experiments/phase_window_fit.hpp"
 #include "control/flow_feedback.hpp"
 #include "control/nozzle_health.hpp"
-#include "control/plant/hydraulic_plant.hpp"
 #include "control/pressure_controller.hpp"
 #include "control/pwm_schedule.hpp"
 #include "control/spray_rate_law.hpp"
+#include "lab/experiments/boom_trim.hpp"
+#include "lab/experiments/phase_window_fit.hpp"
+#include "lab/experiments/vocabulary.hpp"
+#include "sim/plant/hydraulic_plant.hpp"
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 
 // Fuzzy-PID and PID settings found by the documented search of step_response.hpp
 // (`weedspray-lab experiment step --tune` reruns it). Output u in [0, 1] closes the return
@@ -200,4 +201,4 @@ class ClosedLoopRig {
   double health_max_evidence_ = 0.0;
 };
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

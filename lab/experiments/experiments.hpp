@@ -10,12 +10,13 @@
 #include <string>
 #include <vector>
 
-#include "control/experiments/closed_loop_rig.hpp"
-#include "control/experiments/machines.hpp"
-#include "control/experiments/metrics.hpp"
 #include "control/spray_rate_law.hpp"
+#include "lab/experiments/closed_loop_rig.hpp"
+#include "lab/experiments/machines.hpp"
+#include "lab/experiments/metrics.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 
 // ---------- step: start-up 0 -> 0.2 MPa, PID vs fuzzy PID (UGV Fig. 7) ----------
 struct StepRun {
@@ -439,4 +440,4 @@ BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet,
 // per process (several tests of one binary, or both savings runs, calibrate once).
 const CalibrationResult& cached_calibration(const CalibrationOptions& options);
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

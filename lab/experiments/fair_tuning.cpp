@@ -1,11 +1,12 @@
-#include "control/experiments/fair_tuning.hpp"
+#include "lab/experiments/fair_tuning.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <vector>
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 namespace {
 
 struct Bound {
@@ -179,4 +180,4 @@ FuzzyPidConfig fair_tuned_fuzzy_pid_config() {
   return c;
 }
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

@@ -17,9 +17,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "control/experiments/experiments.hpp"
+#include "lab/experiments/experiments.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 
 struct OperatingPoint {
   double setpoint_mpa = 0.2;
@@ -88,4 +89,4 @@ StepFleetResult run_step_fleet(const FleetOptions& fleet, const FuzzyPidConfig& 
 FuzzyPidConfig fair_tuned_pid_config();
 FuzzyPidConfig fair_tuned_fuzzy_pid_config();
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

@@ -9,10 +9,11 @@
 #include <string>
 #include <vector>
 
-#include "control/experiments/experiments.hpp"
 #include "control/nozzle_scheduler.hpp"
+#include "lab/experiments/experiments.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 namespace {
 
 struct CalibratedMachine {
@@ -344,4 +345,4 @@ SavingsFleetResult run_savings_fleet(const std::vector<std::array<double, 4>>& z
   return {spread_of(savings, true), spread_of(under), spread_of(uniform), spread_of(variable)};
 }
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

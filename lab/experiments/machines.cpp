@@ -1,10 +1,11 @@
-#include "control/experiments/machines.hpp"
+#include "lab/experiments/machines.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <random>
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 namespace {
 
 std::mt19937_64 machine_rng(std::uint64_t seed, int index, std::uint64_t stream) {
@@ -126,4 +127,4 @@ Spread spread_of(std::span<const double> values, bool worst_is_min) {
   return s;
 }
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

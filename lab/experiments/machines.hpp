@@ -31,9 +31,10 @@
 #include <span>
 #include <vector>
 
-#include "control/plant/hydraulic_plant.hpp"
+#include "lab/experiments/vocabulary.hpp"
+#include "sim/plant/hydraulic_plant.hpp"
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 
 struct Machine {
   plant::PlantParams params{};
@@ -85,4 +86,4 @@ struct Spread {
 // worst = the largest value (worst_is_min: the smallest).
 Spread spread_of(std::span<const double> values, bool worst_is_min = false);
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

@@ -1,10 +1,11 @@
-#include "control/experiments/metrics.hpp"
+#include "lab/experiments/metrics.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 
 StepMetrics step_metrics(std::span<const double> t, std::span<const double> y, double setpoint,
                          double band) {
@@ -69,4 +70,4 @@ double peak_to_peak(std::span<const double> values) {
   return *hi - *lo;
 }
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

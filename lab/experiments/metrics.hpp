@@ -3,7 +3,7 @@
 
 #include <span>
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 
 struct StepMetrics {
   double rise_s = 0.0;         // 10 % -> 90 % of the set-point (first crossing)
@@ -29,4 +29,4 @@ LineFit fit_line(std::span<const double> x, std::span<const double> y);
 // Peak-to-peak of values.
 double peak_to_peak(std::span<const double> values);
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

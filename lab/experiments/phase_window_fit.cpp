@@ -1,12 +1,13 @@
-#include "control/experiments/phase_window_fit.hpp"
+#include "lab/experiments/phase_window_fit.hpp"
 
 #include "control/small_linear_system.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 
 PhaseWindowFit::PhaseWindowFit(std::size_t nozzles, double ridge)
     : nozzles_(nozzles), ridge_(ridge) {
@@ -64,4 +65,4 @@ double PhaseWindowFit::ratio(std::size_t nozzle) const noexcept {
   return x[nozzle];
 }
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

@@ -21,7 +21,7 @@
 #include <cstddef>
 #include <span>
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 
 class PhaseWindowFit {
  public:
@@ -47,4 +47,4 @@ class PhaseWindowFit {
   double metered_sum_ = 0.0;
 };
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

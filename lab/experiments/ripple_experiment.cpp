@@ -1,9 +1,10 @@
 // Line-pressure ripple with 4 nozzles at 50 % duty: synchronous vs staggered PWM (UGV Fig. 8).
 #include <vector>
 
-#include "control/experiments/experiments.hpp"
+#include "lab/experiments/experiments.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 namespace {
 
 RippleRun ripple_once(const RippleOptions& options, bool staggered) {
@@ -59,4 +60,4 @@ RippleFleetResult run_ripple_fleet(const FleetOptions& fleet, const RippleOption
           spread_of(stag_boom)};
 }
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

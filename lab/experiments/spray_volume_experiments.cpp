@@ -11,9 +11,10 @@
 #include <utility>
 #include <vector>
 
-#include "control/experiments/experiments.hpp"
+#include "lab/experiments/experiments.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 namespace {
 
 struct PreparedMachine {
@@ -228,9 +229,9 @@ double orthogonal_common_floor_pct(const SprayRunOptions& options) {
   return count > 0 ? total / count * 100.0 : 0.0;
 }
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 namespace {
 
 OrthogonalFleetRow summarise(std::vector<OrthogonalResult> machines) {
@@ -306,4 +307,4 @@ OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const Spra
           spread_of(held_open_floor), spread_of(common_floor)};
 }
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

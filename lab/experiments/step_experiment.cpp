@@ -4,9 +4,10 @@
 #include <cmath>
 #include <vector>
 
-#include "control/experiments/experiments.hpp"
+#include "lab/experiments/experiments.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 namespace {
 
 StepMetrics metrics_of(const std::vector<TraceSample>& trace, double setpoint) {
@@ -149,4 +150,4 @@ TuningResult tune_step_controllers(const StepOptions& options) {
   return result;
 }
 
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

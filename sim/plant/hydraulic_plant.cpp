@@ -1,4 +1,4 @@
-#include "control/plant/hydraulic_plant.hpp"
+#include "sim/plant/hydraulic_plant.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <string>
 #include <utility>
 
-namespace weedspray::control::plant {
+namespace weedspray::sim::plant {
 namespace {
 
 void require(bool ok, const char* name, const char* rule) {
@@ -508,4 +508,4 @@ void HydraulicPlant::set_wheel_slip(double slip) {
   wheel_slip_ = std::clamp(slip, -0.49, 0.49);
 }
 
-}  // namespace weedspray::control::plant
+}  // namespace weedspray::sim::plant

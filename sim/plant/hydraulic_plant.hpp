@@ -5,7 +5,7 @@
 //                                              sensor, pulse flow meter -> N solenoid valves
 //                                              -> N nozzles
 //
-// Used by the closed-loop experiments (control/experiments/), the sim tests and the simulated
+// Used by the closed-loop experiments (lab/experiments/), the sim tests and the simulated
 // io backends (io/sim/, `weedsprayd --sim`). Pure and single-threaded: no clocks, no I/O; time
 // only advances in step(). Not thread-safe: a caller sharing it between threads wraps it.
 //
@@ -13,7 +13,7 @@
 // ran on (one pressure node, smooth pump, linear meter, constant valves); every effect added for
 // issue 12 defaults to "off" there so those figures stay reproducible. realistic_plant_params()
 // turns them all on at documented values; the --plants experiments draw machines around it
-// (control/experiments/machines.hpp). Each realistic value names its source, or says
+// (lab/experiments/machines.hpp). Each realistic value names its source, or says
 // "invented" with the range the machine draws sweep.
 //
 // Units: SI unless the name says otherwise; pressures are gauge pressures in MPa, flows in
@@ -28,7 +28,7 @@
 #include <random>
 #include <vector>
 
-namespace weedspray::control::plant {
+namespace weedspray::sim::plant {
 
 inline constexpr int kMaxNozzles = 8;
 
@@ -288,7 +288,7 @@ class HydraulicPlant {
   void set_sensor_shorted(bool shorted);             // loop current 24 mA
   void set_tank_level_l(double litres);
 
-  // --- changes after calibration (machine variation, control/experiments/machines.hpp) ---
+  // --- changes after calibration (machine variation, lab/experiments/machines.hpp) ---
   void set_nozzle_wear(int i, double fraction);  // orifice flow coefficient x (1 + fraction)
   void set_valve_ageing(int i, double factor);   // delays and travel x factor (>= 0.5)
   void set_meter_drift(double fraction);         // true K-factor x (1 + fraction)
@@ -366,4 +366,4 @@ class HydraulicPlant {
   bool shorted_ = false;
 };
 
-}  // namespace weedspray::control::plant
+}  // namespace weedspray::sim::plant

@@ -1,6 +1,6 @@
 // weedspray-hil: the sprayer on the far side of the wires, for the hardware-in-the-loop scenario
 // of the systemd guest (tests/vm-systemd/hil-scenario.sh). It runs the hydraulic plant model
-// (control/plant) in real time against the installed daemon, through kernel interfaces only:
+// (sim/plant) in real time against the installed daemon, through kernel interfaces only:
 //   - samples the valve, pump, buzzer, lamp and heartbeat lines in gpio-sim sysfs at --rate-hz
 //     and drives the plant's solenoids and pump relay with what it reads; integrates each
 //     valve's measured open time (its duty);
@@ -32,8 +32,8 @@
 #include <string>
 #include <vector>
 
-#include "control/plant/hydraulic_plant.hpp"
 #include "io/signal_conversion.hpp"
+#include "sim/plant/hydraulic_plant.hpp"
 #include "tools/hil/loopback_camera.hpp"
 #include "tools/hil/modbus_slaves.hpp"
 #include "tools/hil/sim_gpio_lines.hpp"
@@ -100,7 +100,7 @@ struct Measured {
   std::uint32_t valve_mask = 0;
 };
 
-void write_status(const Options& o, const control::plant::HydraulicPlant& plant, const Measured& m,
+void write_status(const Options& o, const sim::plant::HydraulicPlant& plant, const Measured& m,
                   ModbusBoard& board, const LoopbackCamera* camera, double elapsed_s) {
   std::ostringstream s;
   s << "elapsed_s=" << elapsed_s << "\nsamples=" << m.samples << "\nsampled_s=" << m.sampled_s
@@ -135,7 +135,7 @@ void write_status(const Options& o, const control::plant::HydraulicPlant& plant,
   }
 }
 
-void print_truth(const control::plant::HydraulicPlant& plant, const Measured& m) {
+void print_truth(const sim::plant::HydraulicPlant& plant, const Measured& m) {
   std::printf("WEEDSPRAY-HIL-TRUTH pressure_mpa=%.4f\n", plant.line_pressure_mpa());
   std::printf("WEEDSPRAY-HIL-TRUTH delivered_l=%.4f\n", plant.total_delivered_l());
   for (int i = 0; i < plant.nozzle_count(); ++i)
@@ -155,7 +155,7 @@ void print_truth(const control::plant::HydraulicPlant& plant, const Measured& m)
   std::fflush(stdout);
 }
 
-void handle_command(const std::string& line, control::plant::HydraulicPlant& plant,
+void handle_command(const std::string& line, sim::plant::HydraulicPlant& plant,
                     LoopbackCamera* camera) {
   std::istringstream in(line);
   std::string verb, argument;
@@ -168,7 +168,7 @@ void handle_command(const std::string& line, control::plant::HydraulicPlant& pla
   if (verb == "quit") g_quit = true;
 }
 
-void poll_commands(int fifo, std::string& pending, control::plant::HydraulicPlant& plant,
+void poll_commands(int fifo, std::string& pending, sim::plant::HydraulicPlant& plant,
                    LoopbackCamera* camera) {
   char buffer[256];
   ssize_t n = 0;
@@ -183,13 +183,13 @@ void poll_commands(int fifo, std::string& pending, control::plant::HydraulicPlan
 int run(const Options& o) {
   ::mkdir(o.run_dir.c_str(), 0755);
   ModbusBoard board;
-  control::plant::PlantParams params;
+  sim::plant::PlantParams params;
   params.nozzle_count = static_cast<int>(o.valve_lines.size());
   params.wheel.nominal_pulses_per_m = o.wheel_pulses_per_m;
   params.flow_meter.nominal_pulses_per_l = o.flow_pulses_per_l;
   params.tank.capacity_l = o.tank_capacity_l;
   params.tank.initial_level_l = o.tank_level_l;
-  control::plant::HydraulicPlant plant(params, o.seed);
+  sim::plant::HydraulicPlant plant(params, o.seed);
   plant.set_ground_speed(o.speed_m_per_s);
 
   Lines lines;

@@ -67,7 +67,7 @@ $PY - "$meter" <<'PY' || fail "MeterCalibration after the catch test: $meter ($(
 import sys
 source, k, configured, error = sys.argv[1].split()
 assert source == '"calibration"', source
-true_k = 8500 * 1.02  # the sim meter's K: 2 % above its label (control/plant FlowMeterParams)
+true_k = 8500 * 1.02  # the sim meter's K: 2 % above its label (sim/plant FlowMeterParams)
 assert abs(float(k) / true_k - 1) < 0.005, k
 assert float(configured) == 8500, configured
 assert abs(float(error) - (8500 - true_k) / true_k * 100) < 0.5, error

@@ -7,7 +7,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "control/plant/hydraulic_plant.hpp"
+#include "sim/plant/hydraulic_plant.hpp"
 #include "tests/sim/daemon/run_until.hpp"
 #include "tests/sim/daemon/spraying_machine.hpp"
 
@@ -30,7 +30,7 @@ TEST(FlowTrim, FollowsAMeterDriftAndStartsAfreshOnANewCalibration) {
   ASSERT_GT(before, 0.85);
   ASSERT_LT(before, 1.15);
 
-  m.backends.with_plant([](control::plant::HydraulicPlant& p) { p.set_meter_drift(0.10); });
+  m.backends.with_plant([](sim::plant::HydraulicPlant& p) { p.set_meter_drift(0.10); });
   const double expected = before / 1.10;
   const bool followed = run_until(
       m.backends,

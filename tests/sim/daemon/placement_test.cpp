@@ -10,10 +10,10 @@
 #include <mutex>
 #include <thread>
 
-#include "control/plant/hydraulic_plant.hpp"
 #include "daemon/backends/backends.hpp"
 #include "daemon/sprayer/geometry.hpp"
 #include "daemon/sprayer/sprayer.hpp"
+#include "sim/plant/hydraulic_plant.hpp"
 #include "vision/pipeline.hpp"
 #include "vision/threshold.hpp"
 #include "vision/vegetation_index.hpp"
@@ -41,7 +41,7 @@ class RecordingCamera final : public io::Camera {
     // the plant is advanced to now, and the speed holds between the world's updates.
     SeenFrame seen;
     const auto read_at = backends_.clock->now();
-    backends_.with_plant([&](control::plant::HydraulicPlant& p) {
+    backends_.with_plant([&](sim::plant::HydraulicPlant& p) {
       const double late_s = std::chrono::duration<double>(read_at - frame.timestamp).count();
       seen.true_distance_m = p.distance_m() - p.ground_speed_m_per_s() * late_s;
     });
@@ -134,8 +134,8 @@ TEST(Placement, SprayStartsAndStopsWithin5cmOfTheImagedGround) {
   // The valves' 50 % crossings with the distance at that instant, from the plant itself: this
   // thread's polling would date an edge as late as it was scheduled (at 2.5 m/s a 20 ms stall
   // of a loaded CI machine is 5 cm).
-  backends.with_plant([](control::plant::HydraulicPlant& p) { p.record_valve_crossings(true); });
-  std::vector<control::plant::ValveCrossing> crossings;
+  backends.with_plant([](sim::plant::HydraulicPlant& p) { p.record_valve_crossings(true); });
+  std::vector<sim::plant::ValveCrossing> crossings;
   vision::PipelineConfig vision = vision::default_pipeline_config();
   vision.cols = config.boom.nozzles;
   RecordingCamera camera(*backends.cameras[0], backends, vision);
@@ -161,7 +161,7 @@ TEST(Placement, SprayStartsAndStopsWithin5cmOfTheImagedGround) {
     if (t > run_s) break;
     backends.drive_world(t);
     Sample s{};
-    backends.with_plant([&](control::plant::HydraulicPlant& p) {
+    backends.with_plant([&](sim::plant::HydraulicPlant& p) {
       s.distance_m = p.distance_m();
       for (int i = 0; i < p.nozzle_count(); ++i) {
         if (p.valve_opening(i) >= 0.5) s.open_mask |= 1U << i;
@@ -180,11 +180,11 @@ TEST(Placement, SprayStartsAndStopsWithin5cmOfTheImagedGround) {
   const ControlStatus control_at_end = sprayer.control();
   double plant_distance_at_end = 0;
   backends.with_plant(
-      [&](control::plant::HydraulicPlant& p) { plant_distance_at_end = p.distance_m(); });
+      [&](sim::plant::HydraulicPlant& p) { plant_distance_at_end = p.distance_m(); });
   std::printf("odometer %.3f m, plant %.3f m\n", control_at_end.distance_m, plant_distance_at_end);
   sprayer.stop();
   std::uint32_t final_mask = 0;
-  backends.with_plant([&](control::plant::HydraulicPlant& p) {
+  backends.with_plant([&](sim::plant::HydraulicPlant& p) {
     p.step(0.2);  // let the spools finish moving
     for (int i = 0; i < p.nozzle_count(); ++i) {
       if (p.valve_opening(i) > 0) final_mask |= 1U << i;

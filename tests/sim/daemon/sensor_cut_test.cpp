@@ -10,11 +10,11 @@
 #include <sstream>
 #include <string>
 
-#include "control/plant/hydraulic_plant.hpp"
 #include "daemon/backends/backends.hpp"
 #include "daemon/config/config_schema.hpp"
 #include "daemon/sprayer/sprayer.hpp"
 #include "daemon/supervision/alarms.hpp"
+#include "sim/plant/hydraulic_plant.hpp"
 #include "tests/sim/daemon/run_until.hpp"
 #include "tests/sim/daemon/spraying_machine.hpp"
 
@@ -57,7 +57,7 @@ TEST(SensorCut, ACutWireWhileSprayingIsASensorFaultPumpOffValvesClosed) {
       << "no valve ever opened: " << backends.describe_outputs();
 
   backends.with_plant(
-      [](control::plant::HydraulicPlant& plant) { plant.set_sensor_wire_broken(true); });
+      [](sim::plant::HydraulicPlant& plant) { plant.set_sensor_wire_broken(true); });
   const auto safe = [&] {
     const PressureStatus p = sprayer.pressure();
     return !p.sensor_ok && !p.pump_on && p.current_ma < 1.0 &&
@@ -106,7 +106,7 @@ TEST(SensorCut, ARefusedPumpWriteStopsTheHeartbeat) {
       << "the heartbeat beats while all is well";
   backends.fail_output_writes(OutputRole::kPump, EIO, 0);
   backends.with_plant(
-      [](control::plant::HydraulicPlant& plant) { plant.set_sensor_wire_broken(true); });
+      [](sim::plant::HydraulicPlant& plant) { plant.set_sensor_wire_broken(true); });
   EXPECT_TRUE(run_until(
       backends, [&] { return sprayer.pwm().heartbeat_stopped; }, 300ms));
   EXPECT_EQ(backends.heartbeat->safe_mask(), 0U);

@@ -2,8 +2,8 @@
 // parser for all of them, 1-2 digits within each one's range, anything else refused.
 #include <gtest/gtest.h>
 
-#include "control/plant/hydraulic_plant.hpp"
 #include "daemon/backends/sim_faults.hpp"
+#include "sim/plant/hydraulic_plant.hpp"
 
 namespace weedspray::daemon {
 namespace {
@@ -24,8 +24,8 @@ TEST(SimFaults, NumberedNamesParseInRangeAndNothingElse) {
 }
 
 TEST(SimFaults, MeterDriftAndWearChangeThePlant) {
-  control::plant::PlantParams params;
-  control::plant::HydraulicPlant plant(params, 1);
+  sim::plant::PlantParams params;
+  sim::plant::HydraulicPlant plant(params, 1);
   const double k = plant.true_meter_pulses_per_l();
   parse_sim_fault("meter_drift_10@0")->apply(plant);
   EXPECT_NEAR(plant.true_meter_pulses_per_l() / k, 1.10, 1e-9);
@@ -33,8 +33,8 @@ TEST(SimFaults, MeterDriftAndWearChangeThePlant) {
   EXPECT_NEAR(plant.true_meter_pulses_per_l() / k, 0.95, 1e-9);
   // Every tip worn 20 %: each nozzle sprays more than the same machine unworn (the line's
   // pressure drops a little with the extra flow, so less than 20 % more).
-  control::plant::HydraulicPlant unworn(params, 1);
-  control::plant::HydraulicPlant worn(params, 1);
+  sim::plant::HydraulicPlant unworn(params, 1);
+  sim::plant::HydraulicPlant worn(params, 1);
   parse_sim_fault("nozzles_worn_20@0")->apply(worn);
   for (auto* p : {&unworn, &worn}) {
     p->set_pump(true);

@@ -7,9 +7,10 @@
 #include <stdexcept>
 #include <vector>
 
-#include "control/experiments/experiments.hpp"
+#include "lab/experiments/experiments.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 namespace {
 
 TEST(StepExperiment, FuzzyPidMeetsTheStartUpTargetsAndBeatsTheTunedPid) {
@@ -198,4 +199,4 @@ TEST(SavingsExperiment, TallyAgainstLabelledWeeds) {
 }
 
 }  // namespace
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

@@ -1,7 +1,7 @@
 // The fair tuning of issue 12: one search for both controllers, the fuzzy corrections earning
 // their place, and the daemon's default controller being the one that wins on machines the
 // search never saw.
-#include "control/experiments/fair_tuning.hpp"
+#include "lab/experiments/fair_tuning.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,8 +9,9 @@
 #include <variant>
 
 #include "daemon/config/config_schema.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 namespace {
 
 const daemon::DefaultValue& schema_default(std::string_view section, std::string_view name) {
@@ -78,4 +79,4 @@ TEST(FairTuning, DaemonDefaultIsTheControllerThatWinsOnHeldOutMachines) {
 }
 
 }  // namespace
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

@@ -8,10 +8,11 @@
 #include <cstdio>
 #include <vector>
 
-#include "control/experiments/experiments.hpp"
-#include "control/experiments/fair_tuning.hpp"
+#include "lab/experiments/experiments.hpp"
+#include "lab/experiments/fair_tuning.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 namespace {
 
 TEST(Machines, DrawsAreReproducibleAndDiffer) {
@@ -220,4 +221,4 @@ TEST(FleetBlockage, ABlockedNozzleIsNamedAndAHealthyMinuteIsQuiet) {
 }
 
 }  // namespace
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

@@ -1,15 +1,16 @@
 // PhaseWindowFit (issue 12's lab diagnostic): each nozzle's metered / promised ratio from the
 // phase windows of one line meter, and the rig feeding it.
-#include "control/experiments/phase_window_fit.hpp"
+#include "lab/experiments/phase_window_fit.hpp"
 
 #include <gtest/gtest.h>
 
 #include <array>
 #include <vector>
 
-#include "control/experiments/experiments.hpp"
+#include "lab/experiments/experiments.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
-namespace weedspray::control::experiments {
+namespace weedspray::lab::experiments {
 namespace {
 
 // Windows of a 4-nozzle boom: promised[w][i], the meter reading the true ratios.
@@ -75,4 +76,4 @@ TEST(PhaseWindowFit, TheRigFeedsItThePhaseWindows) {
 }
 
 }  // namespace
-}  // namespace weedspray::control::experiments
+}  // namespace weedspray::lab::experiments

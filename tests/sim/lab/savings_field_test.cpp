@@ -72,13 +72,13 @@ TEST(SavingsField, PeanutValidationPhotos) {
                            read_stem_list(std::filesystem::path(WEEDSPRAY_SOURCE_DIR) /
                                           "tools/train/splits/peanut-val.txt"));
   ASSERT_EQ(photos.size(), 60u);
-  control::experiments::SavingsOptions options;
+  lab::experiments::SavingsOptions options;
   options.max_density = 1.0;
   options.decision_threshold = 0.005;  // = the weedy share: truth leaves no weedy zone dry
   const LabelledField truth = labelled_field(photos, std::nullopt);
   const LabelledField green = labelled_field(photos, vision::default_pipeline_config());
-  const auto on_truth = control::experiments::run_savings(truth.weed_density, options);
-  const auto on_green = control::experiments::run_savings(green.weed_density, options);
+  const auto on_truth = lab::experiments::run_savings(truth.weed_density, options);
+  const auto on_green = lab::experiments::run_savings(green.weed_density, options);
   const auto truth_tally = tally_against_truth(on_truth.equal_coverage, truth.truth);
   const auto green_tally = tally_against_truth(on_green.equal_coverage, green.truth);
   EXPECT_GT(truth_tally.weedy_zones, 200);
@@ -97,7 +97,7 @@ TEST(SavingsField, PeanutValidationPhotos) {
   dnn.weed_source = vision::WeedSource::kDnn;
   dnn.dnn = model.spec;
   const LabelledField predicted = labelled_field(photos, dnn, model.onnx);
-  const auto on_dnn = control::experiments::run_savings(predicted.weed_density, options);
+  const auto on_dnn = lab::experiments::run_savings(predicted.weed_density, options);
   const auto dnn_tally = tally_against_truth(on_dnn.equal_coverage, predicted.truth);
   EXPECT_LT(dnn_tally.crop_only_sprayed, 0.6 * green_tally.crop_only_sprayed);
   EXPECT_LT(dnn_tally.weedy_left_dry, 0.15 * dnn_tally.weedy_zones);

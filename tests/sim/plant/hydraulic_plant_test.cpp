@@ -1,13 +1,13 @@
 // Unit-level checks of the hydraulic plant model (label sim: they integrate seconds of
 // simulated time).
-#include "control/plant/hydraulic_plant.hpp"
+#include "sim/plant/hydraulic_plant.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <stdexcept>
 
-namespace weedspray::control::plant {
+namespace weedspray::sim::plant {
 namespace {
 
 // Run the pump with all valves in `mask` and the return valve at `volts` until steady.
@@ -186,9 +186,9 @@ TEST(HydraulicPlant, RejectsBadParametersByName) {
 }
 
 }  // namespace
-}  // namespace weedspray::control::plant
+}  // namespace weedspray::sim::plant
 
-namespace weedspray::control::plant {
+namespace weedspray::sim::plant {
 namespace {
 
 TEST(HydraulicPlant, ValveReversedMidTravelCoastsOnThenReverses) {
@@ -228,4 +228,4 @@ TEST(HydraulicPlant, ValveCommandedBackWithinItsDeadTimeNeverMoves) {
 }
 
 }  // namespace
-}  // namespace weedspray::control::plant
+}  // namespace weedspray::sim::plant

@@ -4,9 +4,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "control/plant/hydraulic_plant.hpp"
+#include "sim/plant/hydraulic_plant.hpp"
 
-namespace weedspray::control::plant {
+namespace weedspray::sim::plant {
 namespace {
 
 PlantParams quiet(PlantParams p) {
@@ -166,4 +166,4 @@ TEST(PlantRealism, IdealBenchKeepsItsDrawsWhenRealismIsAdded) {
 }
 
 }  // namespace
-}  // namespace weedspray::control::plant
+}  // namespace weedspray::sim::plant

@@ -2,7 +2,7 @@
 // (common gain k, valve timing offset D). It must learn a change of both from windows of
 // changing duty mixes, make the nozzles deliver what was asked at every duty, and not push the
 // excess of a nozzle held open onto the modulated ones.
-#include "control/boom_trim.hpp"
+#include "lab/experiments/boom_trim.hpp"
 
 #include <gtest/gtest.h>
 
@@ -15,8 +15,9 @@
 #include <string>
 
 #include "control/flow_feedback.hpp"
+#include "lab/experiments/vocabulary.hpp"
 
-namespace weedspray::control {
+namespace weedspray::lab::experiments {
 namespace {
 
 // Each nozzle's calibrated line: q = kSlope d + kIntercept [L/min], d in %; full open kFull.
@@ -192,4 +193,4 @@ TEST(BoomTrim, ConfigErrorsNameTheField) {
 }
 
 }  // namespace
-}  // namespace weedspray::control
+}  // namespace weedspray::lab::experiments
