@@ -255,16 +255,6 @@ double FuzzyPid::update(double setpoint, double measurement, double dt_s) noexce
   return pid_.update(setpoint, measurement, dt_s);
 }
 
-void FuzzyPid::set_base_gains(const PidGains& gains) noexcept {
-  if (std::isfinite(gains.kp) && std::isfinite(gains.ki) && std::isfinite(gains.kd))
-    config_.base.gains = gains;
-}
-
-void FuzzyPid::set_correction_weights(const PidGains& weights) noexcept {
-  if (std::isfinite(weights.kp) && std::isfinite(weights.ki) && std::isfinite(weights.kd))
-    config_.correction_weights = weights;
-}
-
 void FuzzyPid::enable(double current_output, double setpoint, double measurement) noexcept {
   pid_.enable(current_output, setpoint, measurement);
   previous_measurement_ = measurement;

@@ -110,10 +110,6 @@ class FuzzyPid {
   bool enabled() const noexcept { return pid_.enabled(); }
   void reset() noexcept;
 
-  // Base gains and correction weights may change between cycles (the table does not depend
-  // on them). Non-finite values are ignored.
-  void set_base_gains(const PidGains& gains) noexcept;
-  void set_correction_weights(const PidGains& weights) noexcept;
   const FuzzyPidConfig& config() const noexcept { return config_; }
 
   double output() const noexcept { return pid_.output(); }

@@ -128,12 +128,6 @@ double application_rate_l_per_ha(double flow_l_per_min, double speed_m_per_s,
   return flow_l_per_min * 10000.0 / (60.0 * speed_m_per_s * width_m);
 }
 
-double application_rate_l_per_ha_kmh(double flow_l_per_min, double speed_km_per_h,
-                                     double width_m) noexcept {
-  if (!(speed_km_per_h > 0.0) || !(width_m > 0.0) || !std::isfinite(flow_l_per_min)) return 0.0;
-  return 600.0 * flow_l_per_min / (speed_km_per_h * width_m);
-}
-
 DutyQuantiser::DutyQuantiser(std::span<const double> levels_pct, double hysteresis_pct)
     : count_(levels_pct.size()), hysteresis_pct_(hysteresis_pct) {
   require(count_ >= 1 && count_ <= kMaxLevels,
@@ -148,15 +142,6 @@ DutyQuantiser::DutyQuantiser(std::span<const double> levels_pct, double hysteres
             "duty quantiser: levels must be strictly ascending (level " + std::to_string(i) + ")");
     levels_[i] = level;
   }
-}
-
-DutyQuantiser DutyQuantiser::evenly_spaced(std::size_t count, double hysteresis_pct) {
-  require(count >= 2 && count <= kMaxLevels, "duty quantiser: need 2..16 evenly spaced levels");
-  std::array<double, kMaxLevels> levels{};
-  for (std::size_t i = 0; i < count; ++i) {
-    levels[i] = 100.0 * static_cast<double>(i) / static_cast<double>(count - 1);
-  }
-  return DutyQuantiser(std::span<const double>(levels.data(), count), hysteresis_pct);
 }
 
 double DutyQuantiser::quantise(double duty_pct) noexcept {
@@ -178,27 +163,6 @@ double DutyQuantiser::quantise(double duty_pct) noexcept {
   current_ = best;
   has_level_ = true;
   return levels_[current_];
-}
-
-std::uint8_t combination_mask_for_mode(int mode) noexcept {
-  static constexpr std::array<std::uint8_t, 8> kMasks{0b000, 0b001, 0b010, 0b100,
-                                                      0b011, 0b101, 0b110, 0b111};
-  return (mode >= 0 && mode <= 7) ? kMasks[static_cast<std::size_t>(mode)] : 0;
-}
-
-NozzleCombination best_nozzle_combination(const NozzleTrio& trio, double target_flow_l_per_min,
-                                          double pressure_mpa) noexcept {
-  const double scale = pressure_scale(pressure_mpa, trio.reference_pressure_mpa);
-  const double target = std::isfinite(target_flow_l_per_min) ? target_flow_l_per_min : 0.0;
-  NozzleCombination best{};
-  for (std::uint8_t mask = 1; mask < 8; ++mask) {
-    double flow = 0.0;
-    for (std::size_t n = 0; n < 3; ++n) {
-      if (mask >> n & 1u) flow += trio.flow_l_per_min[n] * scale;
-    }
-    if (std::abs(flow - target) < std::abs(best.flow_l_per_min - target)) best = {mask, flow};
-  }
-  return best;
 }
 
 }  // namespace weedspray::control

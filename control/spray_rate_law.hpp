@@ -100,9 +100,6 @@ SprayDecision spray_decision(const SprayLawConfig& config, const NozzleLine& lin
 // Application rate from SI inputs; speed or width <= 0 gives 0.
 double application_rate_l_per_ha(double flow_l_per_min, double speed_m_per_s,
                                  double width_m) noexcept;
-// The 2018 paper's form with speed in km/h.
-double application_rate_l_per_ha_kmh(double flow_l_per_min, double speed_km_per_h,
-                                     double width_m) noexcept;
 
 // Quantise duty to a few levels with hysteresis: the output stays at its level while the input
 // is within half a step plus `hysteresis_pct` of it; otherwise it jumps to the nearest level.
@@ -112,8 +109,6 @@ class DutyQuantiser {
   static constexpr std::size_t kMaxLevels = 16;
   // Throws std::invalid_argument (empty, > 16, not ascending, outside [0, 100], hyst < 0).
   DutyQuantiser(std::span<const double> levels_pct, double hysteresis_pct);
-  // Evenly spaced levels 0 .. 100 (count >= 2).
-  static DutyQuantiser evenly_spaced(std::size_t count, double hysteresis_pct);
 
   double quantise(double duty_pct) noexcept;
   void reset() noexcept { has_level_ = false; }
@@ -129,22 +124,5 @@ class DutyQuantiser {
 
 // The 2018 paper's six density levels are classified where the densities are measured:
 // vision/zones.hpp (classify_density, DensityLevelCuts), reported per zone in FrameResult.
-
-// Nozzle-combination mode (2018 paper): three nozzles of different sizes per row, each on/off.
-// Flows are at reference pressure; they scale with sqrt(P / P_ref).
-struct NozzleTrio {
-  std::array<double, 3> flow_l_per_min{0.39, 0.79, 1.18};  // e.g. XR11001/2/3 VS at 0.3 MPa
-  double reference_pressure_mpa = 0.3;
-};
-struct NozzleCombination {
-  std::uint8_t open_mask = 0;  // bit i = nozzle i open; 0 = all closed
-  double flow_l_per_min = 0.0;
-};
-// The paper's mode numbers 1..7 -> open masks (1: n1, 2: n2, 3: n3, 4: n1+n2, 5: n1+n3,
-// 6: n2+n3, 7: all); 0 -> closed.
-std::uint8_t combination_mask_for_mode(int mode) noexcept;
-// The combination (including all closed) whose flow is nearest the target at that pressure.
-NozzleCombination best_nozzle_combination(const NozzleTrio& trio, double target_flow_l_per_min,
-                                          double pressure_mpa) noexcept;
 
 }  // namespace weedspray::control

@@ -57,7 +57,8 @@ TEST(Allocation, PerCycleFunctionsDoNotAllocate) {
   Odometry odometry(OdometryConfig{});
   FlowTrim trim(FlowTrimConfig{});
   FlowTrimWindows trim_windows(0.1);
-  DutyQuantiser quantiser = DutyQuantiser::evenly_spaced(6, 2.0);
+  const std::vector<double> levels{0, 20, 40, 60, 80, 100};
+  DutyQuantiser quantiser(levels, 2.0);
   const std::vector<double> frame(8, 40.0);
   const std::vector<double> duties{10, 20, 30, 40, 50, 60, 70, 80};
 

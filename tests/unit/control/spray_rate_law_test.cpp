@@ -116,12 +116,12 @@ TEST(SprayRateLaw, LowDutyPolicyRaisesWeedyZonesToTheMinimumDose) {
 
 TEST(SprayRateLaw, ApplicationRate) {
   EXPECT_NEAR(application_rate_l_per_ha(1.0, 1.0, 0.5), 10000.0 / 30.0, 1e-9);
-  EXPECT_NEAR(application_rate_l_per_ha_kmh(1.0, 3.6, 0.5), 10000.0 / 30.0, 1e-9);
   EXPECT_DOUBLE_EQ(application_rate_l_per_ha(1.0, 0.0, 0.5), 0.0);
 }
 
 TEST(DutyQuantiser, HysteresisStopsChatter) {
-  DutyQuantiser q = DutyQuantiser::evenly_spaced(6, 3.0);  // 0 20 40 60 80 100
+  const std::vector<double> levels{0, 20, 40, 60, 80, 100};
+  DutyQuantiser q(levels, 3.0);
   EXPECT_DOUBLE_EQ(q.quantise(29.0), 20.0);
   EXPECT_DOUBLE_EQ(q.quantise(31.0), 20.0);  // band of 20 reaches 30 + 3
   EXPECT_DOUBLE_EQ(q.quantise(29.0), 20.0);
@@ -131,7 +131,7 @@ TEST(DutyQuantiser, HysteresisStopsChatter) {
   EXPECT_DOUBLE_EQ(q.quantise(95.0), 100.0);
   EXPECT_DOUBLE_EQ(q.quantise(-5.0), 0.0);
   // Without hysteresis the same alternating input flips every frame.
-  DutyQuantiser plain = DutyQuantiser::evenly_spaced(6, 0.0);
+  DutyQuantiser plain(levels, 0.0);
   EXPECT_DOUBLE_EQ(plain.quantise(29.0), 20.0);
   EXPECT_DOUBLE_EQ(plain.quantise(31.0), 40.0);
 }
@@ -144,31 +144,7 @@ TEST(DutyQuantiser, CustomLevelsAndValidation) {
   const std::vector<double> descending{50, 25};
   EXPECT_THROW(DutyQuantiser(descending, 1.0), std::invalid_argument);
   EXPECT_THROW(DutyQuantiser(levels, -1.0), std::invalid_argument);
-  EXPECT_THROW(DutyQuantiser::evenly_spaced(1, 0.0), std::invalid_argument);
-}
-
-TEST(NozzleCombination, ModesOfThe2018Paper) {
-  EXPECT_EQ(combination_mask_for_mode(0), 0b000);
-  EXPECT_EQ(combination_mask_for_mode(1), 0b001);
-  EXPECT_EQ(combination_mask_for_mode(4), 0b011);
-  EXPECT_EQ(combination_mask_for_mode(6), 0b110);
-  EXPECT_EQ(combination_mask_for_mode(7), 0b111);
-  EXPECT_EQ(combination_mask_for_mode(8), 0b000);
-}
-
-TEST(NozzleCombination, PicksTheNearestFlow) {
-  const NozzleTrio trio{};  // 0.39 0.79 1.18 at 0.3 MPa
-  NozzleCombination c = best_nozzle_combination(trio, 0.6, 0.3);
-  EXPECT_EQ(c.open_mask, 0b010);  // 0.79 (off by 0.19) beats 0.39 (0.21)
-  EXPECT_NEAR(c.flow_l_per_min, 0.79, 1e-12);
-  c = best_nozzle_combination(trio, 2.3, 0.3);
-  EXPECT_EQ(c.open_mask, 0b111);
-  c = best_nozzle_combination(trio, 0.1, 0.3);
-  EXPECT_EQ(c.open_mask, 0b000);  // closed (0.1) beats 0.39 (0.29)
-  // At 0.6 MPa every flow is sqrt(2) larger: 0.55 0.72 1.12 ... -> 0.6 picks nozzle 1.
-  c = best_nozzle_combination(trio, 0.6, 0.6);
-  EXPECT_EQ(c.open_mask, 0b001);
-  EXPECT_NEAR(c.flow_l_per_min, 0.39 * std::sqrt(2.0), 1e-12);
+  EXPECT_THROW(DutyQuantiser(std::vector<double>{}, 0.0), std::invalid_argument);
 }
 
 TEST(SprayRateLaw, ValidationNamesTheField) {
