@@ -67,6 +67,10 @@ struct ValvePwmDriverConfig {
   // loop goes round without sleeping): a write that raced the flag's setter, which writes the
   // valves safe itself, is undone before this thread sleeps.
   const std::atomic<bool>* hold_safe = nullptr;
+  // While *hold_closed is true (the pressure loop's fault reaction: a sensor fault, stale
+  // samples, an over-pressure trip) the valves stay closed, checked like hold_safe; the
+  // heartbeat goes on, so the valves open again when the fault clears.
+  const std::atomic<bool>* hold_closed = nullptr;
 };
 
 struct ValvePwmStats {
@@ -81,7 +85,7 @@ struct ValvePwmStats {
   std::uint64_t heartbeat_write_errors = 0;  // heartbeat output writes refused
   std::uint64_t commands_applied = 0;
   std::uint64_t deadman_expiries = 0;
-  std::uint64_t holds = 0;  // times hold_safe closed the valves
+  std::uint64_t holds = 0;  // times hold_safe or hold_closed closed the valves
   std::chrono::nanoseconds max_lateness{0};
   std::uint32_t last_mask = 0;
   std::chrono::nanoseconds last_mask_written_at{0};  // clock time just after the write
@@ -138,7 +142,7 @@ class ValvePwmDriver {
       }
 
       const std::chrono::nanoseconds expires_at = refreshed_at + config_.command_expiry;
-      const bool held = held_safe();
+      const bool held = held_safe() || held_closed();
       if (held || !have_command || now >= expires_at) {
         if (held && !holding_) ++stats_.holds;
         holding_ = held;
@@ -207,6 +211,9 @@ class ValvePwmDriver {
   }
   bool held_safe() const noexcept {
     return config_.hold_safe != nullptr && config_.hold_safe->load();
+  }
+  bool held_closed() const noexcept {
+    return config_.hold_closed != nullptr && config_.hold_closed->load();
   }
   // A valve may be stuck open: the relay must cut the valves' power.
   void count_write_error() noexcept {

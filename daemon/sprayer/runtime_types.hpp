@@ -56,6 +56,9 @@ struct PressureStatus {
   std::uint64_t valve_thread_stalls = 0;  // times the valve thread stopped advancing
   std::uint64_t stale_samples = 0;        // cycles whose newest ADC sample was too old to use
   std::uint64_t pump_write_errors = 0;    // pump relay writes refused (on or off)
+  std::uint64_t valve_holds = 0;  // times a sensor fault or trip closed the valves from this loop
+  Nanos valves_held_at{};         // clock time just after the latest of those closing writes
+  std::uint64_t valve_safe_write_errors = 0;  // of those closing writes, the refused ones
 };
 
 // Camera worker -> control loop, one per processed frame.

@@ -134,6 +134,7 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
   driver.on_wake_context = this;
   driver.heartbeat = io_.heartbeat;
   driver.hold_safe = &estop_->held();
+  driver.hold_closed = &valves_held_by_pressure_;
   driver.heartbeat_half_period = from_seconds(0.5 / config.gpio.heartbeat_hz);
   pwm_driver_ = std::make_unique<io::ValvePwmDriver<control::PwmSchedule>>(*io_.clock, *io_.valves,
                                                                            *schedule_, driver);
@@ -296,9 +297,11 @@ OutputWriteCounters Sprayer::output_write_counters() const noexcept {
   OutputWriteCounters counters;
   const io::ValvePwmStats valves = pwm_driver_->stats();
   const auto at = [](OutputRole role) { return static_cast<std::size_t>(role); };
-  counters.failed_writes[at(OutputRole::kValves)] = valves.write_errors;
+  const PressureStatus pressure = pressure_.read();
+  counters.failed_writes[at(OutputRole::kValves)] =
+      valves.write_errors + pressure.valve_safe_write_errors;
   counters.failed_writes[at(OutputRole::kHeartbeat)] = valves.heartbeat_write_errors;
-  counters.failed_writes[at(OutputRole::kPump)] = pressure_.read().pump_write_errors;
+  counters.failed_writes[at(OutputRole::kPump)] = pressure.pump_write_errors;
   const io::AnalogIoStats analog = analog_io_->stats();
   counters.failed_writes[at(OutputRole::kReturnValve)] = analog.dac_faults;
   counters.tolerated_failures[at(OutputRole::kReturnValve)] = analog.dac_tolerated;
@@ -372,6 +375,11 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
     }
     // Over-pressure: pump off in this very cycle; the main loop raises the alarm.
     if (status.sensor_ok && status.pressure_mpa > params.over_pressure_mpa) status.tripped = true;
+    // A reading that is no pressure (a cut wire, a stale sample) or a trip closes the valves from
+    // this loop in this cycle too, not through the control loop's next command and the valve
+    // thread's next edge: the flag first (the valve thread holds them closed from its next
+    // wake, and undoes a write that raced it), then the safe write itself.
+    hold_valves_for_pressure(!status.sensor_ok || status.tripped, status);
 
     // A stalled valve thread may hold valves open or shut: no pump, return valve open. A
     // latched emergency stop likewise (its reaction has already switched the pump off).
@@ -418,6 +426,18 @@ void Sprayer::pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept
   }
   if (io_.pump != nullptr) io_.pump->force_safe();
   analog_io_->command_safe();
+}
+
+void Sprayer::hold_valves_for_pressure(bool fault, PressureStatus& status) noexcept {
+  if (fault == valves_held_by_pressure_.load(std::memory_order_relaxed)) return;
+  valves_held_by_pressure_.store(fault);
+  if (!fault) return;
+  ++status.valve_holds;
+  if (io_.valves != nullptr && io_.valves->force_safe() != 0) {
+    ++status.valve_safe_write_errors;
+    pwm_driver_->stop_heartbeat();  // a valve may stay open: the relay cuts them
+  }
+  status.valves_held_at = io_.clock->now();
 }
 
 // Nozzle health's share of the control loop: the valves' open times and the meter's pulses

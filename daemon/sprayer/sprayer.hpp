@@ -142,6 +142,7 @@ class Sprayer {
   Nanos pressure_period() const noexcept;
   // Runs on the valve thread at every wake: the pressure loop's dead-man.
   void watch_pressure_loop(Nanos now) noexcept;
+  void hold_valves_for_pressure(bool fault, PressureStatus& status) noexcept;
   void pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept;
   void control_loop(std::stop_token stop) noexcept;
   void feed_nozzle_health(PhaseWindows& windows, Nanos now, bool spraying, std::uint64_t pulses,
@@ -194,6 +195,9 @@ class Sprayer {
   static constexpr Nanos kCrossWatchTimeout = std::chrono::milliseconds(50);
   io::LoopWatch pressure_watch_{kCrossWatchTimeout};  // used by the valve thread only
   std::atomic<bool> pump_forced_off_{false};
+  // Set by the pressure loop while its reading is a sensor fault or a trip: the valve thread
+  // holds the valves closed (io::ValvePwmDriverConfig::hold_closed).
+  std::atomic<bool> valves_held_by_pressure_{false};
   std::atomic<std::uint64_t> pressure_loop_stalls_{0};
 };
 

@@ -618,6 +618,24 @@ sprayctl clear-alarms >/dev/null 2>&1
 wait_for 10 state_is Idle
 step estop_reset "$?" "sprayctl clear-alarms with the circuit closed: State=$(bus_state), Estop $(bus_value Estop)"
 
+# The pressure sensor's wire cut while spraying: the plant's loop current drops to 0 mA at the
+# ADC module. The pressure loop reads a sensor fault, never a pressure: pump off in that cycle,
+# valves closed. Figure: from weedspray-hil's trace marker (written just after the module's
+# register changed) to every valve and the pump written 0. The Fault then latches.
+start_spraying || info "sensor cut: not spraying before it (State=$(bus_state))"
+trace_window_begin
+hil_command sensor_wire cut
+wait_for 10 state_is Fault
+cut_ms="$(marker_to_safe sensor_cut)"
+figure sensor_cut_safe_ms "$cut_ms"
+step sensor_cut_safe "$(awk -v ms="$cut_ms" 'BEGIN { print (ms >= 0 && ms <= 20) ? 0 : 1 }')" \
+  "pressure sensor wire cut while spraying: every valve and the pump written 0 after $cut_ms ms (limit 20); State=$(bus_state), Alarms $(bus_value Alarms), pump line $(hil pump), valve lines $(hil valve_mask), plant pressure $(hil pressure_mpa) MPa"
+hil_command sensor_wire mended
+sleep 1
+sprayctl clear-alarms >/dev/null 2>&1
+wait_for 10 state_is Idle
+step sensor_mended "$?" "wire mended, sprayctl clear-alarms: State=$(bus_state), Alarms $(bus_value Alarms), Pressure $(bus_value Pressure) MPa"
+
 # kill -9: nothing runs in the daemon; ExecStopPost must write the lines safe.
 # (Each fault costs a restart, the slowest part on an emulated CPU: the orderly stop comes last.)
 start_spraying || info "kill -9: not spraying before the fault (State=$(bus_state))"

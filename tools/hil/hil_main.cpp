@@ -13,7 +13,8 @@
 // Interface for the scenario script, in --run-dir:
 //   status   rewritten every 50 ms: key=value lines (cumulative counters and the plant's state)
 //   control  a FIFO taking one command a line: "speed M_PER_S", "tank_l LITRES",
-//            "frame NAME" (the camera's frame NAME.yuyv from now on), "quit"
+//            "sensor_wire cut|mended" (the pressure sensor's loop current 0 mA, trace marker
+//            "sensor_cut"), "frame NAME" (the camera's frame NAME.yuyv from now on), "quit"
 // On quit (or SIGTERM) it prints its ground truth as "WEEDSPRAY-HIL-TRUTH key=value" lines.
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -26,6 +27,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <memory>
 #include <sstream>
@@ -155,27 +157,52 @@ void print_truth(const sim::plant::HydraulicPlant& plant, const Measured& m) {
   std::fflush(stdout);
 }
 
-void handle_command(const std::string& line, sim::plant::HydraulicPlant& plant,
-                    LoopbackCamera* camera) {
+// What a command acts on.
+struct CommandTarget {
+  const Options& options;
+  sim::plant::HydraulicPlant& plant;
+  ModbusBoard& board;
+  LoopbackCamera* camera;
+};
+
+// A line in the kernel's trace (tracefs trace_marker), so the scenario can time the daemon's
+// reaction from the very moment the plant changed; nothing when tracing is not mounted.
+void trace_marker(const char* text) {
+  const int fd = ::open("/sys/kernel/tracing/trace_marker", O_WRONLY | O_CLOEXEC);
+  if (fd < 0) return;
+  [[maybe_unused]] const ssize_t n = ::write(fd, text, std::strlen(text));
+  ::close(fd);
+}
+
+void handle_command(const std::string& line, CommandTarget& target) {
   std::istringstream in(line);
   std::string verb, argument;
   in >> verb >> argument;
   const double value = std::strtod(argument.c_str(), nullptr);
-  if (verb == "speed") plant.set_ground_speed(value);
-  if (verb == "tank_l") plant.set_tank_level_l(value);
-  if (verb == "frame" && !(camera && camera->show(argument)))
+  if (verb == "speed") target.plant.set_ground_speed(value);
+  if (verb == "tank_l") target.plant.set_tank_level_l(value);
+  if (verb == "sensor_wire" && (argument == "cut" || argument == "mended")) {
+    // The ADC module's register follows at once (not at the next sample), then the marker.
+    target.plant.set_sensor_wire_broken(argument == "cut");
+    {
+      std::lock_guard lock(target.board.mutex);
+      target.board.adc_counts =
+          counts(target.plant.pressure_sensor_volts(), target.options.adc_volts_per_count);
+    }
+    trace_marker(argument == "cut" ? "sensor_cut" : "sensor_mended");
+  }
+  if (verb == "frame" && !(target.camera && target.camera->show(argument)))
     std::fprintf(stderr, "weedspray-hil: no camera frame '%s'\n", argument.c_str());
   if (verb == "quit") g_quit = true;
 }
 
-void poll_commands(int fifo, std::string& pending, sim::plant::HydraulicPlant& plant,
-                   LoopbackCamera* camera) {
+void poll_commands(int fifo, std::string& pending, CommandTarget& target) {
   char buffer[256];
   ssize_t n = 0;
   while ((n = ::read(fifo, buffer, sizeof buffer)) > 0) pending.append(buffer, n);
   std::size_t end = 0;
   while ((end = pending.find('\n')) != std::string::npos) {
-    handle_command(pending.substr(0, end), plant, camera);
+    handle_command(pending.substr(0, end), target);
     pending.erase(0, end + 1);
   }
 }
@@ -232,6 +259,7 @@ int run(const Options& o) {
   double last = start;
   double next_status = start;
   std::string pending;
+  CommandTarget commands{o, plant, board, camera.get()};
   struct timespec next {};
   clock_gettime(CLOCK_MONOTONIC, &next);
   std::printf("weedspray-hil: running (%zu valves, %.0f Hz sampling, status in %s)\n",
@@ -301,7 +329,7 @@ int run(const Options& o) {
 
     if (t >= next_status) {
       next_status = t + 0.05;
-      if (fifo >= 0) poll_commands(fifo, pending, plant, camera.get());
+      if (fifo >= 0) poll_commands(fifo, pending, commands);
       write_status(o, plant, m, board, camera.get(), t - start);
     }
   }

@@ -1,7 +1,7 @@
 // A cut pressure-sensor wire while spraying, on the simulated machine, with the most
 // permissive sensor fault limit the configuration accepts: the reading is a sensor fault (never
-// a pressure), the pressure loop switches the pump off, the control loop closes the valves, and
-// the alarm evaluation latches pressure_sensor_fault, a Fault.
+// a pressure), the pressure loop switches the pump off and closes the valves in the same cycle,
+// and the alarm evaluation latches pressure_sensor_fault, a Fault.
 #include <gtest/gtest.h>
 
 #include <cerrno>
@@ -56,6 +56,12 @@ TEST(SensorCut, ACutWireWhileSprayingIsASensorFaultPumpOffValvesClosed) {
       [&] { return backends.describe_outputs().find("valves=0x0 ") == std::string::npos; }, 10s))
       << "no valve ever opened: " << backends.describe_outputs();
 
+  // Cut while a valve is open, so that closing it is the loops' doing.
+  ASSERT_TRUE(run_until(
+      backends,
+      [&] { return backends.describe_outputs().find("valves=0x0 ") == std::string::npos; }, 2s))
+      << backends.describe_outputs();
+  const auto cut_at = backends.clock->now();
   backends.with_plant(
       [](sim::plant::HydraulicPlant& plant) { plant.set_sensor_wire_broken(true); });
   const auto safe = [&] {
@@ -64,6 +70,16 @@ TEST(SensorCut, ACutWireWhileSprayingIsASensorFaultPumpOffValvesClosed) {
            backends.describe_outputs().find("pump=0") != std::string::npos &&
            backends.describe_outputs().find("valves=0x0 ") != std::string::npos;
   };
+  // The reaction inside the real-time loops: the pressure loop sees the fault at its next
+  // sample (one period, 10 ms at the default 100 Hz) and writes the valves safe in that cycle,
+  // by its own clock (not the test thread's polling, which a loaded machine delays).
+  ASSERT_TRUE(run_until(
+      backends, [&] { return sprayer.pressure().valve_holds > 0; }, 300ms))
+      << "the pressure loop never closed the valves: " << backends.describe_outputs();
+  const double reaction_ms =
+      std::chrono::duration<double, std::milli>(sprayer.pressure().valves_held_at - cut_at).count();
+  EXPECT_GT(reaction_ms, 0.0);
+  EXPECT_LE(reaction_ms, 25.0) << "valves closed " << reaction_ms << " ms after the cut";
   EXPECT_TRUE(run_until(backends, safe, 300ms))
       << backends.describe_outputs() << ", reading " << sprayer.pressure().current_ma << " mA";
 

@@ -397,6 +397,7 @@ struct HoldRig {
   control::PwmConfig pwm_config{};
   control::PwmSchedule schedule{pwm_config};
   std::atomic<bool> hold{false};
+  std::atomic<bool> close{false};
   ValvePwmDriver<control::PwmSchedule> driver{clock, bank, schedule, config()};
   nanoseconds last_refresh{-1s};
 
@@ -406,6 +407,7 @@ struct HoldRig {
     c.heartbeat = &heartbeat;
     c.heartbeat_half_period = 10ms;
     c.hold_safe = &hold;
+    c.hold_closed = &close;
     c.max_sleep = 2ms;
     return c;
   }
@@ -450,6 +452,31 @@ TEST(ValvePwmDriver, AHoldClosesTheValvesAndStopsTheHeartbeatUntilReleased) {
   EXPECT_GT(opened_before, 3U) << "the valves were running before the hold";
   EXPECT_GT(opened_after, 3U) << "and run again once it is released";
   EXPECT_GT(beats_after, 20U);
+}
+
+// The pressure loop's hold (a sensor fault): no valve opens while it holds, the heartbeat beats
+// on, and the valves follow their commands again once it is released.
+TEST(ValvePwmDriver, AClosingHoldKeepsTheValvesClosedAndTheHeartbeatBeating) {
+  HoldRig rig;
+  bool valve_open_while_held = false;
+  rig.clock.on_sleep = [&](nanoseconds now) {
+    rig.refresh(now);
+    rig.close = now >= 300ms && now < 700ms;
+    if (now >= 303ms && now < 700ms) valve_open_while_held |= rig.bank.mask() != 0;
+  };
+  rig.clock.stop_at = 1s;
+  rig.driver.run(rig.clock.stop.get_token());
+
+  EXPECT_FALSE(valve_open_while_held);
+  EXPECT_EQ(rig.driver.stats().holds, 1U);
+  EXPECT_EQ(rig.driver.stats().deadman_expiries, 0U);
+  std::size_t beats_while_held = 0, opened_after = 0;
+  for (const auto& w : rig.heartbeat.history())
+    if (w.time > 310ms && w.time < 690ms) ++beats_while_held;
+  for (const auto& w : rig.bank.history())
+    if (w.mask != 0 && w.time > 700ms) ++opened_after;
+  EXPECT_GT(beats_while_held, 20U) << "the relay keeps power: the valves reopen after the fault";
+  EXPECT_GT(opened_after, 3U);
 }
 
 // The hold's setter writes the valves safe itself; a valve write of this thread already on
