@@ -62,7 +62,17 @@ for path in sorted(glob.glob(log_dir + "/as-applied-*.csv")):
     rows += [r for r in csv.DictReader(open(path)) if r.get("latitude_deg")]
 nozzles = sum(1 for k in rows[0] if k.startswith("duty_pct_"))
 width = float(rows[0]["nozzle_width_m"])
-by_utc = {r["utc"]: r for r in rows}
+
+
+def utc_key(text):
+    """A UTC time as integer milliseconds. GDAL's GeoJSON reader takes string fields that look
+    like times for DateTime fields and writes a whole second without its ".000" (ogr2ogr of a
+    GeoJSON export): the same instant, another text."""
+    whole, _, fraction = text.rstrip("Z").partition(".")
+    return (whole, int((fraction + "000")[:3]) if fraction else 0)
+
+
+by_utc = {utc_key(r["utc"]): r for r in rows}
 offsets = [(n - (nozzles - 1) / 2) * width for n in range(nozzles)]
 
 sprayed = json.load(open(sprayed_file))["features"]
@@ -89,7 +99,7 @@ for f in sprayed:
     check(abs(p["rate_l_ha"] - p["volume_l"] / p["area_m2"] * 1e4) < 1e-6 * max(1, p["rate_l_ha"]),
           "rate_l_ha %s vs volume/area" % p["rate_l_ha"])
     check(p["duty_pct"] > 0, "a sprayed stretch with duty 0")
-    row = by_utc.get(p["utc_end"])
+    row = by_utc.get(utc_key(p["utc_end"]))
     check(row is not None, "utc_end %s is no record's utc" % p["utc_end"])
     if row is None:
         continue
