@@ -7,10 +7,18 @@
 #include <cstdlib>
 
 namespace weedspray::daemon {
+namespace {
+bool g_to_journal = false;
+}  // namespace
+
+bool logs_to_journal() noexcept {
+  return g_to_journal;
+}
 
 void setup_logging(const std::string& level) {
   const bool under_systemd =
       std::getenv("JOURNAL_STREAM") != nullptr || std::getenv("INVOCATION_ID") != nullptr;
+  g_to_journal = under_systemd;
   std::shared_ptr<spdlog::logger> logger;
   if (under_systemd) {
     logger = std::make_shared<spdlog::logger>(

@@ -8,5 +8,7 @@ namespace weedspray::daemon {
 
 void setup_logging(const std::string& level);
 void set_log_level(const std::string& level);
+// Whether setup_logging chose the journal (structured entries may then be sent directly).
+bool logs_to_journal() noexcept;
 
 }  // namespace weedspray::daemon

@@ -10,6 +10,7 @@
 #include "daemon/config/options.hpp"
 #include "daemon/config/vision_config.hpp"
 #include "daemon/run.hpp"
+#include "daemon/supervision/alarm_catalog.hpp"
 
 int main(int argc, char** argv) {
   using namespace weedspray::daemon;
@@ -28,6 +29,11 @@ int main(int argc, char** argv) {
   app.add_flag("--dump-config", options.dump_config, "print the effective configuration");
   app.add_flag("--print-default-config", options.print_default_config,
                "print every key, documented, at its default");
+  std::string alarm_catalog_format;
+  app.add_option("--print-alarm-catalog", alarm_catalog_format,
+                 "print what every alarm means and what to do, as the journal's message catalog "
+                 "(journal) or as a Markdown table (markdown)")
+      ->check(CLI::IsMember({"journal", "markdown"}));
   app.add_flag("--sim", options.sim, "simulated hydraulics, pulses and camera");
   app.add_flag("--user", options.user_bus, "use the session bus instead of the system bus");
   app.add_flag("--no-bus", options.no_bus, "run without D-Bus");
@@ -62,6 +68,11 @@ int main(int argc, char** argv) {
   if (options.safe_outputs) return write_safe_outputs(options);
   if (options.print_default_config) {
     std::cout << documented_config();
+    return 0;
+  }
+  if (!alarm_catalog_format.empty()) {
+    std::cout << (alarm_catalog_format == "journal" ? weedspray::daemon::journal_catalog()
+                                                    : weedspray::daemon::alarm_catalog_markdown());
     return 0;
   }
   if (options.check_hardware && !options.check_config) {

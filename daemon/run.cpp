@@ -40,6 +40,8 @@
 #include "daemon/sprayer/calibrations.hpp"
 #include "daemon/sprayer/live_view.hpp"
 #include "daemon/sprayer/sprayer.hpp"
+#include "daemon/supervision/alarm_catalog.hpp"
+#include "daemon/supervision/alarm_log.hpp"
 #include "daemon/supervision/alarms.hpp"
 #include "daemon/supervision/exit_watcher.hpp"
 #include "daemon/supervision/loop_timing.hpp"
@@ -316,7 +318,7 @@ class Daemon final : public CommandHandler {
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
       const auto id = static_cast<AlarmId>(i);
       if (cleared & alarm_bit(id)) {
-        spdlog::info("alarm cleared: {}", alarm_name(id));
+        log_alarm_cleared(id, "sprayctl clear-alarms", logs_to_journal());
         if (dbus_) dbus_->alarm_cleared(std::string(alarm_name(id)).c_str());
       }
     }
@@ -565,6 +567,81 @@ class Daemon final : public CommandHandler {
     return sorted[k];
   }
 
+  // What one occurrence of an alarm measured, for its log entry (the catalog holds what it means
+  // and what to do: daemon/supervision/alarm_catalog.cpp).
+  std::string alarm_detail(AlarmId id, const AlarmInputs& in, const PressureStatus& pressure,
+                           const ControlStatus& control, const std::string& output_failures,
+                           const std::string& vision_failures) const {
+    switch (id) {
+      case AlarmId::kOutputWriteFailed:
+        return output_failures + "; every other output driven safe";
+      case AlarmId::kFlowValvesClosed:
+        return fmt::format(
+            "{:.3f} L/min through the meter with every valve commanded closed for "
+            "{:.1f} s",
+            in.flow_l_per_min, in.valves_closed_s);
+      case AlarmId::kPressureSensorFault:
+        return fmt::format("loop current {:.2f} mA", pressure.current_ma);
+      case AlarmId::kOverPressure:
+        return fmt::format("{:.3f} MPa, trip at {:.3f} MPa", pressure.pressure_mpa,
+                           config_.alarms.over_pressure_mpa);
+      case AlarmId::kEstop: {
+        const EstopStatus estop = sprayer_->estop();
+        return fmt::format(
+            "valves and pump written safe {:.3f} ms after the edge (largest {:.3f} ms), {} safe "
+            "write(s) refused; latched until the circuit is closed and the alarms are cleared",
+            std::chrono::duration<double, std::milli>(estop.last_reaction).count(),
+            std::chrono::duration<double, std::milli>(estop.max_reaction).count(),
+            estop.safe_write_errors);
+      }
+      case AlarmId::kControlOverruns:
+        return fmt::format("{} deadline misses while spraying in the last second; {}",
+                           overruns_last_second_,
+                           timing_report_line(timing_input(pressure, control)));
+      case AlarmId::kGnssFixLost: {
+        // What the control loop uses without a fix (it switched on its own, at the same timeout).
+        GroundSpeedInputs without_fix;
+        without_fix.source = parse_speed_source(config_.speed.source).value_or(SpeedSource::kWheel);
+        without_fix.wheel_wired = backends_.wheel != nullptr;
+        return fmt::format("no usable fix for {} s; gpsd at {}:{} {}; speed from {}",
+                           config_.gnss.lost_fix_timeout_s, config_.gnss.host, config_.gnss.port,
+                           sprayer_->gnss_link().connected ? "connected: the receiver has no fix"
+                                                           : "not reachable",
+                           to_string(select_ground_speed(without_fix).used));
+      }
+      case AlarmId::kNozzleFlowFault: {
+        const int n = control.nozzle_flow_fault;
+        const double ratio = n >= 0 ? control.nozzle_flow_ratio[static_cast<std::size_t>(n)] : 1.0;
+        return fmt::format("nozzle {}: {}, its flow {:.2f} of its baseline", n,
+                           control.nozzle_flow_fault_low ? "blocked" : "over (worn or stuck open)",
+                           ratio);
+      }
+      case AlarmId::kCalibrationDrift: {
+        const double ratio = control.calibration_ratio;
+        const double c = control.flow_trim_correction;
+        const control::FlowTrimConfig trim;
+        return fmt::format(
+            "the line meter has read {:.1f} % {} than the calibrated nozzles promise at the "
+            "commanded duties for {} s; the flow trim at x{:.3f}{}",
+            std::abs(ratio - 1.0) * 100.0, ratio > 1.0 ? "more" : "less",
+            config_.alarms.calibration_drift_hold_s, c,
+            c <= trim.min_correction || c >= trim.max_correction
+                ? " is at its limit: the dose is NOT held"
+                : " corrects the modulated nozzles by the boom's common change");
+      }
+      case AlarmId::kRecordsDiskFull:
+        return fmt::format("log.min_free_mb = {} MB in {}", config_.log.min_free_mb,
+                           log_->dir().string());
+      case AlarmId::kVisionModelFailed:
+        return vision_failures;
+      case AlarmId::kTankLow:
+      case AlarmId::kTankEmpty:
+        return fmt::format("{:.0f} %", in.tank_level_pct);
+      default:
+        return {};
+    }
+  }
+
   void evaluate_alarms(Nanos now, const PressureStatus& pressure, const ControlStatus& control) {
     AlarmInputs in;
     in.now = now;
@@ -638,79 +715,16 @@ class Daemon final : public CommandHandler {
       const auto id = static_cast<AlarmId>(i);
       if (!(alarms_.cleared_by_itself() & alarm_bit(id))) continue;
       const std::string name(alarm_name(id));
-      spdlog::info("alarm cleared: {} (its condition ended)", name);
+      log_alarm_cleared(id, "its condition ended", logs_to_journal());
       if (dbus_) dbus_->alarm_cleared(name.c_str());
     }
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
       const auto id = static_cast<AlarmId>(i);
       if (!(raised & alarm_bit(id))) continue;
       const std::string name(alarm_name(id));
-      if (id == AlarmId::kOutputWriteFailed) {
-        spdlog::error("alarm raised: {} ({}; fault: every other output driven safe)", name,
-                      output_failures);
-      } else if (id == AlarmId::kFlowValvesClosed) {
-        spdlog::error(
-            "alarm raised: {} ({:.3f} L/min through the meter with every valve commanded closed "
-            "for {:.1f} s: a valve leaks, sticks open or its wire does not close it; fault: "
-            "valves closed, pump off)",
-            name, in.flow_l_per_min, in.valves_closed_s);
-      } else if (id == AlarmId::kEstop) {
-        spdlog::error(
-            "alarm raised: {} (the E-stop circuit opened: valves and pump written safe {:.3f} ms "
-            "after the edge (largest {:.3f} ms), {} safe write(s) refused; latched until the "
-            "circuit is closed and the alarms are cleared)",
-            name, std::chrono::duration<double, std::milli>(estop.last_reaction).count(),
-            std::chrono::duration<double, std::milli>(estop.max_reaction).count(),
-            estop.safe_write_errors);
-      } else if (is_fault(id)) {
-        spdlog::error("alarm raised: {} (fault: valves closed, pump off)", name);
-      } else if (id == AlarmId::kControlOverruns) {
-        spdlog::warn("alarm raised: {} ({} deadline misses while spraying in the last second; {})",
-                     name, overruns_last_second_,
-                     timing_report_line(timing_input(pressure, control)));
-      } else if (id == AlarmId::kGnssFixLost) {
-        // What the control loop uses without a fix (it switched on its own, at the same timeout).
-        GroundSpeedInputs without_fix;
-        without_fix.source = parse_speed_source(config_.speed.source).value_or(SpeedSource::kWheel);
-        without_fix.wheel_wired = backends_.wheel != nullptr;
-        spdlog::warn("alarm raised: {} (no usable fix for {} s; gpsd at {}:{} {}; speed from {})",
-                     name, config_.gnss.lost_fix_timeout_s, config_.gnss.host, config_.gnss.port,
-                     sprayer_->gnss_link().connected ? "connected: the receiver has no fix"
-                                                     : "not reachable",
-                     to_string(select_ground_speed(without_fix).used));
-      } else if (id == AlarmId::kNozzleFlowFault) {
-        const int n = control.nozzle_flow_fault;
-        const double ratio = n >= 0 ? control.nozzle_flow_ratio[static_cast<std::size_t>(n)] : 1.0;
-        spdlog::warn("alarm raised: {} (nozzle {}: {}, its flow {:.2f} of its baseline)", name, n,
-                     control.nozzle_flow_fault_low ? "blocked" : "over (worn or valve stuck open)",
-                     ratio);
-      } else if (id == AlarmId::kCalibrationDrift) {
-        const double ratio = control.calibration_ratio;
-        const double c = control.flow_trim_correction;
-        const control::FlowTrimConfig trim;
-        spdlog::warn(
-            "alarm raised: {} (the line meter has read {:.1f} % {} than the calibrated nozzles "
-            "promise at the commanded duties for {} s; the flow trim at x{:.3f}{}; meter K drift, "
-            "worn or blocked nozzles, or never calibrated: run `sprayctl calibrate meter`, then "
-            "`sprayctl calibrate nozzles`)",
-            name, std::abs(ratio - 1.0) * 100.0, ratio > 1.0 ? "more" : "less",
-            config_.alarms.calibration_drift_hold_s, c,
-            c <= trim.min_correction || c >= trim.max_correction
-                ? " is at its limit: the dose is NOT held"
-                : " corrects the modulated nozzles by the boom's common change");
-      } else if (id == AlarmId::kRecordsDiskFull) {
-        spdlog::warn(
-            "alarm raised: {} (as-applied lines not written, or under log.min_free_mb = {} MB "
-            "free in {}; spraying goes on: export and delete old files)",
-            name, config_.log.min_free_mb, log_->dir().string());
-      } else if (id == AlarmId::kVisionModelFailed) {
-        spdlog::error(
-            "alarm raised: {} ({}; that camera's nozzles stay closed until its frames "
-            "process again)",
-            name, vision_failures);
-      } else {
-        spdlog::warn("alarm raised: {}", name);
-      }
+      log_alarm_raised(id,
+                       alarm_detail(id, in, pressure, control, output_failures, vision_failures),
+                       logs_to_journal());
       if (dbus_) dbus_->alarm_raised(name.c_str());
     }
     if (alarms_.fault_latched() && state_.state() != SprayerState::kFault) {
@@ -967,7 +981,11 @@ class Daemon final : public CommandHandler {
     s.zone_density.assign(control.density.begin(), control.density.begin() + control.nozzles);
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
       const auto id = static_cast<AlarmId>(i);
-      if (alarms_.active() & alarm_bit(id)) s.alarms.emplace_back(alarm_name(id));
+      if (!(alarms_.active() & alarm_bit(id))) continue;
+      s.alarms.emplace_back(alarm_name(id));
+      s.alarm_details.push_back({std::string(alarm_name(id)), std::string(alarm_severity(id)),
+                                 (alarms_.present() & alarm_bit(id)) != 0,
+                                 std::string(alarm_catalog_entry(id).remedy)});
     }
     const Totals totals = current_totals();
     s.volume_sprayed_l = totals.volume_l;

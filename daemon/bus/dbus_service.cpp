@@ -53,6 +53,7 @@ std::vector<const char*> changed_properties(const Status& a, const Status& b) {
   check(a.nozzle_duty_pct != b.nozzle_duty_pct, "NozzleDuty");
   check(a.zone_density != b.zone_density, "ZoneDensity");
   check(a.alarms != b.alarms, "Alarms");
+  check(a.alarm_details != b.alarm_details, "AlarmDetails");
   check(a.volume_sprayed_l != b.volume_sprayed_l, "VolumeSprayed");
   check(a.area_covered_m2 != b.area_covered_m2, "AreaCovered");
   check(a.savings_pct != b.savings_pct, "SavingsPercent");
@@ -111,6 +112,7 @@ const sd_bus_vtable kVtable[] = {
     WS_PROPERTY("NozzleDuty", "ad"),
     WS_PROPERTY("ZoneDensity", "ad"),
     WS_PROPERTY("Alarms", "as"),
+    WS_PROPERTY("AlarmDetails", "a(ssbs)"),
     WS_PROPERTY("VolumeSprayed", "d"),
     WS_PROPERTY("AreaCovered", "d"),
     WS_PROPERTY("SavingsPercent", "d"),
@@ -235,6 +237,16 @@ int DbusService::get_property(sd_bus*, const char*, const char*, const char* pro
                                  s.estop_latched ? 1 : 0, s.estop_reaction_ms);
   if (p == "ZoneDensity") return append_doubles(reply, s.zone_density);
   if (p == "Alarms") return append_strings(reply, s.alarms);
+  if (p == "AlarmDetails") {
+    int r = sd_bus_message_open_container(reply, 'a', "(ssbs)");
+    for (const auto& alarm : s.alarm_details) {
+      if (r >= 0) {
+        r = sd_bus_message_append(reply, "(ssbs)", alarm.name.c_str(), alarm.severity.c_str(),
+                                  alarm.present ? 1 : 0, alarm.remedy.c_str());
+      }
+    }
+    return r < 0 ? r : sd_bus_message_close_container(reply);
+  }
   if (p == "VolumeSprayed") return sd_bus_message_append(reply, "d", s.volume_sprayed_l);
   if (p == "AreaCovered") return sd_bus_message_append(reply, "d", s.area_covered_m2);
   if (p == "SavingsPercent") return sd_bus_message_append(reply, "d", s.savings_pct);

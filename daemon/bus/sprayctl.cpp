@@ -219,6 +219,20 @@ Value read_variant(sd_bus_message* m) {
     check(sd_bus_message_read(m, "(sddd)", &source, &in_use, &configured, &error_pct),
           "read (sddd)");
     value = meter_text(source, in_use, configured, error_pct);
+  } else if (sig == "a(ssbs)") {  // AlarmDetails: name, severity, present, remedy
+    check(sd_bus_message_enter_container(m, 'a', "(ssbs)"), "enter a(ssbs)");
+    std::vector<std::string> lines;
+    const char* name = nullptr;
+    const char* severity = nullptr;
+    const char* remedy = nullptr;
+    int present = 0;
+    while (sd_bus_message_read(m, "(ssbs)", &name, &severity, &present, &remedy) > 0) {
+      lines.push_back(std::string(name) + " (" + severity + ", " +
+                      (present ? "condition present" : "condition gone: clear-alarms") +
+                      "): " + remedy);
+    }
+    check(sd_bus_message_exit_container(m), "exit a(ssbs)");
+    value = lines;
   } else if (sig == "a(sddd)") {  // NozzleCalibration: each nozzle's line in use
     check(sd_bus_message_enter_container(m, 'a', "(sddd)"), "enter a(sddd)");
     std::vector<std::string> lines;
@@ -545,6 +559,12 @@ void print_status(const Properties& p, bool json) {
             << "Calibration:   " << get("Calibration") << "\n"
             << "Flow meter:    " << get("MeterCalibration") << "\n"
             << "Alarms:        " << get("Alarms") << "\n";
+  // Each latched alarm: its severity, whether its condition still holds, and what to do.
+  const auto details = p.find("AlarmDetails");
+  const auto* lines =
+      details == p.end() ? nullptr : std::get_if<std::vector<std::string>>(&details->second);
+  if (lines != nullptr)
+    for (const auto& line : *lines) std::cout << "  - " << line << "\n";
 }
 
 // Starts a calibration and follows it until done, printing each change of state.

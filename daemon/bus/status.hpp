@@ -11,6 +11,15 @@
 
 namespace weedspray::daemon {
 
+// One latched alarm as the operator sees it (daemon/supervision/alarm_catalog.hpp).
+struct AlarmDetail {
+  std::string name;
+  std::string severity;  // fault | warning
+  bool present = false;  // its condition still holds (false: it only waits to be cleared)
+  std::string remedy;
+  bool operator==(const AlarmDetail&) const = default;
+};
+
 struct Status {
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   std::string state = "Starting";
@@ -22,7 +31,8 @@ struct Status {
   double distance_m = 0;
   std::vector<double> nozzle_duty_pct;
   std::vector<double> zone_density;
-  std::vector<std::string> alarms;  // latched alarm names
+  std::vector<std::string> alarms;         // latched alarm names
+  std::vector<AlarmDetail> alarm_details;  // the same alarms, with severity and remedy
   double volume_sprayed_l = 0;
   double area_covered_m2 = 0;
   double savings_pct = 0;  // liquid saved against uniform spraying at the nominal dose

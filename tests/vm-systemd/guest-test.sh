@@ -281,7 +281,7 @@ echo "    ---- end of journal ----"
 # Error lines, except the one the hardware makes honestly: iio_dummy's ADC reads a fixed
 # 73 x 0.001333 mV, far below a 4 mA loop, so a pressure sensor fault is raised (pump off,
 # valves closed). Anything else at priority err or worse fails.
-expected_errors=('^alarm raised: pressure_sensor_fault \(fault: valves closed, pump off\)$')
+expected_errors=('^alarm raised: pressure_sensor_fault \(fault: valves closed, pump off; loop current [0-9.]+ mA\)$')
 # The guest runs under TCG (aarch64: 3-5x slower again than x86): the loops miss their periods
 # by up to 0.5 s on arm64, and by tens of ms on x86 when the host is busy, and the cross-watch
 # then reports the valve thread stalled (and makes the outputs safe, as it must). The host says
@@ -295,5 +295,11 @@ errors="$(journalctl -u weedsprayd -b --no-pager -q -p err -o cat |
 check journal_no_errors "$([ -z "$errors" ]; echo $?)" \
   "priority err lines besides the sensor-fault alarm: ${errors:-none}"
 info "journal err lines (all): $(journalctl -u weedsprayd -b --no-pager -q -p err -o cat | tr '\n' '|')"
+# That alarm's entry carries its catalog MESSAGE_ID, and the package's catalog is indexed (the
+# systemd package's trigger ran journalctl --update-catalog), so journalctl -x explains it.
+sensor_id=6f28571a2c6746e198c507f3265366f3
+catalogued="$(journalctl -u weedsprayd -b --no-pager -q -x MESSAGE_ID="$sensor_id" -o short | grep -c 'What to do: Check the sensor' || true)"
+check alarm_catalog_in_journal "$([ "${catalogued:-0}" -ge 1 ]; echo $?)" \
+  "journalctl -x entries of pressure_sensor_fault with the catalog's remedy: $catalogued; catalog: $(journalctl --list-catalog 2>/dev/null | grep -c 'weedspray: alarm') weedspray entries"
 
 finish

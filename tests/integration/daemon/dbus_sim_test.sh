@@ -201,7 +201,19 @@ if "$SPRAYCTL" --user start 2>/dev/null; then fail "Start accepted in Fault"; fi
 sleep 0.5
 kill "$MONITOR_PID"
 grep -q "^alarm-raised: pressure_sensor_fault" "$T/monitor.txt" || fail "no AlarmRaised signal"
-grep -q "alarm raised: pressure_sensor_fault" "$T/daemon.log" || fail "alarm not logged"
+grep -q "alarm raised: pressure_sensor_fault (fault: valves closed, pump off; loop current .* - what to do: Check the sensor's wiring" "$T/daemon.log" ||
+  fail "alarm not logged with its detail and remedy: $(grep 'alarm raised' "$T/daemon.log")"
+# The catalog's severity, the condition (the wire stays cut) and the remedy, over the bus and on
+# the first screen.
+details="$(busctl --user get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
+  org.weedspray.Sprayer1 AlarmDetails)"
+case "$details" in
+  'a(ssbs) 1 "pressure_sensor_fault" "fault" true "Check the sensor'*) ;;
+  *) fail "AlarmDetails: $details" ;;
+esac
+"$SPRAYCTL" --user status >"$T/status.txt"
+grep -q "^  - pressure_sensor_fault (fault, condition present): Check the sensor's wiring" \
+  "$T/status.txt" || fail "sprayctl status without the alarm's remedy: $(cat "$T/status.txt")"
 kill -TERM "$DAEMON_PID"
 rc=0
 wait "$DAEMON_PID" || rc=$?

@@ -49,7 +49,7 @@ estop=$(prop Estop)
 read -r closed latched ms <<<"$estop"
 [ "$closed $latched" = "false true" ] || fail "Estop after the opening: $estop"
 awk -v ms="$ms" 'BEGIN { exit !(ms > 0 && ms <= 10) }' || fail "reaction $ms ms"
-grep -q "alarm raised: estop (the E-stop circuit opened: valves and pump written safe [0-9.]* ms" \
+grep -q "alarm raised: estop (fault: valves closed, pump off; valves and pump written safe [0-9.]* ms" \
   "$T/daemon.log" || fail "alarm not logged"
 echo "estop_safe_ms=$ms"
 sleep 1

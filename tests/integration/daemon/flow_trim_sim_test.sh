@@ -79,7 +79,7 @@ done
 has_drift || fail "no calibration_drift 90 s after the meter drifted: $(tail -n 5 "$T/trim.txt")"
 ratio=$(prop MeteredOverCalibrated)
 $PY -c 'import sys; sys.exit(not float(sys.argv[1]) > 1.05)' "$ratio" || fail "MeteredOverCalibrated $ratio: $(cat "$T/trim.txt")"
-grep -q "alarm raised: calibration_drift (the line meter has read [0-9.]* % more than the calibrated nozzles promise at the commanded duties for 5 s; the flow trim at x[0-9.]* .*sprayctl calibrate meter.*sprayctl calibrate nozzles" "$T/daemon.log" ||
+grep -q "alarm raised: calibration_drift (warning; the line meter has read [0-9.]* % more than the calibrated nozzles promise at the commanded duties for 5 s; the flow trim at x[0-9.]* .*sprayctl calibrate meter.*sprayctl calibrate nozzles" "$T/daemon.log" ||
   fail "the journal line: $(grep calibration_drift "$T/daemon.log")"
 [ "$(prop State)" = '"Spraying"' ] || fail "State $(prop State) after calibration_drift (a warning)"
 "$SPRAYCTL" --user status | grep -Eq "^Flow trim: *x[0-9.]+ on the nozzles' flows \((following the meter|held)\); meter / calibrated nozzles 1\.[0-9]+" ||

@@ -104,7 +104,7 @@ stop_gpsfake
 wait_for 5 '"gnss_fix_lost" in j["Alarms"] and j["GnssFix"] == "none" and
   j["SpeedSource"] == "wheel (gnss fix lost)" and abs(j["Speed"] - 1.0) < 0.1' ||
   fail "no fallback after gpsd stopped: $(status_json)"
-grep -q "alarm raised: gnss_fix_lost (no usable fix for 2 s; gpsd at 127.0.0.1:$PORT not reachable; speed from wheel)" \
+grep -q "alarm raised: gnss_fix_lost (warning; no usable fix for 2 s; gpsd at 127.0.0.1:$PORT not reachable; speed from wheel)" \
   "$T/daemon.log" || fail "the alarm's log line"
 echo "ok: gnss_fix_lost, speed from the wheel"
 

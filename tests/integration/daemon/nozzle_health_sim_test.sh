@@ -66,7 +66,7 @@ for _ in $(seq 1 100); do
 done
 named=$(date +%s.%N)
 prop Alarms | grep -q nozzle_flow_fault || fail "no nozzle_flow_fault 10 s after the blockage: $(prop NozzleHealth)"
-grep -q "alarm raised: nozzle_flow_fault (nozzle 2: blocked" "$T/daemon.log" ||
+grep -q "alarm raised: nozzle_flow_fault (warning; nozzle 2: blocked" "$T/daemon.log" ||
   fail "the alarm does not name nozzle 2: $(grep nozzle_flow_fault "$T/daemon.log")"
 # With judge = "cusum" the alarm usually comes before the shown ratio (6 s forgetting) has moved
 # all the way: that ratio must follow within 10 s more (with "band" it already has).

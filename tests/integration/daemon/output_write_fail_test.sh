@@ -39,7 +39,7 @@ run() {  # run NAME SECONDS FAULT... -> exit status in $T/NAME.rc
 }
 
 run pump 6 pump_write_fail@2 sensor_open@3 pump_write_ok@4.5
-grep -q "alarm raised: output_write_failed (pump relay (simulated pump relay): [0-9]* failed write" \
+grep -q "alarm raised: output_write_failed (fault: valves closed, pump off; pump relay (simulated pump relay): [0-9]* failed write" \
   "$T/pump.log" || fail "pump: no output_write_failed naming the pump relay"
 grep -q "alarm raised: pressure_sensor_fault" "$T/pump.log" || fail "pump: the sensor fault itself"
 [ "$(cat "$T/pump.rc")" = 0 ] || fail "pump: exit status $(cat "$T/pump.rc") once the relay works"
@@ -47,7 +47,7 @@ grep -q "alarm raised: pressure_sensor_fault" "$T/pump.log" || fail "pump: the s
 echo "ok: refused pump write named, retried until the pump is off"
 
 run valves 5 valve_write_fail@3
-grep -q "alarm raised: output_write_failed (valves (simulated valve bank): [0-9]* failed write" \
+grep -q "alarm raised: output_write_failed (fault: valves closed, pump off; valves (simulated valve bank): [0-9]* failed write" \
   "$T/valves.log" || fail "valves: no output_write_failed naming the valve bank"
 grep -q "output NOT safe: valves (simulated valve bank): safe value not written: Input/output error" \
   "$T/valves.log" || fail "valves: the unsafe output is not named at exit"
@@ -66,7 +66,7 @@ grep -q "return valve DAC: 2 failed write(s) superseded by the next" "$T/dac_twi
 echo "ok: two missed DAC answers in a row, twice: logged, tolerated, no output alarm, no Fault"
 
 run dac_dead 6 return_valve_write_fail@2 return_valve_write_ok@4
-grep -q "alarm raised: output_write_failed (return valve DAC: [0-9]* failed write" \
+grep -q "alarm raised: output_write_failed (fault: valves closed, pump off; return valve DAC: [0-9]* failed write" \
   "$T/dac_dead.log" || fail "dac_dead: no output_write_failed naming the return valve"
 grep -q "pump=0" "$T/dac_dead.valves" || fail "dac_dead: pump not off: $(cat "$T/dac_dead.valves")"
 echo "ok: a DAC that stops answering raises output_write_failed; Fault switched the pump off"

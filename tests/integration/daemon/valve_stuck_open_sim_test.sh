@@ -49,7 +49,7 @@ awk -v p="$p" 'BEGIN { exit !(p > 0.2) }' || fail "healthy: pump not holding pre
 echo "ok: spraying with every valve closed at $p MPa, no Fault"
 
 run stuck 10 valve1_stuck_open@3
-grep -q "alarm raised: flow_with_valves_closed ([0-9.]* L/min through the meter with every valve commanded closed" \
+grep -q "alarm raised: flow_with_valves_closed (fault: valves closed, pump off; [0-9.]* L/min through the meter with every valve commanded closed" \
   "$T/stuck.log" || fail "stuck: no flow_with_valves_closed"
 grep -q "state Spraying -> Fault (alarm)" "$T/stuck.log" || fail "stuck: no Fault"
 p=$(last_pressure "$T/stuck.log")

@@ -1,6 +1,10 @@
 #include <gtest/gtest.h>
 
+#include "daemon/supervision/alarm_catalog.hpp"
 #include "daemon/supervision/alarms.hpp"
+
+#include <set>
+#include <string>
 
 namespace weedspray::daemon {
 namespace {
@@ -322,6 +326,27 @@ TEST(Alarms, NamesRoundTrip) {
     EXPECT_EQ(parse_alarm(alarm_name(id)), id);
   }
   EXPECT_FALSE(parse_alarm("nope"));
+}
+
+// Every alarm has its own journal MESSAGE_ID (32 lower-case hex digits, as sd-id128 writes
+// them), a meaning and a remedy; its severity follows is_fault.
+TEST(AlarmCatalog, EveryAlarmHasItsOwnIdAMeaningAndARemedy) {
+  std::set<std::string_view> ids;
+  for (std::size_t i = 0; i < kAlarmCount; ++i) {
+    const auto id = static_cast<AlarmId>(i);
+    const AlarmCatalogEntry& e = alarm_catalog_entry(id);
+    EXPECT_EQ(e.message_id.size(), 32U) << alarm_name(id);
+    EXPECT_EQ(e.message_id.find_first_not_of("0123456789abcdef"), std::string_view::npos)
+        << alarm_name(id);
+    EXPECT_TRUE(ids.insert(e.message_id).second) << alarm_name(id) << " shares its id";
+    EXPECT_GT(e.meaning.size(), 20U) << alarm_name(id);
+    EXPECT_GT(e.remedy.size(), 10U) << alarm_name(id);
+    EXPECT_EQ(alarm_severity(id), is_fault(id) ? "fault" : "warning");
+  }
+  const std::string catalog = journal_catalog();
+  EXPECT_NE(catalog.find("-- 6f28571a2c6746e198c507f3265366f3\nSubject: alarm "
+                         "pressure_sensor_fault (fault)\n"),
+            std::string::npos);
 }
 
 }  // namespace
