@@ -327,7 +327,7 @@ hil_targets_met() {
     -v fc="$(hil_figure flow_pulses_counted)" -v k9="$(hil_figure kill9_unsafe_ms)" \
     -v ab="$(hil_figure abort_unsafe_ms)" -v sg="$(hil_figure segv_unsafe_ms)" \
     -v wd="$(hil_figure watchdog_unsafe_ms)" -v rs="$(hil_figure restart_s)" \
-    -v es="$(hil_figure estop_safe_ms)" -v sc="$(hil_figure sensor_cut_safe_ms)" \
+    -v es="$(hil_figure estop_safe_ms)" -v sc="$(hil_figure sensor_cut_safe_ms)" -v scl="$(hil_figure sensor_cut_limit_ms)" \
     -v failed="$(hil_figure steps_failed)" -v passed="$(hil_figure steps_passed)" \
     -v camera="$(hil_figure camera)" -v frames="$hil_frames_made" \
     -v steps="$(grep -ac '^WEEDSPRAY-HIL-STEP camera_follows_image PASS' "$guest_log")" '
@@ -340,7 +340,7 @@ hil_targets_met() {
       if (fs == "" || fs <= 0 || abs(fs - fc) > 0.005 * fs) bad("flow pulses sent " fs " counted " fc)
       unsafe("kill9_unsafe_ms", k9, 100); unsafe("abort_unsafe_ms", ab, 10)
       unsafe("segv_unsafe_ms", sg, 10); unsafe("watchdog_unsafe_ms", wd, 100)
-      unsafe("estop_safe_ms", es, 10); unsafe("sensor_cut_safe_ms", sc, 20)
+      unsafe("estop_safe_ms", es, 10); unsafe("sensor_cut_safe_ms", sc, scl == "" ? 0 : scl)
       if (rs == "") bad("no restart_s")
       # Field images made: the guest must have shown them and judged the daemon on them.
       if (frames == 1 && (camera != "loopback" || steps != 1)) bad("camera " camera ", camera_follows_image passed " steps " times")
