@@ -94,12 +94,12 @@ Scores segment_held_out_ground(const std::string& config_text) {
   return scores;
 }
 
-// The shipped model's own figures on these photos at their scale: MIoU 0.75, crop IoU 0.84
+// The fine shipped model's own figures on these photos at their scale: MIoU 0.75, crop IoU 0.84
 // (models/weed-peanut.json). The daemon's pipeline at the default camera keeps most of that;
-// the same frames squeezed into the model's fixed input (the daemon before it knew ground
-// scales) call the crop weed.
+// the same frames squeezed into the model's fixed input (a daemon that ignores ground scales)
+// call the crop weed.
 TEST(GroundScale, TheShippedModelAtTheDefaultCameraKeepsItsHeldOutFigures) {
-  const std::string dnn = "[vision]\nweed_source = \"dnn\"\n";
+  const std::string dnn = "[vision]\nweed_source = \"dnn\"\nmodel = \"weed-peanut.onnx\"\n";
   const Scores scaled = segment_held_out_ground(dnn);
   EXPECT_GE(scaled.iou[1], 0.7) << "crop IoU";
   EXPECT_GE(scaled.miou, 0.65);
@@ -112,11 +112,11 @@ TEST(GroundScale, TheShippedModelAtTheDefaultCameraKeepsItsHeldOutFigures) {
             << "; squeezed: MIoU " << squeezed.miou << ", crop " << squeezed.iou[1] << "\n";
 }
 
-// The shipped 4 mm/px model with the plants source at the default camera: about 13 ms of
-// network per frame instead of 200, the small weeds from colour (docs/vision.md).
+// The default model (the shipped 4 mm/px one) with the plants source at the default camera:
+// about 13 ms of network per frame instead of 200, the small weeds from colour
+// (docs/vision.md).
 TEST(GroundScale, TheFourMillimetreModelWithPlantsAtTheDefaultCameraTellsCropFromWeed) {
-  const Scores plants = segment_held_out_ground(
-      "[vision]\nweed_source = \"plants\"\nmodel = \"weed-peanut-4mm.onnx\"\n");
+  const Scores plants = segment_held_out_ground("[vision]\nweed_source = \"plants\"\n");
   EXPECT_GE(plants.iou[1], 0.7) << "crop IoU";
   EXPECT_GE(plants.iou[2], 0.35) << "weed IoU";
   EXPECT_GE(plants.miou, 0.7);
