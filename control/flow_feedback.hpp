@@ -5,8 +5,8 @@
 // - FlowTrim, fast (10 s): correction = 1 / ratio, bounded, applied to the PWM-modulated
 //   nozzles' flows (trimmed_duty_pct); closed and held-open valves cannot be trimmed.
 // - CalibrationRatio itself, slow (60 s): the daemon's calibration_drift warning.
-// Why a ratio, and not the integrator that drove the metered total to the requested total (the
-// trim until stop 29): the meter sees only the boom's sum, so the trim can correct only what
+// Why a ratio, and not an integrator that drives the metered total to the requested total:
+// the meter sees only the boom's sum, so the trim can correct only what
 // every nozzle shares (a meter or fluid change, the pump, common wear). The integrator also put
 // the error of the nozzles it cannot move (held open, clamped at the law's minimum duty) on the
 // modulated ones, amplified by total / modulated share: with three worn nozzles held open, the

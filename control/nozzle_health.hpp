@@ -1,4 +1,4 @@
-// Per-nozzle health from the ONE line flow meter while spraying (issue 12).
+// Per-nozzle health from the ONE line flow meter while spraying.
 //
 // With staggered PWM phases the nozzles are open in different parts of each period, so the
 // meter's volume per phase window is a different mix of nozzles in each window:

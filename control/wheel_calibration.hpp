@@ -1,4 +1,4 @@
-// Wheel-sensor calibration from GNSS over a straight run (issue #14): drive straight at a
+// Wheel-sensor calibration from GNSS over a straight run: drive straight at a
 // steady speed; the receiver measures the distance, the wheel sensor counts its pulses, and
 // pulses / distance is the wheel's pulses_per_metre as it rolls on this soil (slip included).
 // The distance is the straight line between the run's first and last fixes: on a straight run

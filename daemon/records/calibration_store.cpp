@@ -32,7 +32,7 @@ StoredCalibration load_calibration(const std::filesystem::path& file, std::strin
         fit.line.slope_l_per_min_per_pct = (*n)["slope_l_per_min_per_pct"].value_or(0.0);
         fit.line.intercept_l_per_min = (*n)["intercept_l_per_min"].value_or(0.0);
         fit.line.calibration_pressure_mpa = (*n)["pressure_mpa"].value_or(0.0);
-        // Absent in files from before stop 27 (and when not measured): unknown.
+        // Absent in older files (and when not measured): unknown.
         const double full_open = (*n)["full_open_flow_l_per_min"].value_or(0.0);
         fit.line.full_open_flow_l_per_min =
             std::isfinite(full_open) && full_open > 0 ? full_open : 0.0;

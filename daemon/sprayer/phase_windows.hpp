@@ -1,5 +1,5 @@
 // Cuts the valves' real open times and the line meter's pulses into PWM phase windows for
-// control::NozzleHealth (issue 12), one control cycle at a time.
+// control::NozzleHealth, one control cycle at a time.
 //
 // A window is period / nozzles long, aligned to the valve schedule's start, so with staggered
 // phases each window holds a different mix of open nozzles. The open times come from the valve

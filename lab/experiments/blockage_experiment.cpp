@@ -1,4 +1,4 @@
-// A nozzle blocked while spraying, found from the line flow meter (issue 12).
+// A nozzle blocked while spraying, found from the line flow meter.
 #include <algorithm>
 #include <cmath>
 #include <random>

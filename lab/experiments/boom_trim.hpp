@@ -1,8 +1,8 @@
-// Boom trim as a model: the line flow meter against what the calibrated lines promise (issue
-// 12, stop 23). LAB ONLY (`weedspray-lab experiment orthogonal --plants N`, row "model"): the
-// daemon's FlowTrim (flow_feedback.hpp) is the gain term of this model alone, 1 / (metered over
-// promised), since stop 30. Both leave a held-open nozzle's own error where it is, where the
-// integral law of before put it on the modulated ones. With the valve-timing term this model is
+// Boom trim as a model: the line flow meter against what the calibrated lines promise. LAB ONLY
+// (`weedspray-lab experiment orthogonal --plants N`, row "model"): the daemon's FlowTrim
+// (flow_feedback.hpp) is the gain term of this model alone, 1 / (metered over promised). Both
+// leave a held-open nozzle's own error where it is, where an
+// integral law puts it on the modulated ones. With the valve-timing term this model is
 // better on the changed machine's worst max (7.80 against 9.25 %), but on a sparse variable-rate
 // field (`experiment savings --plants 20`) it under-doses: 20.8 % of nozzle-zones below target
 // against 9.1-9.6 % with the daemon's trims. Valves switching all the time bias the meter's
@@ -25,7 +25,7 @@
 // off-pulse is shorter than the valve's closing delay).
 //
 // Why not one trim per nozzle, from the staggered phase windows the health detector reads:
-// tried (issue 12, stop 23, probes on the lab's machines, not commands). The meter sits at the
+// tried (probes on the lab's machines, not commands). The meter sits at the
 // manifold behind the feed hose's inertance and the boom's compliance, and the valves move
 // 15-40 ms after their command, so which window a pulse's volume lands in depends on timing the
 // controller does not know: on seed 1's first machine as made, the per-nozzle gains came out

@@ -1,4 +1,4 @@
-// What the ONE line flow meter tells about each nozzle's flow in one fixed-duty run (issue 12):
+// What the ONE line flow meter tells about each nozzle's flow in one fixed-duty run:
 // a lab diagnostic, not a controller.
 //
 // With staggered PWM phases each phase window's metered volume is a different mix of nozzles

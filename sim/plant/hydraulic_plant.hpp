@@ -10,8 +10,8 @@
 // only advances in step(). Not thread-safe: a caller sharing it between threads wraps it.
 //
 // Two sets of defaults: PlantParams{} is the ideal bench the papers' single-seed experiments
-// ran on (one pressure node, smooth pump, linear meter, constant valves); every effect added for
-// issue 12 defaults to "off" there so those figures stay reproducible. realistic_plant_params()
+// ran on (one pressure node, smooth pump, linear meter, constant valves); every realism effect
+// defaults to "off" there so those figures stay reproducible. realistic_plant_params()
 // turns them all on at documented values; the --plants experiments draw machines around it
 // (lab/experiments/machines.hpp). Each realistic value names its source, or says
 // "invented" with the range the machine draws sweep.

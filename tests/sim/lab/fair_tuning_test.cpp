@@ -1,4 +1,4 @@
-// The fair tuning of issue 12: one search for both controllers, the fuzzy corrections earning
+// The fair tuning: one search for both controllers, the fuzzy corrections earning
 // their place, and the daemon's default controller being the one that wins on machines the
 // search never saw.
 #include "lab/experiments/fair_tuning.hpp"

@@ -1,4 +1,4 @@
-// Experiments over drawn machines (issue 12): machine draws, the online flow trim after a
+// Experiments over drawn machines: machine draws, the online flow trim after a
 // change, staggered PWM with a pulsing pump, and the fairly tuned controllers on machines they
 // were not tuned on. Each test would fail with the fix it covers switched off (trim disabled,
 // stagger off, fuzzy corrections zeroed).

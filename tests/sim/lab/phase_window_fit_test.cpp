@@ -1,4 +1,4 @@
-// PhaseWindowFit (issue 12's lab diagnostic): each nozzle's metered / promised ratio from the
+// PhaseWindowFit (a lab diagnostic): each nozzle's metered / promised ratio from the
 // phase windows of one line meter, and the rig feeding it.
 #include "lab/experiments/phase_window_fit.hpp"
 

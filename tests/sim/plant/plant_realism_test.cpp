@@ -1,4 +1,4 @@
-// The realism effects of the hydraulic plant (issue 12), each against the law it documents.
+// The realism effects of the hydraulic plant, each against the law it documents.
 #include <gtest/gtest.h>
 
 #include <algorithm>
