@@ -1,11 +1,12 @@
 #include "vision/overlay.hpp"
 
+#include <png.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "vision/weed_source.hpp"
@@ -116,12 +117,27 @@ BgrImage draw_overlay(const ImageView& frame, const ImageView& classes, const Pi
   return out;
 }
 
+// libpng's simplified API: no setjmp error handling in C++ code, and the fast filter and
+// compression settings a live view wants (PNG_IMAGE_FLAG_FAST).
 std::vector<std::uint8_t> encode_png(const BgrImage& image) {
-  std::vector<std::uint8_t> png;
-  const cv::Mat mat(image.height, image.width, CV_8UC3,
-                    const_cast<std::uint8_t*>(image.pixels.data()));  // read only
-  if (!cv::imencode(".png", mat, png, {cv::IMWRITE_PNG_COMPRESSION, 1}))
-    throw std::runtime_error("PNG encoding failed");
+  png_image description{};
+  description.version = PNG_IMAGE_VERSION;
+  description.width = static_cast<png_uint_32>(image.width);
+  description.height = static_cast<png_uint_32>(image.height);
+  description.format = PNG_FORMAT_BGR;
+  description.flags = PNG_IMAGE_FLAG_FAST;
+  const auto stride = static_cast<png_int_32>(image.width * 3);
+  png_alloc_size_t size = 0;
+  if (image.width < 1 || image.height < 1 ||
+      image.pixels.size() < static_cast<std::size_t>(image.width) * image.height * 3 ||
+      png_image_write_to_memory(&description, nullptr, &size, 0, image.pixels.data(), stride,
+                                nullptr) == 0)
+    throw std::runtime_error(std::string("PNG encoding failed: ") + description.message);
+  std::vector<std::uint8_t> png(size);
+  if (png_image_write_to_memory(&description, png.data(), &size, 0, image.pixels.data(), stride,
+                                nullptr) == 0)
+    throw std::runtime_error(std::string("PNG encoding failed: ") + description.message);
+  png.resize(size);
   return png;
 }
 

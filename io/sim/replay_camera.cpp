@@ -1,46 +1,21 @@
 #include "io/sim/replay_camera.hpp"
 
 #include "io/sim/ground_mosaic.hpp"
+#include "io/sim/image_file.hpp"
 
 #include <algorithm>
 #include <atomic>
-#include <cctype>
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/videoio.hpp>
 
 namespace weedspray::io::sim {
 
 namespace fs = std::filesystem;
 using std::chrono::nanoseconds;
 
-namespace {
-
-std::string lower_extension(const fs::path& p) {
-  std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext;
-}
-
-bool is_image(const fs::path& p) {
-  const std::string ext = lower_extension(p);
-  return ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp";
-}
-
-bool is_video(const fs::path& p) {
-  const std::string ext = lower_extension(p);
-  return ext == ".mp4" || ext == ".avi" || ext == ".mkv" || ext == ".mov";
-}
-
-}  // namespace
-
 struct ReplayCamera::Impl {
   ReplayCameraConfig config;
   Clock& clock;
   std::vector<fs::path> images;
-  cv::VideoCapture video;
-  bool use_video = false;
   bool started = false;
   std::size_t next_index = 0;
   cv::Mat current;
@@ -70,27 +45,16 @@ struct ReplayCamera::Impl {
 
   // Loads the next frame into `current`. Returns kOk, kEnd or kError.
   FrameStatus load_next() {
-    if (use_video) {
-      if (!video.read(current) || current.empty()) {
-        if (!config.loop) return FrameStatus::kEnd;
-        video.set(cv::CAP_PROP_POS_FRAMES, 0);
-        if (!video.read(current) || current.empty()) {
-          error = "replay camera: cannot read a frame from " + config.source;
-          return FrameStatus::kError;
-        }
-      }
-      current_name = config.source;
-      return FrameStatus::kOk;
-    }
     if (next_index >= images.size()) {
       if (!config.loop) return FrameStatus::kEnd;
       next_index = 0;
     }
     if (config.source_mm_per_px > 0.0) return lay_next_ground();
     const fs::path& path = images[next_index++];
-    current = cv::imread(path.string(), cv::IMREAD_COLOR);
+    std::string failed;
+    current = read_bgr_image(path, failed);
     if (current.empty()) {
-      error = "replay camera: cannot decode image " + path.string();
+      error = "replay camera: cannot decode image " + failed;
       return FrameStatus::kError;
     }
     current_name = path.filename().string();
@@ -105,8 +69,9 @@ struct ReplayCamera::Impl {
     current = lay_ground(scale, [&]() {
       if (next_index >= images.size()) next_index = 0;
       const fs::path& path = images[next_index++];
-      cv::Mat photo = cv::imread(path.string(), cv::IMREAD_COLOR);
-      if (photo.empty() && failed.empty()) failed = path.string();
+      std::string why;
+      cv::Mat photo = read_bgr_image(path, why);
+      if (photo.empty() && failed.empty()) failed = why;
       current_name = path.filename().string();
       return photo.empty() ? cv::Mat(1, 1, CV_8UC3, cv::Scalar::all(0)) : photo;
     });
@@ -126,7 +91,6 @@ ReplayCamera::~ReplayCamera() = default;
 bool ReplayCamera::start() {
   Impl& m = *impl_;
   m.images.clear();
-  m.use_video = false;
   m.error.clear();
   if (m.config.source_mm_per_px > 0.0 && (!(m.config.frame_mm_per_px > 0.0) ||
                                           m.config.frame_width < 1 || m.config.frame_height < 1)) {
@@ -144,24 +108,19 @@ bool ReplayCamera::start() {
   std::error_code ec;
   if (fs::is_directory(source, ec)) {
     for (const auto& entry : fs::directory_iterator(source, ec))
-      if (entry.is_regular_file() && is_image(entry.path())) m.images.push_back(entry.path());
+      if (entry.is_regular_file() && is_readable_image(entry.path()))
+        m.images.push_back(entry.path());
     std::sort(m.images.begin(), m.images.end());
     if (m.images.empty()) {
-      m.error =
-          "replay camera: no images (*.png, *.jpg, *.jpeg, *.bmp) in directory " + m.config.source;
+      m.error = "replay camera: no images (*.png, *.jpg, *.jpeg) in directory " + m.config.source;
       return false;
     }
-  } else if (fs::is_regular_file(source, ec) && is_image(source)) {
+  } else if (fs::is_regular_file(source, ec) && is_readable_image(source)) {
     m.images.push_back(source);
-  } else if (fs::is_regular_file(source, ec) && is_video(source)) {
-    if (!m.video.open(m.config.source)) {
-      m.error = "replay camera: OpenCV cannot open video file " + m.config.source;
-      return false;
-    }
-    m.use_video = true;
   } else {
     m.error = "replay camera: source " + m.config.source +
-              " is neither a directory, an image nor a video file (or does not exist)";
+              " is neither a directory of images nor a PNG or JPEG file (or does not exist); for a "
+              "video, extract its frames first (ffmpeg -i VIDEO DIR/%05d.png)";
     return false;
   }
   m.next_index = 0;
@@ -229,7 +188,6 @@ FrameStatus ReplayCamera::next_frame(Frame& frame, std::chrono::milliseconds tim
 
 void ReplayCamera::stop() noexcept {
   impl_->started = false;
-  impl_->video.release();
 }
 
 std::string ReplayCamera::last_error() const {

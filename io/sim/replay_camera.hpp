@@ -1,5 +1,5 @@
-// A Camera replaying recorded field images (a directory or a list of files, read with OpenCV
-// imread) or a video file (VideoCapture). Frames are paced so consecutive images tile the
+// A Camera replaying recorded field images (a directory of PNG or JPEG files, or one file; read
+// by io/sim/image_file.hpp). Frames are paced so consecutive images tile the
 // ground: one frame per `footprint_length_m` travelled at the current ground speed (or at a
 // fixed `fps` when no speed is given). Timestamps come from the injected clock.
 #pragma once
@@ -17,8 +17,7 @@
 namespace weedspray::io::sim {
 
 struct ReplayCameraConfig {
-  // A directory (its *.png / *.jpg / *.jpeg / *.bmp files, sorted by name), one image file, or
-  // one video file (*.mp4, *.avi, *.mkv, *.mov).
+  // A directory (its *.png / *.jpg / *.jpeg files, sorted by name) or one image file.
   std::string source;
   bool loop = true;
   // Ground distance covered by one image along the direction of travel.

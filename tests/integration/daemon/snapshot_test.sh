@@ -15,18 +15,13 @@ PY=/usr/bin/python3
 # The field: brown soil with a green block over zone 2 (of 4 across), below the zone's text.
 mkdir -p "$T/images" "$T/state"
 # (A 24-bit BMP from plain Python: importing OpenCV twice costs seconds on a loaded machine.)
-$PY - "$T/images/field.bmp" <<'PYEOF'
-import struct, sys
-w, h = 320, 200
-rows = []
-for y in range(h - 1, -1, -1):  # BMP rows run bottom-up, pixels B G R
-    plant = 110 <= y < 190
-    rows.append(b"".join(bytes((40, 150, 60)) if plant and 170 <= x < 230 else bytes((70, 100, 130))
-                         for x in range(w)))
-pixels = b"".join(rows)  # 960 bytes a row: no padding
-header = struct.pack("<2sIHHI", b"BM", 54 + len(pixels), 0, 0, 54)
-info = struct.pack("<IiiHHIIiiII", 40, w, h, 1, 24, 0, len(pixels), 2835, 2835, 0, 0)
-open(sys.argv[1], "wb").write(header + info + pixels)
+$PY - "$T/images/field.png" "$(dirname "$0")" <<'PYEOF'
+import sys
+sys.path.insert(0, sys.argv[2])
+from png_file import write_png
+# Soil, and one green block at x 170..229, y 110..189.
+write_png(sys.argv[1], 320, 200, lambda x, y: (60, 150, 40) if 110 <= y < 190 and 170 <= x < 230
+          else (130, 100, 70))
 PYEOF
 cat >"$T/weedspray.toml" <<'TOML'
 [sim]

@@ -24,20 +24,12 @@ require_gpsfake
 
 # A field of uniform weed density: an 8 px green/soil checkerboard (half of every zone green).
 mkdir -p "$T/field"
-$PY - "$T/field/checker.bmp" <<'PYEOF'
-import struct, sys
-w, h = 640, 400
-row = bytearray()
-rows = []
-for y in range(h):
-    line = bytearray()
-    for x in range(w):
-        line += bytes((0, 150, 0)) if ((x // 8) + (y // 8)) % 2 == 0 else bytes((50, 70, 100))
-    rows.append(bytes(line))
-data = b"".join(rows)
-header = b"BM" + struct.pack("<IHHI", 54 + len(data), 0, 0, 54) + struct.pack(
-    "<IiiHHIIiiII", 40, w, h, 1, 24, 0, len(data), 2835, 2835, 0, 0)
-open(sys.argv[1], "wb").write(header + data)
+$PY - "$T/field/checker.png" "$(dirname "$0")" <<'PYEOF'
+import sys
+sys.path.insert(0, sys.argv[2])
+from png_file import write_png
+write_png(sys.argv[1], 640, 400,
+          lambda x, y: (0, 150, 0) if ((x // 8) + (y // 8)) % 2 == 0 else (100, 70, 50))
 PYEOF
 
 start_private_bus

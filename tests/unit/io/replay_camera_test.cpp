@@ -5,13 +5,15 @@
 #include <atomic>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 #include "io/sim/ground_mosaic.hpp"
+#include "io/sim/image_file.hpp"
 #include "io/sim/manual_clock.hpp"
 
 #include <opencv2/core.hpp>
-#include <opencv2/videoio.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 namespace weedspray::io::sim {
 namespace {
@@ -81,35 +83,48 @@ TEST(ReplayCamera, SingleImageWithoutLoopEnds) {
   EXPECT_EQ(camera.next_frame(f, 1s), FrameStatus::kEnd);
 }
 
-TEST(ReplayCamera, ReplaysAVideoFileFrameByFrame) {
+// A video is refused at start with a message that says what to do instead (the daemon reads
+// no video: OpenCV's videoio would map some 240 libraries into it).
+TEST(ReplayCamera, AVideoFileIsRefusedSayingHowToExtractItsFrames) {
   char tmpl[] = "/tmp/weedspray-replay-XXXXXX";
   ASSERT_NE(mkdtemp(tmpl), nullptr);
   const std::string path = std::string(tmpl) + "/run.avi";
-  {
-    cv::VideoWriter writer(path, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 10.0,
-                           cv::Size(64, 48));
-    ASSERT_TRUE(writer.isOpened()) << "OpenCV cannot write " << path;
-    for (int i = 0; i < 5; ++i) writer.write(cv::Mat(48, 64, CV_8UC3, cv::Scalar(i * 40, 0, 0)));
-  }
+  std::ofstream(path) << "not really a video";
   ManualClock clock;
   ReplayCameraConfig config;
   config.source = path;
-  config.loop = false;
-  config.fps = 5.0;
   ReplayCamera camera(config, clock);
-  ASSERT_TRUE(camera.start()) << camera.last_error();
-  Frame f;
-  int frames = 0;
-  FrameStatus status;
-  while ((status = camera.next_frame(f, 1s)) == FrameStatus::kOk) {
-    EXPECT_EQ(f.view.width, 64);
-    EXPECT_EQ(f.view.height, 48);
-    EXPECT_EQ(f.timestamp, frames * 200ms);
-    ++frames;
-  }
-  EXPECT_EQ(status, FrameStatus::kEnd);
-  EXPECT_EQ(frames, 5);
+  EXPECT_FALSE(camera.start());
+  EXPECT_NE(camera.last_error().find("extract its frames first"), std::string::npos)
+      << camera.last_error();
   std::filesystem::remove_all(tmpl);
+}
+
+// PNG and JPEG files decode to the BGR pixels OpenCV's own codecs wrote (JPEG within its loss);
+// a file that is not what its name says fails with the file named.
+TEST(ImageFile, ReadsPngAndJpegAsBgrAndNamesAFileItCannotRead) {
+  char tmpl[] = "/tmp/weedspray-image-XXXXXX";
+  ASSERT_NE(mkdtemp(tmpl), nullptr);
+  const std::filesystem::path dir(tmpl);
+  cv::Mat picture(48, 64, CV_8UC3);
+  for (int y = 0; y < picture.rows; ++y)
+    for (int x = 0; x < picture.cols; ++x)
+      picture.at<cv::Vec3b>(y, x) =
+          cv::Vec3b(static_cast<std::uint8_t>(x * 4), 200, static_cast<std::uint8_t>(y * 5));
+  ASSERT_TRUE(cv::imwrite((dir / "a.png").string(), picture));
+  ASSERT_TRUE(cv::imwrite((dir / "b.JPG").string(), picture, {cv::IMWRITE_JPEG_QUALITY, 95}));
+  std::string error;
+  const cv::Mat png = read_bgr_image(dir / "a.png", error);
+  ASSERT_FALSE(png.empty()) << error;
+  EXPECT_EQ(cv::norm(png, picture, cv::NORM_INF), 0.0);
+  const cv::Mat jpeg = read_bgr_image(dir / "b.JPG", error);
+  ASSERT_FALSE(jpeg.empty()) << error;
+  ASSERT_EQ(jpeg.size(), picture.size());
+  EXPECT_LT(cv::norm(jpeg, picture, cv::NORM_L1) / static_cast<double>(picture.total() * 3), 3.0);
+  std::ofstream(dir / "c.png") << "not a png";
+  EXPECT_TRUE(read_bgr_image(dir / "c.png", error).empty());
+  EXPECT_NE(error.find("c.png"), std::string::npos) << error;
+  std::filesystem::remove_all(dir);
 }
 
 TEST(ReplayCamera, LaysImagesOfKnownScaleAtTheCamerasScale) {
