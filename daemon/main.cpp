@@ -40,7 +40,8 @@ int main(int argc, char** argv) {
   app.add_flag("--safe-outputs", options.safe_outputs,
                "write every configured output's safe value and exit (the unit's ExecStopPost: "
                "covers kill -9 and crashes)");
-  app.add_option("--sim-images", options.sim_images, "field image folder for --sim");
+  app.add_option("--sim-images", options.sim_images,
+                 "field image folder (PNG or JPEG files) for --sim");
   app.add_option("--state-dir", options.state_dir, "overrides daemon.state_dir");
   app.add_option("--valve-state-file", options.valve_state_file,
                  "sim: write the final valve states here on exit");

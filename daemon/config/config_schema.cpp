@@ -555,7 +555,7 @@ const std::vector<KeySpec<Config>>& config_keys() {
     {WS_KEY(sim, speed_period_s), 20.0, 0.1, 3600, "s",
      "period of the sine/ramp speed profile"},
     {WS_KEY(sim, images_dir), std::string(""), 0, 0, "path",
-     "field images used as the simulated camera (empty = the bundled ones)"},
+     "field images (PNG or JPEG files) used as the simulated camera (empty = the bundled ones)"},
     {WS_KEY(sim, images_mm_per_px), 0.0, 0, 100, "mm",
      "ground size of one pixel of images_dir's images: each simulated frame is then the ground "
      "as the [[camera]] sees it (its frame size and ground_mm_per_px), consecutive images "
