@@ -2,13 +2,45 @@
 
 #include <pthread.h>
 #include <sched.h>
+#include <signal.h>
 #include <sys/mman.h>
 
 #include <cerrno>
 #include <future>
+#include <memory>
 #include <string>
 
 namespace weedspray::io {
+
+namespace {
+
+// The fatal-signal handlers (emergency_outputs.hpp) run on an alternate stack, because a stack
+// overflow's SIGSEGV cannot be delivered on the overflowed stack; an alternate stack belongs to
+// one thread, so each real-time thread sets up its own before its loop starts.
+class ThreadSignalStack {
+ public:
+  ThreadSignalStack() : memory_(std::make_unique<unsigned char[]>(kBytes)) {
+    stack_t stack{};
+    stack.ss_sp = memory_.get();
+    stack.ss_size = kBytes;
+    installed_ = ::sigaltstack(&stack, nullptr) == 0;
+  }
+  ~ThreadSignalStack() {
+    if (!installed_) return;
+    stack_t off{};
+    off.ss_flags = SS_DISABLE;
+    ::sigaltstack(&off, nullptr);
+  }
+  ThreadSignalStack(const ThreadSignalStack&) = delete;
+  ThreadSignalStack& operator=(const ThreadSignalStack&) = delete;
+
+ private:
+  static constexpr std::size_t kBytes = 64 * 1024;
+  std::unique_ptr<unsigned char[]> memory_;
+  bool installed_ = false;
+};
+
+}  // namespace
 
 std::string_view to_string(RtStatus status) noexcept {
   switch (status) {
@@ -47,6 +79,7 @@ RealtimeThread::RealtimeThread(ThreadRole role, std::function<void(std::stop_tok
   // The thread owns the promise, so it outlives set_value() however the threads interleave.
   thread_ = std::jthread(
       [role, applied = std::move(applied), body = std::move(body)](std::stop_token stop) mutable {
+        const ThreadSignalStack signal_stack;
         applied.set_value(apply_thread_role(role));
         body(stop);
       });

@@ -27,6 +27,8 @@
 #include <string>
 #include <thread>
 
+#include "io/realtime.hpp"
+
 namespace weedspray::io {
 namespace {
 
@@ -35,7 +37,17 @@ std::string read_file(const std::filesystem::path& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-enum class Death { kSignal, kEscapedException, kReadOnlyStore };
+enum class Death { kSignal, kEscapedException, kReadOnlyStore, kStackOverflowInRealtimeThread };
+
+// Recurses until the stack's guard page; the opaque limit keeps the compiler from seeing an
+// endless recursion (or turning it into a loop).
+volatile int g_recursion_limit = 1 << 30;
+int recurse_into_the_guard_page(int depth) {
+  volatile char frame[512];
+  frame[0] = static_cast<char>(depth);
+  if (depth >= g_recursion_limit) return frame[0];
+  return recurse_into_the_guard_page(depth + 1) + frame[0];
+}
 
 // In a child: writes "OPEN" to the file (the valve), registers "SAFE" as its fatal-exit write
 // when armed, installs the handlers; returns the file's descriptor.
@@ -72,6 +84,13 @@ int run_child(const std::filesystem::path& file, Death how, int signal, bool arm
         // for UBSan to stop first (as a null store would be in the sanitizer build).
         void* page = ::mmap(nullptr, 4096, PROT_READ, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
         *static_cast<volatile int*>(page) = 1;
+        break;
+      }
+      case Death::kStackOverflowInRealtimeThread: {
+        RealtimeThread overflowing(ThreadRole::kValvePwm, [](std::stop_token) {
+          [[maybe_unused]] const int sum = recurse_into_the_guard_page(0);
+        });
+        overflowing.stop_and_join();
         break;
       }
     }
@@ -174,6 +193,17 @@ TEST(FatalExit, ARealSegfaultWritesSafe) {
   const auto file = std::filesystem::temp_directory_path() / "weedspray_emergency_segv";
   const int status = run_child(file, Death::kReadOnlyStore, 0, true);
   ASSERT_TRUE(WIFSIGNALED(status));
+  EXPECT_EQ(WTERMSIG(status), SIGSEGV);
+  EXPECT_EQ(read_file(file), "SAFE\n");
+  std::filesystem::remove(file);
+}
+
+// A real-time thread's stack overflow: the SIGSEGV is delivered on that thread's own alternate
+// stack (each RealtimeThread sets one up), so the handler runs and the "valve" is written safe.
+TEST(FatalExit, AStackOverflowInARealtimeThreadWritesSafe) {
+  const auto file = std::filesystem::temp_directory_path() / "weedspray_emergency_overflow";
+  const int status = run_child(file, Death::kStackOverflowInRealtimeThread, 0, true);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "status " << status;
   EXPECT_EQ(WTERMSIG(status), SIGSEGV);
   EXPECT_EQ(read_file(file), "SAFE\n");
   std::filesystem::remove(file);
