@@ -40,6 +40,10 @@ int main(int argc, char** argv) {
   app.add_flag("--safe-outputs", options.safe_outputs,
                "write every configured output's safe value and exit (the unit's ExecStopPost: "
                "covers kill -9 and crashes)");
+  app.add_option("--output-manifest", options.output_manifest,
+                 "hardware mode: write the resolved configuration here at start (the unit: "
+                 "/run/weedspray/outputs.toml); the exit watcher and --safe-outputs read it, not "
+                 "the editable files");
   app.add_option("--sim-images", options.sim_images,
                  "field image folder (PNG or JPEG files) for --sim");
   app.add_option("--state-dir", options.state_dir, "overrides daemon.state_dir");

@@ -25,6 +25,7 @@
 #include "control/flow_feedback.hpp"
 #include "daemon/backends/backends.hpp"
 #include "daemon/backends/emergency_write_handoff.hpp"
+#include "daemon/backends/output_manifest.hpp"
 #include "daemon/backends/sim_faults.hpp"
 #include "daemon/bus/dbus_service.hpp"
 #include "daemon/bus/status.hpp"
@@ -1174,7 +1175,8 @@ class Daemon final : public CommandHandler {
 }  // namespace
 
 int write_safe_outputs(const Options& options) {
-  return write_safe_outputs(options.config_path, "weedsprayd --safe-outputs");
+  return write_safe_outputs(options.config_path, options.output_manifest,
+                            "weedsprayd --safe-outputs");
 }
 
 int run_daemon(const Options& options) {
@@ -1211,14 +1213,23 @@ int run_daemon(const Options& options) {
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   if (io::lock_memory() != 0) spdlog::info("memory not locked (mlockall not permitted)");
 
+  if (!options.sim && !options.output_manifest.empty()) {
+    try {
+      write_output_manifest(config, options.output_manifest);
+    } catch (const std::exception& error) {
+      spdlog::critical("{}: the safe writers would depend on the editable files; not starting",
+                       error.what());
+      return 1;
+    }
+  }
   int exit_watcher_socket = -1;  // stays -1 in the self-test build: no watcher, no handoff
 #ifndef WEEDSPRAY_SELFTEST_NO_FAILSAFE
   // Hardware mode: before any line is requested, a watcher process that writes the outputs
   // safe when this one ends in any way (kill -9 included); ExecStopPost is the second layer.
   if (!options.sim) {
     std::string error;
-    const ExitWatcher watcher =
-        start_exit_watcher(options.config_path, default_exit_watcher_program(), error);
+    const ExitWatcher watcher = start_exit_watcher(options.config_path, options.output_manifest,
+                                                   default_exit_watcher_program(), error);
     if (watcher.pid < 0)
       spdlog::warn(
           "exit watcher not started ({}): after a kill -9 only ExecStopPost closes the "

@@ -107,11 +107,13 @@ struct SafeWriteFailure {
 // output is tried on its own; returns the number of failures, each described in `failures`.
 int write_hw_safe_outputs(const Config& config, std::vector<SafeWriteFailure>& failures);
 
-// Loads `config_path` (without the weed source check: no model, no vision library), then
-// write_hw_safe_outputs(); each failure on stderr prefixed by `program`. Returns the exit
+// Loads the output manifest weedsprayd wrote at its start, or `config_path` when there is none
+// (backends/output_manifest.hpp; without the weed source check: no model, no vision library),
+// then write_hw_safe_outputs(); each failure on stderr prefixed by `program`. Returns the exit
 // status: 0 when every output took its safe value. weedsprayd --safe-outputs and
 // weedspray-safe-outputs.
-int write_safe_outputs(const std::filesystem::path& config_path, const char* program);
+int write_safe_outputs(const std::filesystem::path& config_path,
+                       const std::filesystem::path& manifest_path, const char* program);
 
 Backends make_hw_backends(const Config& config);
 
@@ -125,6 +127,9 @@ struct PressureConverters {
   io::ValveDriveConfig drive{};
 };
 PressureConverters make_hw_pressure_converters(const Config& config, const io::Clock& clock);
+// The return-valve DAC alone, written at its safe value (fully open) when it is made: the safe
+// writers need no working ADC to open the relief path.
+std::shared_ptr<io::AnalogOutput> make_hw_return_valve(const Config& config);
 Backends make_sim_backends(const Config& config, const Options& options);
 
 }  // namespace weedspray::daemon

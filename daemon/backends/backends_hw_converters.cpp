@@ -62,9 +62,13 @@ PressureConverters make_hw_pressure_converters(const Config& config, const io::C
   c.sensor = pressure_sensor_config(config);
   c.drive = valve_drive_config(config);
   c.adc = make_adc(config, clock);
-  // Safe: return valve fully open, so the line holds no pressure.
-  c.dac = make_dac(config, io::dac_volts_from_valve_opening(1.0, c.drive));
+  c.dac = make_hw_return_valve(config);
   return c;
+}
+
+std::shared_ptr<io::AnalogOutput> make_hw_return_valve(const Config& config) {
+  // Safe: return valve fully open, so the line holds no pressure.
+  return make_dac(config, io::dac_volts_from_valve_opening(1.0, valve_drive_config(config)));
 }
 
 }  // namespace weedspray::daemon

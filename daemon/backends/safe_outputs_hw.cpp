@@ -7,9 +7,9 @@
 
 #include "daemon/backends/backends.hpp"
 #include "daemon/backends/hw_output_lines.hpp"
+#include "daemon/backends/output_manifest.hpp"
 #include "io/linux/gpio_lines.hpp"
 #include "io/linux/gpio_output_bank.hpp"
-#include "io/linux/monotonic_clock.hpp"
 
 namespace weedspray::daemon {
 
@@ -59,24 +59,18 @@ int write_hw_safe_outputs(const Config& config, std::vector<SafeWriteFailure>& f
     b.heartbeat = single_line(b, gpio, gpio.heartbeat_name, gpio.heartbeat_offset, false);
   });
   attempt("return valve", [&](Backends& b) {
-    b.clock = keep(b, std::make_shared<io::hw::MonotonicClock>());
-    PressureConverters converters = make_hw_pressure_converters(config, *b.clock);
-    b.return_valve = keep(b, converters.dac);  // writes the safe value when it is made
-    keep(b, converters.adc);
+    b.return_valve = keep(b, make_hw_return_valve(config));  // writes the safe value when made
   });
   return static_cast<int>(failures.size());
 }
 
-int write_safe_outputs(const std::filesystem::path& config_path, const char* program) {
-  Config config;
-  try {
-    config = load_config_without_vision(config_path);
-  } catch (const ConfigError& error) {
-    std::fprintf(stderr, "%s: %s\n", program, error.what());
-    return 1;
-  }
+int write_safe_outputs(const std::filesystem::path& config_path,
+                       const std::filesystem::path& manifest_path, const char* program) {
+  const std::optional<Config> config =
+      load_safe_outputs_config(config_path, manifest_path, program);
+  if (!config) return 1;
   std::vector<SafeWriteFailure> failures;
-  write_hw_safe_outputs(config, failures);
+  write_hw_safe_outputs(*config, failures);
   for (const auto& failure : failures)
     std::fprintf(stderr, "%s: %s\n", program, failure.message.c_str());
   if (failures.empty()) std::printf("%s: outputs written safe\n", program);

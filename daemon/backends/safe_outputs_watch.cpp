@@ -16,6 +16,7 @@
 
 #include "daemon/backends/backends.hpp"
 #include "daemon/backends/emergency_write_handoff.hpp"
+#include "daemon/backends/output_manifest.hpp"
 #include "daemon/supervision/process_exit_probe.hpp"
 #include "io/emergency_outputs.hpp"
 
@@ -74,15 +75,15 @@ int write_retrying_busy_lines(const std::function<void(std::vector<SafeWriteFail
 }
 
 int watch_and_write_safe_outputs(int fd, int daemon_pid, const std::filesystem::path& config_path,
-                                 const char* program) {
+                                 const std::filesystem::path& manifest_path, const char* program) {
   for (int signal : {SIGTERM, SIGINT, SIGHUP}) std::signal(signal, SIG_IGN);
-  Config config;
-  try {
-    config = load_config_without_vision(config_path);
-  } catch (const ConfigError& error) {
-    std::fprintf(stderr, "%s: %s (not watching)\n", program, error.what());
+  const std::optional<Config> loaded =
+      load_safe_outputs_config(config_path, manifest_path, program);
+  if (!loaded) {
+    std::fprintf(stderr, "%s: no configuration: not watching\n", program);
     return 1;
   }
+  const Config& config = *loaded;
   // Only while the daemon is still our parent is the PID surely its (not a reused one).
   ProcessExitProbe probe;
   if (daemon_pid > 0) {

@@ -31,11 +31,12 @@ int write_retrying_busy_lines(const std::function<void(std::vector<SafeWriteFail
                               std::chrono::nanoseconds retry_for,
                               std::chrono::nanoseconds retry_every);
 
-// Loads the configuration first (so nothing is left to read after the daemon is gone), ignores
+// Loads the configuration first, from the daemon's output manifest when there is one (so
+// nothing is left to read after the daemon is gone), ignores
 // SIGTERM/SIGINT/SIGHUP (a stop signals the whole service: the watcher must outlive the
 // daemon), waits, writes. Returns the exit status.
 // daemon_pid <= 0: only end-of-file is watched.
 int watch_and_write_safe_outputs(int fd, int daemon_pid, const std::filesystem::path& config_path,
-                                 const char* program);
+                                 const std::filesystem::path& manifest_path, const char* program);
 
 }  // namespace weedspray::daemon

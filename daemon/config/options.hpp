@@ -18,6 +18,7 @@ struct Options {
   bool user_bus = false;         // session bus instead of the system bus
   bool no_bus = false;           // run without D-Bus (sim on a machine without a session bus)
   bool safe_outputs = false;     // write the outputs' safe values and exit (ExecStopPost)
+  std::string output_manifest;   // hardware mode: the resolved configuration written here
   std::string sim_images;        // overrides sim.images_dir
   std::string state_dir;         // overrides daemon.state_dir
   std::string valve_state_file;  // sim: final valve states written here on exit

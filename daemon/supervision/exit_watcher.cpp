@@ -20,6 +20,7 @@ std::filesystem::path default_exit_watcher_program() {
 }
 
 ExitWatcher start_exit_watcher(const std::filesystem::path& config_path,
+                               const std::filesystem::path& manifest_path,
                                const std::filesystem::path& program, std::string& error) {
   ExitWatcher watcher;
   // A socket pair rather than a pipe: the daemon hands the watcher its outputs' descriptors
@@ -44,6 +45,10 @@ ExitWatcher start_exit_watcher(const std::filesystem::path& config_path,
                                    "3",
                                    "--daemon-pid",
                                    std::to_string(getpid())};
+  if (!manifest_path.empty()) {
+    args.emplace_back("--manifest");
+    args.push_back(std::filesystem::absolute(manifest_path, absolute_error).string());
+  }
   std::vector<char*> argv;
   for (auto& arg : args) argv.push_back(arg.data());
   argv.push_back(nullptr);

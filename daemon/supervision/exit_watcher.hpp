@@ -15,8 +15,10 @@ struct ExitWatcher {
 };
 
 // `program` is the watcher's executable (default: weedspray-safe-outputs in this program's
-// folder). Returns pid -1 with `error` set when it cannot be started.
+// folder); it reads `manifest_path` (the daemon's output manifest; empty: none) before
+// `config_path`. Returns pid -1 with `error` set when it cannot be started.
 ExitWatcher start_exit_watcher(const std::filesystem::path& config_path,
+                               const std::filesystem::path& manifest_path,
                                const std::filesystem::path& program, std::string& error);
 
 // weedspray-safe-outputs in the folder of /proc/self/exe.

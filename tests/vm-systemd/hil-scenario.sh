@@ -646,11 +646,23 @@ step sensor_mended "$?" "wire mended, sprayctl clear-alarms: State=$(bus_state),
 
 # kill -9: nothing runs in the daemon; ExecStopPost must write the lines safe.
 # (Each fault costs a restart, the slowest part on an emulated CPU: the orderly stop comes last.)
+# The configuration is broken (a typo being edited) when the daemon dies: the safe writers read
+# the output manifest the daemon wrote at its start under /run, not the files. The typo goes
+# once ExecStopPost has spoken, before RestartSec (2 s) ends, so the restart below still runs.
 start_spraying || info "kill -9: not spraying before the fault (State=$(bus_state))"
 pid="$(main_pid)"
+manifest_valves="$(grep -c '^valve_names = \[ "valve0", "valve1", "valve2", "valve3" \]' /run/weedspray/outputs.toml)"
+printf '[gpio]\nvalve_ofsets = [0]\n' >/etc/weedspray/conf.d/90-typo.toml
+journal_lines="$(journalctl -u weedsprayd -b -o cat | wc -l)"
+stop_post_said() { journalctl -u weedsprayd -b -o cat | tail -n +$((journal_lines + 1)) | grep -q "^weedspray-safe-outputs: \(outputs written safe\|/etc/weedspray\)"; }
 trace_window_begin
 started="$(now)"
 kill -9 "$pid"
+wait_for 30 stop_post_said
+stop_post="$(journalctl -u weedsprayd -b -o cat | tail -n +$((journal_lines + 1)) | grep "^weedspray-safe-outputs: " | grep -v "weedsprayd e[xn]" | tr '\n' '|')"
+rm -f /etc/weedspray/conf.d/90-typo.toml
+step kill9_config_broken "$([ "$manifest_valves" = 1 ] && grep -q "^weedspray-safe-outputs: outputs written safe|$" <<<"$stop_post"; echo $?)" \
+  "gpio.valve_ofsets typo in conf.d, then kill -9: ExecStopPost said '$stop_post' (manifest /run/weedspray/outputs.toml names the 4 valves: $manifest_valves)"
 wait_for 120 active_with_new_pid "$pid"
 restart_s="$(elapsed "$started")"
 wait_for 15 state_is Idle

@@ -2,7 +2,8 @@
 # weedspray-safe-outputs, the unit's ExecStopPost: it loads none of OpenCV (so it starts in
 # milliseconds), it still writes the outputs when the weed model is missing or broken (a vision
 # problem must never keep the valves open), and its errors name the file, line and key, or the
-# output and device it could not write. (Its writes to real lines are checked in the systemd
+# output and device it could not write. It reads the daemon's output manifest before the
+# editable file, and writes each output on its own. (Its writes to real lines are checked in the systemd
 # guest, tests/vm-systemd: valves and pump low after stop, kill -9 and crashes.)
 set -euo pipefail
 BUILD=$1
@@ -45,6 +46,52 @@ if "$BUILD/daemon/weedsprayd" --safe-outputs --config "$T/weedspray.toml" >"$T/d
   fail "weedsprayd --safe-outputs reported safe"
 fi
 grep -q "^weedsprayd --safe-outputs: valves: " "$T/daemon.log" || fail "weedsprayd --safe-outputs"
+# The return valve is written on its own: a missing pressure ADC does not stop the relief path
+# opening (the DAC's raw value at full scale: 3.3 V / 1 mV = 3300 counts).
+mkdir -p "$T/dac"
+echo 1 >"$T/dac/out_voltage_scale"
+echo 0 >"$T/dac/out_voltage0_raw"
+cat >"$T/converters.toml" <<TOML
+[gpio]
+chip = "$T/no-such-gpiochip"
+valve_offsets = [0, 1, 2, 3]
+[adc]
+iio_device = "$T/no-such-adc"
+[dac]
+iio_device = "$T/dac"
+TOML
+"$BIN" --config "$T/converters.toml" >"$T/converters.log" 2>&1 && fail "no chip, yet safe"
+grep -q "return valve" "$T/converters.log" && fail "the return valve was not written on its own"
+[ "$(cat "$T/dac/out_voltage0_raw")" = 3300 ] ||
+  fail "return-valve DAC at $(cat "$T/dac/out_voltage0_raw") counts, not 3300 (fully open)"
+
+# The output manifest: weedsprayd writes the configuration it resolved at its start (here it
+# then stops, finding no GPIO chip); a typo made in the file afterwards does not stop the safe
+# writer, which reads the manifest and still tries the outputs the daemon drove.
+cp "$T/converters.toml" "$T/machine.toml"
+sed -i 's/^valve_offsets = .*/valve_offsets = [5, 6, 7, 8]\nheartbeat_opt_out = true\nestop_opt_out = true/' \
+  "$T/machine.toml"
+mkdir -p "$T/run"
+if "$BUILD/daemon/weedsprayd" --no-bus --config "$T/machine.toml" \
+  --output-manifest "$T/run/outputs.toml" --state-dir "$T/state" >"$T/start.log" 2>&1; then
+  fail "weedsprayd started without a GPIO chip"
+fi
+grep -q "^valve_offsets = \[ 5, 6, 7, 8 \]" "$T/run/outputs.toml" ||
+  fail "the manifest lacks the valves: $(grep -n valve "$T/run/outputs.toml")"
+printf '[pump]\nofset = 3\n' >>"$T/machine.toml"
+echo 0 >"$T/dac/out_voltage0_raw"
+"$BIN" --config "$T/machine.toml" --manifest "$T/run/outputs.toml" >"$T/manifest.log" 2>&1 &&
+  fail "no chip, yet safe"
+grep -q "unknown\|ofset" "$T/manifest.log" && fail "the safe writer read the edited file"
+grep -q "^weedspray-safe-outputs: valves: .*no-such-gpiochip" "$T/manifest.log" ||
+  fail "the safe writer did not try the manifest's valves"
+[ "$(cat "$T/dac/out_voltage0_raw")" = 3300 ] || fail "the manifest's return valve not written"
+# Without a manifest (the daemon never started) the file is read, and its error named.
+"$BIN" --config "$T/machine.toml" --manifest "$T/run/none.toml" >"$T/nomanifest.log" 2>&1 &&
+  fail "a broken file, yet safe"
+grep -q "no output manifest .*none.toml" "$T/nomanifest.log" || fail "the missing manifest unsaid"
+grep -q "machine.toml:[0-9]*: pump: unknown section" "$T/nomanifest.log" || fail "the file's error not named"
+
 # --when-closed (the exit watcher weedsprayd starts): it waits while the pipe's write end lives,
 # outlives SIGTERM (a stop signals the whole service), and writes as soon as that end closes,
 # here when its holder is killed with SIGKILL. A missing chip is not retried.
