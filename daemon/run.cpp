@@ -112,24 +112,16 @@ class Daemon final : public CommandHandler {
     if (event_ != nullptr) sd_event_unref(event_);
   }
 
-  // The exit watcher's socket (supervision/exit_watcher.hpp): run() hands it the outputs.
-  void set_exit_watcher_socket(int fd) noexcept { exit_watcher_socket_ = fd; }
+  // The exit watcher (supervision/exit_watcher.hpp): run() hands it the outputs, each tick
+  // keeps one running.
+  void set_exit_watcher(ExitWatcherKeeper keeper) noexcept { exit_watcher_ = std::move(keeper); }
 
   int run() {
     backends_ = options_.sim ? make_sim_backends(config_, options_) : make_hw_backends(config_);
     spdlog::info("backends: {}", backends_.mode);
     const std::size_t emergency = backends_.register_emergency_writes();
     if (!options_.sim) spdlog::info("fatal-exit safe writes armed for {} outputs", emergency);
-    if (exit_watcher_socket_ >= 0) {
-      const int handed = hand_emergency_writes(exit_watcher_socket_);
-      if (handed < 0)
-        spdlog::warn(
-            "exit watcher: outputs not handed over ({}): it writes them only after "
-            "this process is gone",
-            std::strerror(-handed));
-      else
-        spdlog::info("exit watcher holds the safe writes of {} outputs", handed);
-    }
+    if (exit_watcher_.watcher().socket_fd >= 0) hand_outputs_to_exit_watcher();
     totals_file_ = std::filesystem::path(config_.daemon.state_dir) / "totals.toml";
     std::filesystem::create_directories(config_.daemon.state_dir);
     run_marker_.emplace(std::filesystem::path(config_.daemon.state_dir) / "running");
@@ -635,6 +627,8 @@ class Daemon final : public CommandHandler {
                            log_->dir().string());
       case AlarmId::kVisionModelFailed:
         return vision_failures;
+      case AlarmId::kExitWatcherLost:
+        return exit_watcher_lost_said_;
       case AlarmId::kTankLow:
       case AlarmId::kTankEmpty:
         return fmt::format("{:.0f} %", in.tank_level_pct);
@@ -702,6 +696,7 @@ class Daemon final : public CommandHandler {
     in.vision_model_failed = !vision_failures.empty();
     const std::string output_failures = check_outputs();
     in.output_write_failed = !output_failures.empty();
+    in.exit_watcher_lost = !exit_watcher_running(now);
     in.gnss_fix_lost = backends_.gnss != nullptr && gnss_lost_fix_->lost(sprayer_->gnss(), now);
     // Not from a status older than the last ClearAlarms (the detector restarts on it).
     in.nozzle_flow_fault =
@@ -888,6 +883,38 @@ class Daemon final : public CommandHandler {
     } catch (const std::exception& error) {
       spdlog::error("timing report: {}", error.what());
     }
+  }
+
+  void hand_outputs_to_exit_watcher() {
+    const int handed = hand_emergency_writes(exit_watcher_.watcher().socket_fd);
+    if (handed < 0)
+      spdlog::warn(
+          "exit watcher: outputs not handed over ({}): it writes them only after this process "
+          "is gone",
+          std::strerror(-handed));
+    else
+      spdlog::info("exit watcher (pid {}) holds the safe writes of {} outputs",
+                   exit_watcher_.watcher().pid, handed);
+  }
+
+  // Hardware mode: a watcher that ended is started again and handed the outputs; false while
+  // none runs (the exit_watcher_lost alarm).
+  bool exit_watcher_running(Nanos now) {
+    const ExitWatcherKeeper::Check check = exit_watcher_.check(now);
+    switch (check.state) {
+      case ExitWatcherKeeper::State::kRunning:
+        return true;
+      case ExitWatcherKeeper::State::kRestarted:
+        spdlog::warn("{}: started again (pid {})", check.what, exit_watcher_.watcher().pid);
+        hand_outputs_to_exit_watcher();
+        exit_watcher_lost_said_.clear();
+        return true;
+      case ExitWatcherKeeper::State::kLost:
+        if (check.what != exit_watcher_lost_said_) spdlog::error("{}", check.what);
+        exit_watcher_lost_said_ = check.what;
+        return false;
+    }
+    return false;
   }
 
   // The watchdog is fed only while the real-time loops make progress.
@@ -1169,7 +1196,8 @@ class Daemon final : public CommandHandler {
   std::array<std::uint64_t, kOutputRoleCount> tolerated_seen_{};
   std::array<bool, kOutputRoleCount> rewrite_safe_{};  // refused a write: write it safe in Fault
   bool start_when_ready_ = false;                      // Start arrived while Starting
-  int exit_watcher_socket_ = -1;
+  ExitWatcherKeeper exit_watcher_;
+  std::string exit_watcher_lost_said_;  // logged once per cause
 };
 
 }  // namespace
@@ -1222,26 +1250,29 @@ int run_daemon(const Options& options) {
       return 1;
     }
   }
-  int exit_watcher_socket = -1;  // stays -1 in the self-test build: no watcher, no handoff
+  ExitWatcherKeeper exit_watcher;  // keeps nothing in the self-test build: no watcher, no handoff
 #ifndef WEEDSPRAY_SELFTEST_NO_FAILSAFE
   // Hardware mode: before any line is requested, a watcher process that writes the outputs
   // safe when this one ends in any way (kill -9 included); ExecStopPost is the second layer.
   if (!options.sim) {
+    const ExitWatcherKeeper::Launch launch{options.config_path, options.output_manifest,
+                                           default_exit_watcher_program()};
     std::string error;
-    const ExitWatcher watcher = start_exit_watcher(options.config_path, options.output_manifest,
-                                                   default_exit_watcher_program(), error);
+    const ExitWatcher watcher =
+        start_exit_watcher(launch.config, launch.manifest, launch.program, error);
     if (watcher.pid < 0)
-      spdlog::warn(
-          "exit watcher not started ({}): after a kill -9 only ExecStopPost closes the "
-          "valves",
+      spdlog::error(
+          "exit watcher not started ({}): after a kill -9 only ExecStopPost closes "
+          "the valves",
           error);
     else
       spdlog::info("exit watcher started (pid {})", watcher.pid);
-    exit_watcher_socket = watcher.socket_fd;
+    exit_watcher = ExitWatcherKeeper(launch, watcher,
+                                     error.empty() ? "" : "exit watcher not started: " + error);
   }
 #endif
   Daemon daemon(options, std::move(config));
-  daemon.set_exit_watcher_socket(exit_watcher_socket);
+  daemon.set_exit_watcher(std::move(exit_watcher));
   try {
     return daemon.run();
   } catch (const std::exception& error) {

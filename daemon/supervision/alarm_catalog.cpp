@@ -94,6 +94,13 @@ constexpr std::array<AlarmCatalogEntry, kAlarmCount> kCatalog = {{
      "log.min_free_mb; the lines wait in memory and spraying goes on.",
      "Export and delete old as-applied files (or give the log folder more space); the alarm "
      "clears itself once the waiting lines are written."},
+    {"b5a85ee395a94b8db98523467f2b3086",
+     "The exit watcher (weedspray-safe-outputs --when-closed, the process that writes the "
+     "outputs safe within milliseconds if the daemon is killed) ended and could not be started "
+     "again: after a kill -9 only ExecStopPost would close the valves, seconds later.",
+     "Look in the journal for why the watcher ended or could not start (a missing or broken "
+     "weedspray-safe-outputs, memory); reinstall the package or restart the service. Clear the "
+     "alarms once a watcher runs again."},
 }};
 
 }  // namespace

@@ -24,6 +24,7 @@ constexpr std::array<std::string_view, kAlarmCount> kNames = {
     "flow_with_valves_closed",
     "estop",
     "records_disk_full",
+    "exit_watcher_lost",
 };
 
 double seconds(std::chrono::nanoseconds t) {
@@ -54,6 +55,7 @@ bool is_fault(AlarmId id) noexcept {
     case AlarmId::kOutputWriteFailed:
     case AlarmId::kFlowValvesClosed:
     case AlarmId::kEstop:
+    case AlarmId::kExitWatcherLost:
       return true;
     default:
       return false;
@@ -148,6 +150,8 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
       in.overruns_last_second >= static_cast<std::uint64_t>(t.control_overrun_limit), false);
   // A warning: records are no safety function, spraying goes on while they wait in memory.
   set(AlarmId::kRecordsDiskFull, in.records_at_risk, false);
+  // A fault: after a kill -9 only ExecStopPost would close the valves, seconds later.
+  set(AlarmId::kExitWatcherLost, in.exit_watcher_lost, false);
 
   AlarmMask raised = 0;
   present_ = 0;

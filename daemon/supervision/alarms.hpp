@@ -32,8 +32,9 @@ enum class AlarmId : std::uint8_t {
   kFlowValvesClosed,   // flow with every valve commanded closed: a leaking or stuck-open valve
   kEstop,              // the emergency-stop circuit opened: outputs held safe until reset
   kRecordsDiskFull,    // as-applied lines not written, or free space under log.min_free_mb
+  kExitWatcherLost,    // the process that writes the outputs safe after a kill -9 is gone
 };
-inline constexpr std::size_t kAlarmCount = 18;
+inline constexpr std::size_t kAlarmCount = 19;
 
 using AlarmMask = std::uint32_t;
 constexpr AlarmMask alarm_bit(AlarmId id) noexcept {
@@ -72,6 +73,7 @@ struct AlarmInputs {
   std::uint64_t overruns_last_second = 0;
   bool vision_model_failed = false;  // some camera's latest frame failed in its weed model
   bool output_write_failed = false;  // an output write failed since the last evaluation
+  bool exit_watcher_lost = false;    // hardware mode: no exit watcher runs (one could not start)
   bool gnss_fix_lost = false;        // see gnss_fix_lost() (daemon/sprayer/ground_speed.hpp)
   bool nozzle_flow_fault = false;    // the nozzle health detector names a nozzle
   // The line meter's flow over what the calibrated nozzles promise at the commanded duties,

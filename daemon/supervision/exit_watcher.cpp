@@ -2,6 +2,7 @@
 
 #include <spawn.h>
 #include <sys/socket.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -64,6 +65,48 @@ ExitWatcher start_exit_watcher(const std::filesystem::path& config_path,
   watcher.pid = pid;
   watcher.socket_fd = fds[1];
   return watcher;
+}
+
+namespace {
+
+// Whether the watcher ended, reaped; `how` says how.
+bool reaped(const ExitWatcher& watcher, std::string& how) {
+  int status = 0;
+  if (::waitpid(watcher.pid, &status, WNOHANG) != watcher.pid) return false;
+  how = WIFSIGNALED(status) ? "was killed by signal " + std::to_string(WTERMSIG(status))
+                            : "exited with status " + std::to_string(WEXITSTATUS(status));
+  return true;
+}
+
+}  // namespace
+
+ExitWatcherKeeper::ExitWatcherKeeper(Launch launch, ExitWatcher started, std::string start_error,
+                                     std::chrono::nanoseconds retry_every)
+    : keeping_(true),
+      launch_(std::move(launch)),
+      watcher_(started),
+      last_error_(std::move(start_error)),
+      retry_every_(retry_every) {}
+
+ExitWatcherKeeper::Check ExitWatcherKeeper::check(std::chrono::nanoseconds now) {
+  if (!keeping_) return {};
+  std::string how;
+  if (watcher_.pid >= 0) {
+    if (!reaped(watcher_, how)) return {};
+    ::close(watcher_.socket_fd);
+    last_error_ = "exit watcher (pid " + std::to_string(watcher_.pid) + ") " + how;
+    watcher_ = {};
+  }
+  if (started_once_ && now - last_start_ < retry_every_) return {State::kLost, last_error_};
+  started_once_ = true;
+  last_start_ = now;
+  std::string error;
+  watcher_ = start_exit_watcher(launch_.config, launch_.manifest, launch_.program, error);
+  if (watcher_.pid < 0) {
+    last_error_ = "exit watcher not started: " + error;
+    return {State::kLost, last_error_};
+  }
+  return {State::kRestarted, last_error_};
 }
 
 }  // namespace weedspray::daemon

@@ -3,6 +3,7 @@
 // output safe within milliseconds of this one ending, however it ends.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <string>
 
@@ -23,5 +24,38 @@ ExitWatcher start_exit_watcher(const std::filesystem::path& config_path,
 
 // weedspray-safe-outputs in the folder of /proc/self/exe.
 std::filesystem::path default_exit_watcher_program();
+
+// Keeps an exit watcher running beside the daemon (hardware mode): check() reaps one that ended
+// (it is this process's child), closes its socket and starts another, at most once per
+// `retry_every`. The caller hands a restarted watcher the outputs' safe writes.
+class ExitWatcherKeeper {
+ public:
+  struct Launch {
+    std::filesystem::path config;
+    std::filesystem::path manifest;
+    std::filesystem::path program;
+  };
+  enum class State { kRunning, kRestarted, kLost };
+  struct Check {
+    State state = State::kRunning;
+    std::string what;  // kRestarted: how the last one ended; kLost: why none runs
+  };
+
+  ExitWatcherKeeper() = default;  // keeps nothing (simulation, self-test build)
+  ExitWatcherKeeper(Launch launch, ExitWatcher started, std::string start_error,
+                    std::chrono::nanoseconds retry_every = std::chrono::seconds(1));
+
+  Check check(std::chrono::nanoseconds now);
+  [[nodiscard]] const ExitWatcher& watcher() const noexcept { return watcher_; }
+
+ private:
+  bool keeping_ = false;
+  Launch launch_;
+  ExitWatcher watcher_;
+  std::string last_error_;
+  std::chrono::nanoseconds retry_every_{};
+  std::chrono::nanoseconds last_start_{};
+  bool started_once_ = false;
+};
 
 }  // namespace weedspray::daemon

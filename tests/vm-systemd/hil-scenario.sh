@@ -646,12 +646,22 @@ step sensor_mended "$?" "wire mended, sprayctl clear-alarms: State=$(bus_state),
 
 # kill -9: nothing runs in the daemon; ExecStopPost must write the lines safe.
 # (Each fault costs a restart, the slowest part on an emulated CPU: the orderly stop comes last.)
+# The exit watcher killed: the daemon starts another and hands it the outputs (the kill -9
+# below then measures the new one).
+watcher_pid() { pgrep -f -- "--when-closed 3 --daemon-pid $(main_pid)" | head -n1; }
+old_watcher="$(watcher_pid)"
+journal_lines="$(journalctl -u weedsprayd -b -o cat | wc -l)"
+[ -n "$old_watcher" ] && kill -9 "$old_watcher"
+new_watcher_started() { local w; w="$(watcher_pid)"; [ -n "$w" ] && [ "$w" != "$old_watcher" ] && journalctl -u weedsprayd -b -o cat | tail -n +$((journal_lines + 1)) | grep -q "exit watcher (pid $w) holds the safe writes"; }
+wait_for 10 new_watcher_started
+step watcher_restarted "$?" "exit watcher pid ${old_watcher:-none} killed: now pid $(watcher_pid); journal: $(journalctl -u weedsprayd -b -o cat | tail -n +$((journal_lines + 1)) | grep -i "watcher" | tr '\n' '|'); State=$(bus_state)"
+
 # The configuration is broken (a typo being edited) when the daemon dies: the safe writers read
 # the output manifest the daemon wrote at its start under /run, not the files. The typo goes
 # once ExecStopPost has spoken, before RestartSec (2 s) ends, so the restart below still runs.
 start_spraying || info "kill -9: not spraying before the fault (State=$(bus_state))"
 pid="$(main_pid)"
-manifest_valves="$(grep -c '^valve_names = \[ "valve0", "valve1", "valve2", "valve3" \]' /run/weedspray/outputs.toml)"
+manifest_valves="$(grep -c "^valve_names = \[ .valve0., .valve1., .valve2., .valve3. \]" /run/weedspray/outputs.toml)"
 printf '[gpio]\nvalve_ofsets = [0]\n' >/etc/weedspray/conf.d/90-typo.toml
 journal_lines="$(journalctl -u weedsprayd -b -o cat | wc -l)"
 stop_post_said() { journalctl -u weedsprayd -b -o cat | tail -n +$((journal_lines + 1)) | grep -q "^weedspray-safe-outputs: \(outputs written safe\|/etc/weedspray\)"; }

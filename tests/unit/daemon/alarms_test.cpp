@@ -270,6 +270,17 @@ TEST(Alarms, RecordsDiskFullIsAWarningThatClearsItself) {
   EXPECT_EQ(alarms.evaluate(at(in, 6s)), alarm_bit(AlarmId::kRecordsDiskFull)) << "again";
 }
 
+// No exit watcher: a fault at once (after a kill -9 only ExecStopPost would close the valves).
+TEST(Alarms, ALostExitWatcherIsAFaultAtOnce) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(1s);
+  EXPECT_EQ(alarms.evaluate(in), 0U);
+  in.exit_watcher_lost = true;
+  EXPECT_EQ(alarms.evaluate(at(in, 2s)), alarm_bit(AlarmId::kExitWatcherLost));
+  EXPECT_TRUE(alarms.fault_latched());
+  EXPECT_EQ(alarm_name(AlarmId::kExitWatcherLost), "exit_watcher_lost");
+}
+
 // Only records_disk_full clears itself: the others wait for ClearAlarms.
 TEST(Alarms, OnlyRecordsDiskFullClearsItself) {
   for (std::size_t i = 0; i < kAlarmCount; ++i) {
