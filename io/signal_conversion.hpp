@@ -70,6 +70,8 @@ struct ValveDriveConfig {
   double dac_full_scale_volts = 3.3;     // DAC output range 0..this
   double amplifier_gain = 10.0 / 3.3;    // valve volts per DAC volt
   double valve_full_scale_volts = 10.0;  // control voltage for a fully driven valve
+  // A reverse-acting valve: fully open at 0 V, closed at full-scale volts.
+  bool opens_at_zero_volts = false;
 };
 
 constexpr double valve_volts_from_dac_volts(double dac_volts, const ValveDriveConfig& c) noexcept {
@@ -81,14 +83,19 @@ constexpr double dac_volts_from_valve_volts(double valve_volts,
   return std::clamp(valve_volts / c.amplifier_gain, 0.0, c.dac_full_scale_volts);
 }
 
-// Fraction of the valve's control range (0 = 0 V, 1 = full-scale volts), clamped to [0, 1].
+// The valve's opening, clamped to [0, 1]: the fraction of its control range (0 = 0 V, 1 =
+// full-scale volts), reversed for a valve that opens at 0 V.
 constexpr double valve_opening_from_dac_volts(double dac_volts,
                                               const ValveDriveConfig& c) noexcept {
-  return std::clamp(valve_volts_from_dac_volts(dac_volts, c) / c.valve_full_scale_volts, 0.0, 1.0);
+  const double drive =
+      std::clamp(valve_volts_from_dac_volts(dac_volts, c) / c.valve_full_scale_volts, 0.0, 1.0);
+  return c.opens_at_zero_volts ? 1.0 - drive : drive;
 }
 
 constexpr double dac_volts_from_valve_opening(double opening, const ValveDriveConfig& c) noexcept {
-  return dac_volts_from_valve_volts(std::clamp(opening, 0.0, 1.0) * c.valve_full_scale_volts, c);
+  const double clamped = std::clamp(opening, 0.0, 1.0);
+  const double drive = c.opens_at_zero_volts ? 1.0 - clamped : clamped;
+  return dac_volts_from_valve_volts(drive * c.valve_full_scale_volts, c);
 }
 
 }  // namespace weedspray::io

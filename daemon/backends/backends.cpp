@@ -84,6 +84,7 @@ io::ValveDriveConfig valve_drive_config(const Config& config) {
   io::ValveDriveConfig drive;
   drive.dac_full_scale_volts = config.dac.full_scale_v;
   drive.amplifier_gain = drive.valve_full_scale_volts / config.dac.full_scale_v;
+  drive.opens_at_zero_volts = config.dac.return_valve_open_at == "zero";
   return drive;
 }
 

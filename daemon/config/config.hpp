@@ -172,6 +172,7 @@ struct DacSection {
   int channel;
   double iio_scale_mv;  // mV per count; 0 = read out_voltageN_scale
   double full_scale_v;
+  std::string return_valve_open_at;  // full_scale|zero: the DAC output that opens it fully
   int modbus_slave_id;
   int modbus_register;
   double modbus_volts_per_count;

@@ -340,6 +340,12 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "(0 = read the driver's scale)"},
     {WS_KEY(dac, full_scale_v), 3.3, 0.5, 12, "V",
      "DAC voltage for a 100 % valve command"},
+    {WS_KEY(dac, return_valve_open_at), std::string("full_scale"), 0, 0, "",
+     "the DAC output that opens the return valve fully, its safe position (no pressure held): "
+     "full_scale for a valve that opens with its control voltage (then a DAC reset, a "
+     "brown-out or a broken wire closes it: wire a fail-open bypass, docs/hardware.md), zero "
+     "for a reverse-acting valve that opens at 0 V, so a dead DAC opens the relief path",
+     {"full_scale", "zero"}},
     {WS_KEY(dac, modbus_slave_id), 3, 1, 247, "",
      "source = \"modbus\": the output module's slave address"},
     {WS_KEY(dac, modbus_register), 0, 0, 65535, "",

@@ -168,12 +168,15 @@ int RigReturnValveDac::write(double volts) noexcept {
     }
   }
   last_volts_ = std::clamp(volts, 0.0, drive_.dac_full_scale_volts);
-  rig_.set_return_valve_volts(valve_volts_from_dac_volts(last_volts_, drive_));
+  // The simulated valve acts as configured: the rig takes the control volts of a valve that
+  // opens with them.
+  rig_.set_return_valve_volts(valve_opening_from_dac_volts(last_volts_, drive_) *
+                              drive_.valve_full_scale_volts);
   return 0;
 }
 
 int RigReturnValveDac::force_safe() noexcept {
-  return write(drive_.dac_full_scale_volts);
+  return write(dac_volts_from_valve_opening(1.0, drive_));
 }
 
 TankLevelSample RigTankLevel::read() noexcept {

@@ -65,6 +65,13 @@ grep -q "return valve" "$T/converters.log" && fail "the return valve was not wri
 [ "$(cat "$T/dac/out_voltage0_raw")" = 3300 ] ||
   fail "return-valve DAC at $(cat "$T/dac/out_voltage0_raw") counts, not 3300 (fully open)"
 
+# A reverse-acting return valve (open at 0 V): its safe write is 0 counts.
+printf '[dac]\niio_device = "%s"\nreturn_valve_open_at = "zero"\n' "$T/dac" >"$T/reverse.toml"
+: >"$T/dac/out_voltage0_raw" # a sysfs attribute takes each write whole; a file keeps the rest
+"$BIN" --config "$T/reverse.toml" >"$T/reverse.log" 2>&1
+[ "$(cat "$T/dac/out_voltage0_raw")" = 0 ] ||
+  fail "reverse-acting return valve at $(cat "$T/dac/out_voltage0_raw") counts, not 0 (open)"
+
 # The output manifest: weedsprayd writes the configuration it resolved at its start (here it
 # then stops, finding no GPIO chip); a typo made in the file afterwards does not stop the safe
 # writer, which reads the manifest and still tries the outputs the daemon drove.

@@ -55,5 +55,20 @@ TEST(SignalConversion, ValveDriveDacToValveVolts) {
   EXPECT_NEAR(dac_volts_from_valve_opening(2.0, d), 3.3, 1e-9);
 }
 
+// A reverse-acting return valve: fully open (the safe position) at 0 V, so a DAC that resets,
+// browns out or loses its wire opens the relief path.
+TEST(SignalConversion, AValveThatOpensAtZeroVoltsIsDrivenReversed) {
+  ValveDriveConfig d;
+  d.opens_at_zero_volts = true;
+  EXPECT_NEAR(dac_volts_from_valve_opening(1.0, d), 0.0, 1e-9);
+  EXPECT_NEAR(dac_volts_from_valve_opening(0.0, d), 3.3, 1e-9);
+  EXPECT_NEAR(dac_volts_from_valve_opening(0.25, d), 2.475, 1e-9);
+  EXPECT_NEAR(valve_opening_from_dac_volts(0.0, d), 1.0, 1e-9);
+  EXPECT_NEAR(valve_opening_from_dac_volts(3.3, d), 0.0, 1e-9);
+  for (double opening = 0.0; opening <= 1.0; opening += 0.1)
+    EXPECT_NEAR(valve_opening_from_dac_volts(dac_volts_from_valve_opening(opening, d), d), opening,
+                1e-9);
+}
+
 }  // namespace
 }  // namespace weedspray::io
