@@ -389,6 +389,11 @@ inline constexpr const char* kNoEstopWarning =
 // The effective configuration as TOML (every key, current values), parseable back.
 [[nodiscard]] std::string dump_config(const Config& config);
 
+// The most [[camera]] tables one board runs (the sprayer's fixed camera workers).
+inline constexpr std::size_t kMaxCameras = 8;
+// The largest configuration file (or drop-in) the loader reads.
+inline constexpr std::uintmax_t kMaxConfigFileBytes = 1u << 20;
+
 using ConfigPtr = std::shared_ptr<const Config>;
 
 // <sysconfdir>/weedspray/weedspray.toml of the install prefix (default_config_path.cpp).

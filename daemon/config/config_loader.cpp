@@ -358,6 +358,11 @@ class Loader {
   // Rules between keys; the message names the key whose value was set last in a file.
   void validate() const {
     const auto& c = config_;
+    if (c.cameras.size() > kMaxCameras) {
+      fail("camera[" + std::to_string(kMaxCameras) + "]",
+           std::to_string(c.cameras.size()) + " [[camera]] tables: at most " +
+               std::to_string(kMaxCameras) + " cameras per board");
+    }
     std::vector<int> owner(static_cast<std::size_t>(c.boom.nozzles), -1);
     for (std::size_t i = 0; i < c.cameras.size(); ++i) {
       const auto& camera = c.cameras[i];
@@ -423,6 +428,13 @@ class Loader {
     }
     if (c.spray.duty_min_pct >= c.spray.duty_max_pct) {
       fail("spray.duty_max_pct", "must be above spray.duty_min_pct");
+    }
+    if (c.pwm.min_on_s + c.pwm.min_off_s > 1.0 / c.pwm.frequency_hz) {
+      fail("pwm.min_on_s",
+           "pwm.min_on_s + pwm.min_off_s (" + format_number(c.pwm.min_on_s + c.pwm.min_off_s) +
+               " s) must fit in one PWM period (1 / pwm.frequency_hz = " +
+               format_number(1.0 / c.pwm.frequency_hz) + " s)",
+           "pwm.min_off_s");
     }
     if (c.nozzle_health.enabled) {
       if (!c.pwm.staggered) {
@@ -542,6 +554,14 @@ std::string read_file(const std::filesystem::path& path) {
                       std::filesystem::is_directory(status)
                           ? "is a directory, not a configuration file"
                           : "is not a regular file");
+  }
+  // A configuration is a few tens of kB; a file far larger is a mistake (a log or an image
+  // saved under the wrong name), and parsing it would stall the reload for seconds.
+  const auto size = std::filesystem::file_size(path, error);
+  if (!error && size > kMaxConfigFileBytes) {
+    throw ConfigError(path.string(), 0, "",
+                      std::to_string(size) + " bytes: a configuration file has at most " +
+                          std::to_string(kMaxConfigFileBytes) + " bytes");
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ConfigError(path.string(), 0, "", "cannot be read (permission?)");

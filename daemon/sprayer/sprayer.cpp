@@ -167,8 +167,10 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
     std::vector<double> levels{0.0};
     const int n = config.spray.quantiser_levels;
     for (int i = 0; i < n; ++i) {
-      levels.push_back(config.spray.duty_min_pct +
-                       (config.spray.duty_max_pct - config.spray.duty_min_pct) * i / (n - 1));
+      const double level = config.spray.duty_min_pct +
+                           (config.spray.duty_max_pct - config.spray.duty_min_pct) * i / (n - 1);
+      // duty_min_pct = 0 or duty_max_pct = 100: that level is the closed or open one already.
+      if (level > levels.back() && level < 100.0) levels.push_back(level);
     }
     levels.push_back(100.0);
     for (std::size_t i = 0; i < nozzles; ++i) {

@@ -49,7 +49,7 @@ LiveParams live_params_from(const Config& config);
 
 class Sprayer {
  public:
-  static constexpr std::size_t kMaxCameras = 8;
+  static constexpr std::size_t kMaxCameras = daemon::kMaxCameras;
   using FrameQueue = io::SpscQueue<FrameDensities, 16>;
   using LatencyQueue = io::SpscQueue<float, 1024>;
   using RecordQueue = io::SpscQueue<AppliedRecord, 256>;

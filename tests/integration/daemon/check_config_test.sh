@@ -72,4 +72,24 @@ printf '[alarms]\nsensor_fault_high_ma = 30\n' >"$T/short.toml"
 refused short "2: alarms.sensor_fault_high_ma: 30 is outside"
 printf '[pressure]\nsensor_max_mpa = 1.0\n[alarms]\nover_pressure_mpa = 1.2\n' >"$T/trip.toml"
 refused trip "4: alarms.over_pressure_mpa: .* must be below pressure.sensor_max_mpa"
+
+# What the daemon would refuse at start is refused here: more cameras than a board runs, minimum
+# valve times that do not fit a PWM period (every numeric key at its range's ends is checked
+# against the daemon's own construction by ConfigBounds.* in daemon_sim_tests).
+for i in $(seq 0 8); do printf '[[camera]]\nfirst_nozzle = %d\nnozzle_count = 1\n' "$i"; done \
+  >"$T/cameras.toml"
+sed -i '1i [boom]\nnozzles = 9' "$T/cameras.toml"
+refused cameras "27: camera\\[8\\]: 9 \\[\\[camera\\]\\] tables: at most 8 cameras"
+printf '[pwm]\nfrequency_hz = 20\nmin_on_s = 0.04\nmin_off_s = 0.02\n' >"$T/pwm.toml"
+refused pwm "3: pwm.min_on_s: pwm.min_on_s + pwm.min_off_s (0.06 s) must fit"
+# A file far larger than any configuration (a log saved under its name) is refused at once,
+# before it is parsed: a reload of it would stall the daemon's main loop for seconds.
+{
+  printf '[gpio]\n'
+  head -c 2000000 /dev/zero | tr '\0' '#'
+  printf '\n'
+} >"$T/huge.toml"
+start=$(date +%s%N)
+refused huge " 2000008 bytes: a configuration file has at most 1048576 bytes"
+[ $((($(date +%s%N) - start) / 1000000)) -lt 1000 ] || fail "the huge file took over a second"
 echo PASS
