@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
-# The D-Bus policy file on a private bus that loads it (like the system bus does): root may
-# own the name and call methods; any other user (here: nobody, not in group weedspray) may read
-# properties and introspect, but every method call is denied. Also: a malformed policy is
+# The D-Bus policy file on a private bus that loads it (like the system bus does), its three
+# permissions: anyone (here: nobody, in no group) may read properties and introspect, but every
+# method call is denied; an operator (group weedspray) may start, stop, set the pressure and
+# clear alarms, not reload or calibrate; an engineer (group weedspray-admin) and root may call
+# every method. The policy's two groups are mapped to groups every Debian has (users, staff),
+# so that the test needs no group of its own on the machine. Also: a malformed policy is
 # rejected by dbus-daemon, so the file is known to parse.
 # usage: bus_policy_test.sh BUILD_DIR SOURCE_DIR   (runs as root; skipped otherwise)
 set -euo pipefail
@@ -50,7 +53,11 @@ if dbus-daemon --config-file="$T/bad-bus.conf" --fork --nopidfile --print-addres
   fail "dbus-daemon accepted a malformed policy (the check cannot tell good from bad)"
 fi
 
-write_bus_config "$POLICY" "$T/bus.conf"
+sed -e 's/group="weedspray-admin"/group="staff"/' -e 's/group="weedspray"/group="users"/' \
+  "$POLICY" >"$T/policy.conf"
+grep -q 'group="users"' "$T/policy.conf" && grep -q 'group="staff"' "$T/policy.conf" ||
+  fail "the policy names neither group weedspray nor weedspray-admin"
+write_bus_config "$T/policy.conf" "$T/bus.conf"
 dbus-daemon --config-file="$T/bus.conf" --fork --nopidfile --print-address=3 --print-pid=4 \
   3>"$T/bus.addr" 4>"$T/bus.pid" 2>"$T/bus.err" || fail "bus: $(cat "$T/bus.err")"
 BUS_PID=$(cat "$T/bus.pid")
@@ -62,6 +69,24 @@ mkdir -p "$T/state"
   --state-dir "$T/state" >"$T/daemon.log" 2>&1 &
 DAEMON_PID=$!
 as_nobody() { setpriv --reuid=nobody --regid=nogroup --clear-groups "$@"; }
+as_operator() { setpriv --reuid=nobody --regid=nogroup --groups=users "$@"; }
+as_engineer() { setpriv --reuid=nobody --regid=nogroup --groups=staff "$@"; }
+denied() {  # denied WHO SPRAYCTL_ARGS...: the bus refuses the call
+  local who=$1
+  shift
+  if "$who" "$BUILD/daemon/sprayctl" --user "$@" 2>"$T/err.txt"; then fail "$who: $* allowed"; fi
+  grep -q "AccessDenied" "$T/err.txt" || fail "$who: $*: $(cat "$T/err.txt")"
+}
+passed_by_the_bus() {  # passed_by_the_bus WHO METHOD [SIGNATURE ARGS...]: the call reaches the
+  # daemon (which may still refuse it for its state)
+  local who=$1
+  shift
+  "$who" busctl --user call org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
+    org.weedspray.Sprayer1 "$@" >/dev/null 2>"$T/err.txt" || true
+  if grep -q "AccessDenied" "$T/err.txt"; then fail "$who: $* denied: $(cat "$T/err.txt")"; fi
+}
+state() { busctl --user get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
+  org.weedspray.Sprayer1 State; }
 for _ in $(seq 1 100); do
   state=$(busctl --user get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
     org.weedspray.Sprayer1 State 2>/dev/null || true)
@@ -80,22 +105,46 @@ as_nobody busctl --user introspect org.weedspray.Sprayer1 /org/weedspray/Sprayer
 echo "ok: reading allowed to everyone"
 
 # Methods: denied to nobody, allowed to root.
-for cmd in start stop clear-alarms reload "set-pressure 0.3"; do
+for cmd in start stop clear-alarms reload "set-pressure 0.3" "calibrate nozzles" \
+  "calibrate meter --seconds 5"; do
   # shellcheck disable=SC2086
-  if as_nobody "$BUILD/daemon/sprayctl" --user $cmd 2>"$T/err.txt"; then
-    fail "nobody was allowed to call $cmd"
-  fi
-  grep -q "AccessDenied" "$T/err.txt" || fail "$cmd by nobody: $(cat "$T/err.txt")"
+  denied as_nobody $cmd
 done
 if as_nobody busctl --user set-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
   org.weedspray.Sprayer1 State s Spraying 2>/dev/null; then
   fail "nobody could Set a property"
 fi
 echo "ok: methods denied to other users"
+
+# An operator operates: start, set the pressure, clear alarms, stop; reloading and calibrating
+# are refused.
+as_operator "$BUILD/daemon/sprayctl" --user start 2>"$T/err.txt" || fail "operator: start: $(cat "$T/err.txt")"
+[ "$(state)" = 's "Spraying"' ] || fail "the operator's Start had no effect: $(state)"
+as_operator "$BUILD/daemon/sprayctl" --user set-pressure 0.3 || fail "operator: set-pressure"
+as_operator "$BUILD/daemon/sprayctl" --user clear-alarms || fail "operator: clear-alarms"
+as_operator "$BUILD/daemon/sprayctl" --user stop || fail "operator: stop"
+[ "$(state)" = 's "Idle"' ] || fail "the operator's Stop had no effect: $(state)"
+for cmd in reload "calibrate nozzles" "calibrate meter --seconds 5" "calibrate meter --volume 1"; do
+  # shellcheck disable=SC2086
+  denied as_operator $cmd
+done
+if as_operator busctl --user call org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
+  org.weedspray.Sprayer1 InjectSimFault s pump_stops@1 2>/dev/null; then
+  fail "an operator could inject a simulated fault"
+fi
+echo "ok: an operator may operate, not reload or calibrate"
+
 "$BUILD/daemon/sprayctl" --user start || fail "root cannot Start"
 [ "$(busctl --user get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
   org.weedspray.Sprayer1 State)" = 's "Spraying"' ] || fail "root's Start had no effect"
 echo "ok: root may call methods"
+
+# An engineer may reload and calibrate as well.
+as_engineer "$BUILD/daemon/sprayctl" --user reload 2>"$T/err.txt" || fail "engineer: reload: $(cat "$T/err.txt")"
+passed_by_the_bus as_engineer CalibrateMeter d 5
+passed_by_the_bus as_engineer CalibrateNozzles
+passed_by_the_bus as_engineer CalibrateWheel d 20
+echo "ok: an engineer may reload and calibrate"
 kill -TERM "$DAEMON_PID"
 wait "$DAEMON_PID" || fail "exit status $? after SIGTERM"
 DAEMON_PID=
