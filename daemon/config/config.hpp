@@ -199,6 +199,7 @@ struct CalibrationSection {
   double measure_s;                // counted at each point
   double min_r_squared;            // a nozzle's fit below this: the [spray] line stays in use
   bool full_open;                  // also meter each nozzle held open (its full-open flow)
+  double meter_max_change_pct;     // a catch test's K this far off flow.pulses_per_litre: refused
 };
 
 // Per-nozzle health from the line meter while spraying (control/nozzle_health.hpp).

@@ -389,6 +389,10 @@ const std::vector<KeySpec<Config>>& config_keys() {
     {WS_KEY(calibration, min_r_squared), 0.98, 0, 1, "",
      "a nozzle whose fitted line has R^2 below this keeps the [spray] line (a sticking valve, a "
      "meter too coarse for one nozzle)"},
+    {WS_KEY(calibration, meter_max_change_pct), 25.0, 1, 100, "%",
+     "sprayctl calibrate meter --volume: a result further than this from flow.pulses_per_litre "
+     "is refused as a likely typo in the volume (the catch test still awaits the right one); "
+     "a meter that truly differs that much needs flow.pulses_per_litre set"},
     {WS_KEY(calibration, full_open), true, 0, 1, "",
      "sprayctl calibrate nozzles: also meter each nozzle held open (100 %, one point more): a "
      "request at or above that flow holds the valve open, and the flow trim and "

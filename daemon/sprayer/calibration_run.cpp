@@ -69,7 +69,8 @@ std::string CalibrationRun::start_nozzle_sweep(const NozzleSweepPlan& plan, doub
 }
 
 std::optional<control::FlowMeterCalibration> CalibrationRun::enter_volume(
-    double volume_l, double configured_pulses_per_litre, std::string& error) {
+    double volume_l, double configured_pulses_per_litre, double max_change_pct,
+    std::string& error) {
   if (state_ != CalibrationState::kAwaitingVolume) {
     error = std::string("no catch test awaits its volume (calibration ") + to_string(state_) +
             "): run `sprayctl calibrate meter --seconds S` first";
@@ -85,6 +86,19 @@ std::optional<control::FlowMeterCalibration> CalibrationRun::enter_volume(
   }
   const control::FlowMeterCalibration result =
       control::calibrate_flow_meter(catch_pulses_, volume_l, configured_pulses_per_litre);
+  const double change_pct =
+      std::abs(result.pulses_per_litre / configured_pulses_per_litre - 1.0) * 100.0;
+  if (change_pct > max_change_pct) {
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "%.3f L over %llu pulses is %.1f pulses/L, %.0f %% off the configured %.1f "
+                  "(at most calibration.meter_max_change_pct = %.0f %%): was the volume typed "
+                  "right? If the meter truly differs that much, set flow.pulses_per_litre",
+                  volume_l, static_cast<unsigned long long>(catch_pulses_), result.pulses_per_litre,
+                  change_pct, configured_pulses_per_litre, max_change_pct);
+    error = text;
+    return std::nullopt;
+  }
   state_ = CalibrationState::kDone;
   progress_ = 1.0;
   char text[160];

@@ -51,9 +51,12 @@ class CalibrationRun {
   std::string start_catch_test(double duration_s, double now_s, std::uint64_t pulses);
   std::string start_nozzle_sweep(const NozzleSweepPlan& plan, double now_s, std::uint64_t pulses);
   // The measured volume of a finished catch test: the meter's calibration against
-  // `configured_pulses_per_litre`; nullopt and `error` set unless a catch test awaits it.
+  // `configured_pulses_per_litre`; nullopt and `error` set unless a catch test awaits it, or
+  // when the result is further than `max_change_pct` from the configured K (a typo in the
+  // volume: the catch test still awaits the right one).
   std::optional<control::FlowMeterCalibration> enter_volume(double volume_l,
                                                             double configured_pulses_per_litre,
+                                                            double max_change_pct,
                                                             std::string& error);
   // Ends a running calibration (or a catch test awaiting its volume): valves closed.
   void cancel(std::string_view why);

@@ -65,7 +65,8 @@ CommandResult Calibrations::start_catch_test(double seconds, const CalibrationCo
 
 CommandResult Calibrations::calibrate_meter(double volume_l) {
   std::string error;
-  const auto result = run_.enter_volume(volume_l, configured_pulses_per_litre_, error);
+  const auto result = run_.enter_volume(volume_l, configured_pulses_per_litre_,
+                                        section_.meter_max_change_pct, error);
   if (!result) {
     return {run_.state() == CalibrationState::kAwaitingVolume ? kErrorInvalidArgument
                                                               : kErrorNotPermitted,

@@ -80,13 +80,20 @@ TEST(CalibrationRun, CatchTestOpensEveryValveThenTakesTheCollectedVolume) {
   EXPECT_EQ(run.duties()[3], 0.0) << "a valve beyond the boom was opened";
   EXPECT_NE(run.start_nozzle_sweep({}, 0.0, 0), "") << "a second calibration started";
   std::string error;
-  EXPECT_FALSE(run.enter_volume(1.0, 8500.0, error)) << "a volume taken mid-run";
+  EXPECT_FALSE(run.enter_volume(1.0, 8500.0, 25.0, error)) << "a volume taken mid-run";
   const double end = run_until_idle(run, boom, 0.0, 30.0);
   EXPECT_NEAR(end, 10.0 + CalibrationRun::kDrainS, 0.06);
   EXPECT_EQ(run.state(), CalibrationState::kAwaitingVolume);
   for (double d : run.duties()) EXPECT_EQ(d, 0.0);
+  // A typo (ten times the volume, a tenth): the K would be 90 % or 900 % off: refused, and the
+  // catch test still awaits its volume.
+  for (double typo : {10.0, 0.1}) {
+    EXPECT_FALSE(run.enter_volume(boom.litres * typo, 8500.0, 25.0, error)) << typo;
+    EXPECT_NE(error.find("calibration.meter_max_change_pct"), std::string::npos) << error;
+    EXPECT_EQ(run.state(), CalibrationState::kAwaitingVolume);
+  }
   // What the user collected: the boom's true litres over the run.
-  const auto result = run.enter_volume(boom.litres, 8500.0, error);
+  const auto result = run.enter_volume(boom.litres, 8500.0, 25.0, error);
   ASSERT_TRUE(result) << error;
   EXPECT_NEAR(result->pulses_per_litre, 8670.0, 8670.0 * 1e-3);
   EXPECT_NEAR(result->error_pct, (8500.0 - 8670.0) / 8670.0 * 100.0, 0.1);
