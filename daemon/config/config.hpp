@@ -344,11 +344,18 @@ struct Config {
 class ConfigError : public std::runtime_error {
  public:
   ConfigError(std::string file, int line, std::string key, const std::string& message);
+  // Every problem of `errors` (not empty) as one error: located at the first, its text one
+  // "file:line: key: message" line per problem.
+  static ConfigError listing(const std::vector<ConfigError>& errors);
   const std::string& file() const { return file_; }
   int line() const { return line_; }
   const std::string& key() const { return key_; }
 
  private:
+  struct Preformatted {};
+  ConfigError(Preformatted, const std::string& text, std::string file, int line, std::string key)
+      : std::runtime_error(text), file_(std::move(file)), line_(line), key_(std::move(key)) {}
+
   std::string file_;
   int line_;
   std::string key_;

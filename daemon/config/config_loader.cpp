@@ -22,6 +22,17 @@ ConfigError::ConfigError(std::string file, int line, std::string key, const std:
       line_(line),
       key_(std::move(key)) {}
 
+ConfigError ConfigError::listing(const std::vector<ConfigError>& errors) {
+  if (errors.size() == 1) return errors.front();
+  std::string text;
+  for (const auto& error : errors) {
+    if (!text.empty()) text += '\n';
+    text += error.what();
+  }
+  const ConfigError& first = errors.front();
+  return ConfigError(Preformatted{}, text, first.file(), first.line(), first.key());
+}
+
 namespace {
 
 // A safety line hardware mode needs (gpio.NAME_offset or gpio.NAME_name) unless
@@ -232,25 +243,53 @@ class Loader {
         continue;
       }
       if (!sections().count(section)) {
-        throw ConfigError(file, line, section, "unknown section");
+        note(ConfigError(file, line, section, "unknown section"));
+        continue;
       }
       if (!section_node.is_table()) {
-        throw ConfigError(file, line, section, "expected a [" + section + "] table");
+        note(ConfigError(file, line, section, "expected a [" + section + "] table"));
+        continue;
       }
       for (const auto& [name_key, value_node] : *section_node.as_table()) {
         const std::string full = section + "." + std::string(name_key.str());
-        const auto found = keys_.find(full);
-        if (found == keys_.end()) {
-          throw ConfigError(file, static_cast<int>(name_key.source().begin.line), full,
-                            "unknown key");
-        }
-        set_from_node(*found->second, config_, value_node, Where{file, full});
-        config_.sources[full] = KeySource{file, line_of(value_node)};
+        set_key(keys_, full, config_, file, full, name_key, value_node);
       }
     }
   }
 
+  // A problem of one key or file: the loader goes on, so that every such problem is reported
+  // at once (finish() throws them all).
+  void note(const ConfigError& error) { errors_.push_back(error); }
+  // The key `name` of `index` set in `root` from `value_node` (written as `full`), its source
+  // recorded; an unknown key or a bad value is noted instead.
+  template <class Index, class Root>
+  void set_key(const Index& index, const std::string& name, Root& root, const std::string& file,
+               const std::string& full, const toml::key& name_key, const toml::node& value_node) {
+    const auto found = index.find(name);
+    if (found == index.end()) {
+      note(ConfigError(file, static_cast<int>(name_key.source().begin.line), full, "unknown key"));
+      return;
+    }
+    try {
+      set_from_node(*found->second, root, value_node, Where{file, full});
+    } catch (const ConfigError& error) {
+      note(error);
+      return;
+    }
+    config_.sources[full] = KeySource{file, line_of(value_node)};
+  }
+
+  // One file's problems in the order of its lines (the TOML tables come sorted by name).
+  void end_of_file() {
+    std::stable_sort(
+        errors_.begin() + static_cast<std::ptrdiff_t>(errors_in_earlier_files_), errors_.end(),
+        [](const ConfigError& a, const ConfigError& b) { return a.line() < b.line(); });
+    errors_in_earlier_files_ = errors_.size();
+  }
+
   Config finish(WeedSourceCheck check) {
+    // Rules between keys judge values that all parsed; until then they would only add noise.
+    if (!errors_.empty()) throw ConfigError::listing(errors_);
     if (!cameras_given_) config_.cameras.front().nozzle_count = config_.boom.nozzles;
     validate();
     if (check != nullptr) {
@@ -292,13 +331,7 @@ class Loader {
       for (const auto& [name_key, value_node] : *array->get(i)->as_table()) {
         const std::string name(name_key.str());
         const std::string full = "camera[" + std::to_string(i) + "]." + name;
-        const auto found = camera_index_.find("camera." + name);
-        if (found == camera_index_.end()) {
-          throw ConfigError(file, static_cast<int>(name_key.source().begin.line), full,
-                            "unknown key");
-        }
-        set_from_node(*found->second, camera, value_node, Where{file, full});
-        config_.sources[full] = KeySource{file, line_of(value_node)};
+        set_key(camera_index_, "camera." + name, camera, file, full, name_key, value_node);
       }
       config_.cameras.push_back(std::move(camera));
     }
@@ -529,6 +562,8 @@ class Loader {
 
   Config config_;
   bool cameras_given_ = false;
+  std::vector<ConfigError> errors_;
+  std::size_t errors_in_earlier_files_ = 0;
   std::map<std::string, const KeySpec<Config>*, std::less<>> keys_ = index_by_name(config_keys());
   std::map<std::string, const KeySpec<CameraSection>*, std::less<>> camera_index_ =
       index_by_name(camera_keys());
@@ -584,7 +619,14 @@ Config default_config() {
 Config load_config_documents(const std::vector<std::pair<std::string, std::string>>& documents,
                              WeedSourceCheck check) {
   Loader loader;
-  for (const auto& [name, text] : documents) loader.apply(name, parse_document(text, name));
+  for (const auto& [name, text] : documents) {
+    try {
+      loader.apply(name, parse_document(text, name));
+    } catch (const ConfigError& error) {
+      loader.note(error);  // a file that does not parse: the others are still read
+    }
+    loader.end_of_file();
+  }
   return loader.finish(check);
 }
 

@@ -285,6 +285,38 @@ TEST(ConfigErrors, TomlSyntaxErrorHasTheLine) {
   EXPECT_EQ(e.line(), 3);
 }
 
+// Every problem of every file at once, each file's in line order, located at the first; a
+// file that does not parse does not hide the next file's problems. Rules between keys wait
+// until every value parsed.
+TEST(ConfigErrors, EveryProblemIsListedAtOnce) {
+  const auto e =
+      parse_error({{"main.toml",
+                    "[pwm]\nfrequency_hz = 50\nstaggered = \"yes\"\n[gpio]\nvalve_ofsets = [1]\n"
+                    "[nonsense]\na = 1\n"},
+                   {"conf.d/10-broken.toml", "[boom\n"},
+                   {"conf.d/20-camera.toml", "[[camera]]\nfps = -1\n"}});
+  EXPECT_EQ(e.file(), "main.toml");
+  EXPECT_EQ(e.line(), 2);
+  EXPECT_EQ(e.key(), "pwm.frequency_hz");
+  const std::vector<std::string> expected = {
+      "main.toml:2: pwm.frequency_hz: 50 is outside",
+      "main.toml:3: pwm.staggered: expected",
+      "main.toml:5: gpio.valve_ofsets: unknown key",
+      "main.toml:6: nonsense: unknown section",
+      "conf.d/10-broken.toml:1: ",
+      "conf.d/20-camera.toml:2: camera[0].fps: -1 is outside"};
+  std::istringstream lines(e.what());
+  std::size_t n = 0;
+  for (std::string line; std::getline(lines, line); ++n) {
+    ASSERT_LT(n, expected.size()) << e.what();
+    EXPECT_EQ(line.rfind(expected[n], 0), 0U) << line;
+  }
+  EXPECT_EQ(n, expected.size()) << e.what();
+  // One problem: its own text, as before.
+  const auto one = parse_error({{"main.toml", "[boom]\nnozzles = 0\n"}});
+  EXPECT_EQ(std::string(one.what()).find('\n'), std::string::npos) << one.what();
+}
+
 TEST(ConfigErrors, CrossKeyRulesNameTheKeyAndWhereItWasSet) {
   const auto e = parse_error({{"main.toml", "[boom]\nnozzles = 4\n"},
                               {"conf.d/10-cam.toml", "[[camera]]\nfirst_nozzle = 2\n"}});
