@@ -699,6 +699,27 @@ crash segv_safe RTMIN+2 11 10 segv_unsafe_ms
 crash watchdog_safe RTMIN+3 6 100 watchdog_unsafe_ms
 info "journal of the faults: $(journalctl -u weedsprayd -b -q -o cat | grep -E 'watchdog|dumped core|Main process exited|outputs written safe|test crash hook' | sort | uniq -c | tr '\n' '|')"
 
+# The system bus dies while spraying (dbus-daemon killed): nobody can stop the sprayer over
+# D-Bus any more, so the daemon stops by itself (valves closed, pump off) and exits for systemd
+# to restart it, Idle, once the bus is back. Figure: from a trace marker written just before
+# the kill to every valve and the pump written 0; limit 1000 ms, as for an orderly stop.
+start_spraying || info "bus lost: not spraying before it (State=$(bus_state))"
+pid="$(main_pid)"
+bus_pid="$(systemctl show -p MainPID --value dbus)"
+daemon_gone() { ! kill -0 "$pid" 2>/dev/null; }
+trace_window_begin
+echo bus_killed >"$tracing/trace_marker"
+kill -9 "$bus_pid"
+wait_for 30 daemon_gone
+bus_ms="$(marker_to_safe bus_killed)"
+figure bus_lost_safe_ms "$bus_ms"
+bus_exit="$(journalctl -u weedsprayd -b -o cat | grep -c "D-Bus connection lost")"
+systemctl start dbus.socket dbus.service
+wait_for 120 active_with_new_pid "$pid"
+wait_for 15 state_is Idle
+step bus_lost_safe "$(awk -v ms="$bus_ms" -v said="$bus_exit" -v st="$(bus_state)" 'BEGIN { print (ms >= 0 && ms <= 1000 && said > 0 && st == "Idle") ? 0 : 1 }')" \
+  "dbus-daemon (PID $bus_pid) killed while spraying: every valve and the pump written 0 after $bus_ms ms (limit 1000), 'D-Bus connection lost' in the journal $bus_exit time(s); restarted as PID $(main_pid), State=$(bus_state), Alarms $(bus_value Alarms)"
+
 # systemctl stop while spraying.
 start_spraying || info "stop: not spraying before it (State=$(bus_state))"
 trace_window_begin
