@@ -9,24 +9,17 @@ manpage="${2:?usage: man_options_test.sh PROGRAM MANPAGE}"
 page="$(LC_ALL=C MANWIDTH=250 man --no-hyphenation --no-justification -l "$manpage")"
 [ -n "$page" ] || { echo "man_options_test: $manpage renders empty" >&2; exit 1; }
 
+names="$("$(dirname "$0")/help_names.sh" "$program")"
 missing=()
 checked=0
 in_page() { grep -qE -- "(^|[^A-Za-z0-9-])$1([^A-Za-z0-9-]|$)" <<<"$page"; }
-walk() { # ARGS...: the subcommand path
-  local help
-  help="$("$program" "$@" --help)" || { echo "man_options_test: '$program $* --help' failed" >&2; exit 1; }
-  local option sub
-  for option in $(grep -oE -- '^ +(-[A-Za-z], ?)?--[a-z][a-z0-9-]*' <<<"$help" | grep -oE -- '--[a-z][a-z0-9-]*'); do
-    checked=$((checked + 1))
-    in_page "$option" || missing+=("${*:+$* }$option")
-  done
-  for sub in $(sed -n '/^Subcommands:/,/^$/p' <<<"$help" | grep -oE '^  [a-z][a-z0-9-]*' || true); do
-    checked=$((checked + 1))
-    in_page "$sub" || missing+=("${*:+$* }$sub (subcommand)")
-    walk "$@" "$sub"
-  done
-}
-walk
+while read -r -a words; do
+  ((${#words[@]})) || continue
+  checked=$((checked + 1))
+  kind=""
+  [[ ${words[-1]} == -* ]] || kind=" (subcommand)"
+  in_page "${words[-1]}" || missing+=("${words[*]}$kind")
+done <<<"$names"
 ((checked > 0)) || { echo "man_options_test: no option found in '$program --help'" >&2; exit 1; }
 if ((${#missing[@]})); then
   echo "man_options_test: not in $(basename "$manpage"):" >&2
