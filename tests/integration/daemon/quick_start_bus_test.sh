@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The quick start as a newcomer runs it on a fresh machine as root (no session bus): the
-# simulated daemon under tools/with-session-bus.sh (what `./dev sim` runs) prints one line;
+# simulated daemon under tools/with-session-bus.sh (what `./dev sim` runs) prints one line, once
+# the sprayer answers (after its start-up lines);
 # pasted into another shell, `sprayctl --user status` shows the live sprayer with no alarm and
 # nothing unreadable.
 set -euo pipefail
@@ -22,6 +23,12 @@ for _ in $(seq 1 100); do
   sleep 0.1
 done
 [ -n "$line" ] || fail "no line to paste was printed"
+# It comes once the sprayer answers: after the daemon's start-up lines, not above them.
+grep -n -m1 "^  export DBUS_SESSION_BUS_ADDRESS=" "$T/out.txt" | cut -d: -f1 >"$T/line_no" || true
+grep -n -m1 "weedsprayd running" "$T/out.txt" | cut -d: -f1 >"$T/running_no" || true
+[ -s "$T/running_no" ] && [ "$(cat "$T/line_no")" -gt "$(cat "$T/running_no")" ] ||
+  fail "the line to paste came before the daemon's start-up lines"
+[ "$(grep -c "DBUS_SESSION_BUS_ADDRESS=" "$T/out.txt")" = 1 ] || fail "the line was printed twice"
 # "Another shell": a clean environment with only what the printed line gives it.
 status=
 for _ in $(seq 1 100); do
