@@ -273,16 +273,65 @@ class Daemon final : public CommandHandler {
     return {};
   }
 
-  CommandResult reload_config() override {
+  CommandResult reload_config(ReloadReply reply) override {
+    reload_waiters_.push_back(std::move(reply));
+    if (!reload_job_) start_reload();  // else the next job, once this one is applied
+    return {};
+  }
+
+  // The files are read and parsed and the model probed on a thread of its own (seconds for a
+  // large model on a slow board), while the main loop goes on feeding the watchdog, judging
+  // alarms and serving the bus; tick() applies the result. Callers that arrive meanwhile wait
+  // for the next job, which reads the files as they are then.
+  struct ReloadJob {
+    std::vector<ReloadReply> waiters;
+    std::optional<Config> config;
+    std::string error;
+    std::atomic<bool> done{false};
+    std::jthread thread;  // last: joined before the rest goes
+  };
+
+  void start_reload() {
+    auto job = std::make_unique<ReloadJob>();
+    job->waiters = std::exchange(reload_waiters_, {});
+    ReloadJob* running = job.get();
+    job->thread = std::jthread([running, options = options_] {
+      const std::chrono::milliseconds delay = test_reload_delay();
+      if (delay.count() > 0) std::this_thread::sleep_for(delay);
+      try {
+        running->config = load_with_overrides(options);
+      } catch (const std::exception& error) {  // ConfigError, or a conf.d that cannot be listed
+        running->error = error.what();
+      }
+      running->done.store(true, std::memory_order_release);
+    });
+    reload_job_ = std::move(job);
+  }
+
+  void finish_reload() {
+    if (!reload_job_ || !reload_job_->done.load(std::memory_order_acquire)) return;
+    reload_job_->thread.join();
+    const CommandResult result = reload_job_->config ? apply_reload(*reload_job_->config)
+                                                     : refuse_reload(reload_job_->error);
+    std::vector<ReloadReply> waiters = std::move(reload_job_->waiters);
+    reload_job_.reset();
+    for (auto& reply : waiters) {
+      if (reply) reply(result);
+    }
+    if (!reload_waiters_.empty()) start_reload();
+  }
+
+  static CommandResult refuse_reload(const std::string& why) {
+    spdlog::error("reload refused, running configuration kept: {}", why);
+    return {kErrorConfig, why};
+  }
+
+  CommandResult apply_reload(const Config& fresh) {
     LiveReload reload;
     try {
-      reload = apply_live_reload(config_, load_with_overrides(options_));
+      reload = apply_live_reload(config_, fresh);
     } catch (const ConfigError& error) {
-      spdlog::error("reload refused, running configuration kept: {}", error.what());
-      return {kErrorConfig, error.what()};
-    } catch (const std::exception& error) {  // e.g. a conf.d entry that cannot be listed
-      spdlog::error("reload refused, running configuration kept: {}", error.what());
-      return {kErrorConfig, error.what()};
+      return refuse_reload(error.what());
     }
     if (reload.restart_needed) {
       spdlog::warn(
@@ -330,7 +379,7 @@ class Daemon final : public CommandHandler {
     auto& self = *static_cast<Daemon*>(userdata);
     if (info->ssi_signo == SIGHUP) {
       try {
-        self.reload_config();
+        self.reload_config(nullptr);           // its outcome is logged
       } catch (const std::exception& error) {  // never through sd-event's C frames
         spdlog::error("reload: {}", error.what());
       }
@@ -424,6 +473,7 @@ class Daemon final : public CommandHandler {
     drain_latencies();
     live_view_->poll(now);
     if (calibrations_ && calibrations_->update(calibration_context())) publish_params();
+    finish_reload();
     evaluate_alarms(now, pressure, control);
     heartbeat(now, pressure, control);
 
@@ -1196,6 +1246,8 @@ class Daemon final : public CommandHandler {
   std::array<std::uint64_t, kOutputRoleCount> tolerated_seen_{};
   std::array<bool, kOutputRoleCount> rewrite_safe_{};  // refused a write: write it safe in Fault
   bool start_when_ready_ = false;                      // Start arrived while Starting
+  std::vector<ReloadReply> reload_waiters_;            // asked for a reload not yet started
+  std::unique_ptr<ReloadJob> reload_job_;
   ExitWatcherKeeper exit_watcher_;
   std::string exit_watcher_lost_said_;  // logged once per cause
 };

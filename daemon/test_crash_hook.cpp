@@ -44,4 +44,12 @@ void run_requested_test_fault() {
   }
 }
 
+std::chrono::milliseconds test_reload_delay() {
+  static const std::chrono::milliseconds delay = [] {
+    const char* text = std::getenv("WEEDSPRAY_TEST_RELOAD_DELAY_MS");
+    return std::chrono::milliseconds(text != nullptr ? std::atol(text) : 0);
+  }();
+  return delay;
+}
+
 }  // namespace weedspray::daemon

@@ -8,11 +8,17 @@
 // The fault happens in the main loop's thread at its next tick, not in the signal handler.
 #pragma once
 
+#include <chrono>
+
 namespace weedspray::daemon {
 
 // Installs the handlers when enabled; returns whether it did.
 bool install_test_crash_hook();
 // Main loop: performs a requested fault (never returns then); otherwise nothing.
 void run_requested_test_fault();
+
+// How long each configuration reload waits on its thread before it reads the files:
+// WEEDSPRAY_TEST_RELOAD_DELAY_MS (tests that show the main loop goes on meanwhile); 0 unset.
+std::chrono::milliseconds test_reload_delay();
 
 }  // namespace weedspray::daemon

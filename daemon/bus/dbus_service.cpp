@@ -320,6 +320,21 @@ SnapshotReply deferred_snapshot_reply(sd_bus_message* call) {
   };
 }
 
+// The reply to a ReloadConfig call, sent later: the call is kept referenced until then.
+ReloadReply deferred_reload_reply(sd_bus_message* call) {
+  std::shared_ptr<sd_bus_message> kept(sd_bus_message_ref(call), sd_bus_message_unref);
+  return [kept](const CommandResult& result) {
+    if (result.ok()) {
+      sd_bus_reply_method_return(kept.get(), "");
+      return;
+    }
+    sd_bus_error error = SD_BUS_ERROR_NULL;
+    sd_bus_error_set(&error, result.error_name.c_str(), result.message.c_str());
+    sd_bus_reply_method_error(kept.get(), &error);
+    sd_bus_error_free(&error);
+  };
+}
+
 int dispatch(sd_bus_message* message, CommandHandler& handler, sd_bus_error* error) {
   const char* member_name = sd_bus_message_get_member(message);
   const std::string_view member(member_name != nullptr ? member_name : "");
@@ -334,7 +349,8 @@ int dispatch(sd_bus_message* message, CommandHandler& handler, sd_bus_error* err
     if (r < 0) return r;
     result = handler.set_pressure_setpoint(mpa);
   } else if (member == "ReloadConfig") {
-    result = handler.reload_config();
+    result = handler.reload_config(deferred_reload_reply(message));
+    if (result.ok()) return 1;  // the handler replies once the reload is applied or refused
   } else if (member == "ClearAlarms") {
     result = handler.clear_alarms();
   } else if (member == "InjectSimFault") {

@@ -114,6 +114,9 @@ inline constexpr const char* kErrorConfig = "org.weedspray.Sprayer1.Error.Config
 inline constexpr const char* kErrorRateLimited = "org.weedspray.Sprayer1.Error.RateLimited";
 inline constexpr const char* kErrorUnavailable = "org.weedspray.Sprayer1.Error.Unavailable";
 
+// The answer to a ReloadConfig call, given once: done, or why the reload was refused.
+using ReloadReply = std::function<void(const CommandResult&)>;
+
 // The answer to a Snapshot call, given once: an error, or the PNG's bytes.
 using SnapshotReply = std::function<void(const CommandResult&, std::span<const std::uint8_t> png)>;
 
@@ -124,7 +127,11 @@ class CommandHandler {
   virtual CommandResult start() = 0;
   virtual CommandResult stop() = 0;
   virtual CommandResult set_pressure_setpoint(double mpa) = 0;
-  virtual CommandResult reload_config() = 0;
+  // Re-reads the configuration: the files are parsed and the model probed on a thread of
+  // their own, so the main loop goes on meanwhile. A refusal is returned at once (and `reply`
+  // never called); once accepted, `reply` is called exactly once, later, from the main thread,
+  // when the new configuration is applied or refused.
+  virtual CommandResult reload_config(ReloadReply reply) = 0;
   virtual CommandResult clear_alarms() = 0;
   // Simulation only (the soak, tests): a fault by name now (daemon/backends/sim_faults.hpp).
   virtual CommandResult inject_sim_fault(const std::string& name) = 0;

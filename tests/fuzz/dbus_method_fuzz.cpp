@@ -14,6 +14,7 @@
 namespace {
 
 using weedspray::daemon::CommandResult;
+using weedspray::daemon::ReloadReply;
 
 class Handler final : public weedspray::daemon::CommandHandler {
  public:
@@ -24,7 +25,10 @@ class Handler final : public weedspray::daemon::CommandHandler {
       return {weedspray::daemon::kErrorInvalidArgument, "out of range"};
     return {};
   }
-  CommandResult reload_config() override { return {}; }
+  CommandResult reload_config(ReloadReply reply) override {
+    reply({});
+    return {};
+  }
   CommandResult clear_alarms() override { return {}; }
   CommandResult inject_sim_fault(const std::string& name) override {
     if (!weedspray::daemon::parse_sim_fault(name + "@0"))

@@ -21,7 +21,7 @@ class RecordingHandler final : public CommandHandler {
     setpoint = mpa;
     return mpa > 0 ? CommandResult{} : CommandResult{kErrorInvalidArgument, "not positive"};
   }
-  CommandResult reload_config() override { throw 42; }  // not even a std::exception
+  CommandResult reload_config(ReloadReply) override { throw 42; }  // not even a std::exception
   CommandResult clear_alarms() override { return {}; }
   CommandResult inject_sim_fault(const std::string& name) override {
     fault = name;
