@@ -12,13 +12,7 @@ WEEDSPRAYD=$BUILD/daemon/weedsprayd
 . "$(dirname "$0")/private_bus_lib.sh" estop
 start_private_bus
 
-cat >"$T/weedspray.toml" <<'TOML'
-[boom]
-nozzles = 3
-[sim]
-speed_profile = "constant"
-speed_max_m_per_s = 1.0
-TOML
+write_constant_speed_config
 start_sim_daemon --valve-state-file "$T/valves.txt"
 
 pressure_above() {  # pressure_above MPA: the Pressure property is above MPA

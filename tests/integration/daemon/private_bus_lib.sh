@@ -65,6 +65,11 @@ call() {  # call METHOD [SIGNATURE ARGS...]
 write_sim_config() {  # write_sim_config [TOML LINE...]
   printf '%s\n' "[daemon]" "autostart = true" "[boom]" "nozzles = 3" "$@" >"$T/weedspray.toml"
 }
+# $T/weedspray.toml for the sim: 3 nozzles driven at a constant 1 m/s, then the TOML lines given.
+write_constant_speed_config() {  # write_constant_speed_config [TOML LINE...]
+  printf '%s\n' "[boom]" "nozzles = 3" "[sim]" 'speed_profile = "constant"' \
+    "speed_max_m_per_s = 1.0" "$@" >"$T/weedspray.toml"
+}
 # weedsprayd --sim without a bus on $T/weedspray.toml and the state folder $T/state, with
 # --resume as a restart does, logging to $T/NAME.log (BUILD set by the script). It execs the
 # daemon: after `resumed_sim NAME &`, $! is the daemon itself (a kill reaches it, not a

@@ -11,13 +11,7 @@ BUILD=$(realpath "$1")
 WEEDSPRAYD="$BUILD/daemon/weedsprayd"
 SPRAYCTL="$BUILD/daemon/sprayctl"
 mkdir -p "$T/conf.d"
-cat >"$T/weedspray.toml" <<'TOML'
-[boom]
-nozzles = 3
-[sim]
-speed_profile = "constant"
-speed_max_m_per_s = 1.0
-TOML
+write_constant_speed_config
 start_private_bus
 export WEEDSPRAY_TEST_RELOAD_DELAY_MS=3000
 HOME="$T" start_sim_daemon
