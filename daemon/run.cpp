@@ -951,19 +951,16 @@ class Daemon final : public CommandHandler {
   // none runs (the exit_watcher_lost alarm).
   bool exit_watcher_running(Nanos now) {
     const ExitWatcherKeeper::Check check = exit_watcher_.check(now);
-    switch (check.state) {
-      case ExitWatcherKeeper::State::kRunning:
-        return true;
-      case ExitWatcherKeeper::State::kRestarted:
-        spdlog::warn("{}: started again (pid {})", check.what, exit_watcher_.watcher().pid);
-        hand_outputs_to_exit_watcher();
-        exit_watcher_lost_said_.clear();
-        return true;
-      case ExitWatcherKeeper::State::kLost:
-        if (check.what != exit_watcher_lost_said_) spdlog::error("{}", check.what);
-        exit_watcher_lost_said_ = check.what;
-        return false;
+    if (check.started) {
+      spdlog::warn("{}: started again (pid {})", check.what, exit_watcher_.watcher().pid);
+      hand_outputs_to_exit_watcher();
     }
+    if (check.state != ExitWatcherKeeper::State::kLost) {
+      exit_watcher_lost_said_.clear();
+      return true;
+    }
+    if (check.what != exit_watcher_lost_said_) spdlog::error("{}", check.what);
+    exit_watcher_lost_said_ = check.what;
     return false;
   }
 

@@ -24,6 +24,12 @@ ExitWatcher start_exit_watcher(const std::filesystem::path& config_path,
                                const std::filesystem::path& manifest_path,
                                const std::filesystem::path& program, std::string& error) {
   ExitWatcher watcher;
+  // Said here rather than left to posix_spawn: under an emulator (qemu-user) a failed exec
+  // shows only as a child exiting with status 127.
+  if (::access(program.c_str(), X_OK) != 0) {
+    error = program.string() + ": " + std::strerror(errno);
+    return watcher;
+  }
   // A socket pair rather than a pipe: the daemon hands the watcher its outputs' descriptors
   // over it later (backends/emergency_write_handoff.hpp). Datagrams keep each write whole.
   int fds[2];
@@ -92,9 +98,14 @@ ExitWatcherKeeper::Check ExitWatcherKeeper::check(std::chrono::nanoseconds now) 
   if (!keeping_) return {};
   std::string how;
   if (watcher_.pid >= 0) {
-    if (!reaped(watcher_, how)) return {};
+    if (!reaped(watcher_, how)) {
+      // A restarted watcher that has lived a retry interval is trusted again.
+      if (ending_at_once_ && now - last_start_ >= retry_every_) ending_at_once_ = false;
+      return {ending_at_once_ ? State::kLost : State::kRunning, last_error_};
+    }
     ::close(watcher_.socket_fd);
     last_error_ = "exit watcher (pid " + std::to_string(watcher_.pid) + ") " + how;
+    ending_at_once_ = started_once_ && now - last_start_ < retry_every_;
     watcher_ = {};
   }
   if (started_once_ && now - last_start_ < retry_every_) return {State::kLost, last_error_};
@@ -106,7 +117,8 @@ ExitWatcherKeeper::Check ExitWatcherKeeper::check(std::chrono::nanoseconds now) 
     last_error_ = "exit watcher not started: " + error;
     return {State::kLost, last_error_};
   }
-  return {State::kRestarted, last_error_};
+  // One that keeps ending as soon as it starts is no watcher: lost, though started again.
+  return {ending_at_once_ ? State::kLost : State::kRestarted, last_error_, true};
 }
 
 }  // namespace weedspray::daemon

@@ -27,7 +27,8 @@ std::filesystem::path default_exit_watcher_program();
 
 // Keeps an exit watcher running beside the daemon (hardware mode): check() reaps one that ended
 // (it is this process's child), closes its socket and starts another, at most once per
-// `retry_every`. The caller hands a restarted watcher the outputs' safe writes.
+// `retry_every`. The caller hands each newly started watcher the outputs' safe writes. A
+// watcher that ends within `retry_every` of its start counts as lost until one lives that long.
 class ExitWatcherKeeper {
  public:
   struct Launch {
@@ -38,7 +39,8 @@ class ExitWatcherKeeper {
   enum class State { kRunning, kRestarted, kLost };
   struct Check {
     State state = State::kRunning;
-    std::string what;  // kRestarted: how the last one ended; kLost: why none runs
+    std::string what;      // kRestarted, kLost: how the last one ended, or why none started
+    bool started = false;  // a new watcher was started: hand it the outputs
   };
 
   ExitWatcherKeeper() = default;  // keeps nothing (simulation, self-test build)
@@ -56,6 +58,7 @@ class ExitWatcherKeeper {
   std::chrono::nanoseconds retry_every_{};
   std::chrono::nanoseconds last_start_{};
   bool started_once_ = false;
+  bool ending_at_once_ = false;  // the last one ended within retry_every_ of its start
 };
 
 }  // namespace weedspray::daemon
