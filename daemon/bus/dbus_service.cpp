@@ -301,15 +301,20 @@ int DbusService::method(sd_bus_message* message, void* userdata, sd_bus_error* e
 
 namespace {
 
+// A deferred call's refusal as its named error reply.
+void reply_error_later(sd_bus_message* call, const CommandResult& result) {
+  sd_bus_error error = SD_BUS_ERROR_NULL;
+  sd_bus_error_set(&error, result.error_name.c_str(), result.message.c_str());
+  sd_bus_reply_method_error(call, &error);
+  sd_bus_error_free(&error);
+}
+
 // The reply to a Snapshot call, sent later: the call is kept referenced until then.
 SnapshotReply deferred_snapshot_reply(sd_bus_message* call) {
   std::shared_ptr<sd_bus_message> kept(sd_bus_message_ref(call), sd_bus_message_unref);
   return [kept](const CommandResult& result, std::span<const std::uint8_t> png) {
     if (!result.ok()) {
-      sd_bus_error error = SD_BUS_ERROR_NULL;
-      sd_bus_error_set(&error, result.error_name.c_str(), result.message.c_str());
-      sd_bus_reply_method_error(kept.get(), &error);
-      sd_bus_error_free(&error);
+      reply_error_later(kept.get(), result);
       return;
     }
     sd_bus_message* reply = nullptr;
@@ -328,10 +333,7 @@ ReloadReply deferred_reload_reply(sd_bus_message* call) {
       sd_bus_reply_method_return(kept.get(), "");
       return;
     }
-    sd_bus_error error = SD_BUS_ERROR_NULL;
-    sd_bus_error_set(&error, result.error_name.c_str(), result.message.c_str());
-    sd_bus_reply_method_error(kept.get(), &error);
-    sd_bus_error_free(&error);
+    reply_error_later(kept.get(), result);
   };
 }
 
