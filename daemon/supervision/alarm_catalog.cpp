@@ -97,7 +97,8 @@ constexpr std::array<AlarmCatalogEntry, kAlarmCount> kCatalog = {{
     {"b5a85ee395a94b8db98523467f2b3086",
      "The exit watcher (weedspray-safe-outputs --when-closed, the process that writes the "
      "outputs safe within milliseconds if the daemon is killed) ended and could not be started "
-     "again: after a kill -9 only ExecStopPost would close the valves, seconds later.",
+     "again, or each new one ends as soon as it starts: after a kill -9 only ExecStopPost "
+     "would close the valves, seconds later.",
      "Look in the journal for why the watcher ended or could not start (a missing or broken "
      "weedspray-safe-outputs, memory); reinstall the package or restart the service. Clear the "
      "alarms once a watcher runs again."},
