@@ -150,9 +150,10 @@ grep -q "outside 0.05..0.9 MPa" "$T/err.txt" || fail "$(cat "$T/err.txt")"
 rm "$T/etc/conf.d/99-broken.toml"
 echo "ok: a safety limit changed by reload waits for a restart"
 
-# monitor prints changes.
+# monitor prints changes, each with its time and unit.
 timeout 2 "$SPRAYCTL" --user monitor >"$T/monitor.txt" || true
-grep -q "^Pressure = \|^Distance = " "$T/monitor.txt" || fail "monitor printed: $(head -3 "$T/monitor.txt")"
+grep -qE "^[0-9]{2}:[0-9]{2}:[0-9]{2}\.[0-9]{3} (Pressure = [0-9.]+ MPa|Distance = [0-9.]+ m)$" "$T/monitor.txt" ||
+  fail "monitor printed: $(head -3 "$T/monitor.txt")"
 "$SPRAYCTL" --user clear-alarms || fail "ClearAlarms"
 "$SPRAYCTL" --user stop || fail "Stop"
 [ "$(prop State)" = '"Idle"' ] || fail "not Idle after Stop"
@@ -200,7 +201,7 @@ expect_alarms pressure_sensor_fault
 if "$SPRAYCTL" --user start 2>/dev/null; then fail "Start accepted in Fault"; fi
 sleep 0.5
 kill "$MONITOR_PID"
-grep -q "^alarm-raised: pressure_sensor_fault" "$T/monitor.txt" || fail "no AlarmRaised signal"
+grep -qE "^[0-9:.]{12} alarm-raised: pressure_sensor_fault$" "$T/monitor.txt" || fail "no AlarmRaised signal"
 grep -q "alarm raised: pressure_sensor_fault (fault: valves closed, pump off; loop current .* - what to do: Check the sensor's wiring" "$T/daemon.log" ||
   fail "alarm not logged with its detail and remedy: $(grep 'alarm raised' "$T/daemon.log")"
 # The catalog's severity, the condition (the wire stays cut) and the remedy, over the bus and on

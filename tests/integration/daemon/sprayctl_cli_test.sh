@@ -51,3 +51,28 @@ expect 0 "^State: *Idle" --user status
 # Outside the set-point's range: refused by the daemon, which says why.
 expect 1 "^sprayctl: org\.weedspray\.Sprayer1\.Error\.[A-Za-z]+: .*" --user set-pressure 5.0
 echo "ok: sprayctl --version, usage (2), not running (3), done (0) and refused (1)"
+
+# Typed JSON: numbers in the units named under "units", structures as objects, a timestamp.
+"$SPRAYCTL" --user status --json >"$T/status.json" || fail "status --json"
+python3 - "$T/status.json" <<'PY' || fail "status --json: $(cat "$T/status.json")"
+import datetime, json, sys
+j = json.load(open(sys.argv[1]))
+assert isinstance(j["Pressure"], float) and j["units"]["Pressure"] == "MPa", j
+assert j["units"]["Flow"] == "L/min" and j["units"]["NozzleDuty"] == "%", j["units"]
+assert isinstance(j["Estop"]["circuit_closed"], bool) and "last_reaction_ms" in j["Estop"], j["Estop"]
+assert set(j["MeterCalibration"]) >= {"source", "pulses_per_litre"}, j["MeterCalibration"]
+assert set(j["Calibration"]) == {"state", "progress", "message"}, j["Calibration"]
+age = datetime.datetime.now(datetime.timezone.utc) - datetime.datetime.fromisoformat(j["timestamp"].replace("Z", "+00:00"))
+assert abs(age.total_seconds()) < 5, (j["timestamp"], age)
+PY
+expect 0 '^\{"Alarms":\[.*\],"timestamp":"[0-9T:.-]+Z"\}$' --user alarms --json
+echo "ok: status --json typed, with units and a timestamp"
+
+# The live view: two frames a fifth of a second apart, each with every nozzle's bar.
+"$SPRAYCTL" --user start || fail "start"
+expect 0 "Applied .* L/ha over the job" --user top --frames 2 --interval 0.2
+[ "$(grep -c '^weedsprayd  Spraying' "$T/out.txt")" -eq 2 ] || fail "top: not 2 frames: $(cat "$T/out.txt")"
+[ "$(grep -cE '^ +[0-9]+    \[[# ]{30}\] +[0-9]+ %' "$T/out.txt")" -eq 8 ] ||
+  fail "top: not 4 nozzle bars (the default boom) a frame: $(cat "$T/out.txt")"
+expect 2 "interval" --user top --interval 0
+echo "ok: sprayctl top"
