@@ -39,6 +39,10 @@ class AnalogOutput {
   virtual std::string describe() const { return {}; }
   virtual double full_scale_volts() const noexcept = 0;
   virtual std::uint64_t error_count() const noexcept = 0;
+  // The longest an unchanged value may go without being written again: a module with a
+  // communication watchdog puts its output safe when no write arrives in time. Zero: a written
+  // value holds until the next write.
+  virtual std::chrono::nanoseconds rewrite_within() const noexcept { return {}; }
   // See DigitalOutputBank::emergency_write.
   virtual bool emergency_write(EmergencyWrite& /*out*/) const noexcept { return false; }
 };

@@ -60,8 +60,14 @@ void AnalogIoWorker::write_pending(DacCommand& written, bool& have_written) noex
   if (!command_.try_read(wanted) && have_written) return;  // writer busy: next slot
   const bool unchanged =
       have_written && wanted.safe == written.safe && (wanted.safe || wanted.volts == written.volts);
-  // Unchanged commands are not re-sent (a Modbus write costs bus time) unless the last failed.
-  if (unchanged && !last_write_failed_) return;
+  // Unchanged commands are not re-sent (a Modbus write costs bus time) unless the last failed
+  // or the output's communication watchdog needs to hear from us again.
+  const nanoseconds now = clock_.now();
+  const nanoseconds rewrite_within = dac_.rewrite_within();
+  const bool due_again =
+      rewrite_within > nanoseconds::zero() && now - last_write_at_ >= rewrite_within;
+  if (unchanged && !last_write_failed_ && !due_again) return;
+  last_write_at_ = now;
   // force_safe() retries itself: only its final result counts.
   const int result = wanted.safe ? dac_.force_safe() : dac_.write(wanted.volts);
   ++writes_;

@@ -96,11 +96,12 @@ class AnalogIoWorker {
   LatestValue<AnalogSample> sample_;
   LatestValue<DacCommand> command_{DacCommand{}};
   LatestValue<AnalogIoStats> stats_;
-  std::uint64_t writes_ = 0;           // run()'s thread only
-  bool last_write_failed_ = false;     // run()'s thread only
-  std::uint32_t failed_in_a_row_ = 0;  // run()'s thread only
-  std::uint64_t dac_faults_ = 0;       // run()'s thread only
-  std::uint64_t dac_tolerated_ = 0;    // run()'s thread only
+  std::uint64_t writes_ = 0;                  // run()'s thread only
+  bool last_write_failed_ = false;            // run()'s thread only
+  std::uint32_t failed_in_a_row_ = 0;         // run()'s thread only
+  std::uint64_t dac_faults_ = 0;              // run()'s thread only
+  std::uint64_t dac_tolerated_ = 0;           // run()'s thread only
+  std::chrono::nanoseconds last_write_at_{};  // run()'s thread only
 };
 
 }  // namespace weedspray::io

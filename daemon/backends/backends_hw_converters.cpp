@@ -1,6 +1,8 @@
 // The pressure ADC and return-valve DAC of the board: Linux IIO devices (e.g. ADS1115 and
 // MCP4725 on a Pi) or Modbus RTU analog modules on their own RS-485 bus ([analog_modbus]).
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <stdexcept>
 
 #include "daemon/backends/backends.hpp"
@@ -44,6 +46,13 @@ std::shared_ptr<io::AnalogOutput> make_dac(const Config& config, double safe_vol
     dac.volts_per_count = config.dac.modbus_volts_per_count;
     dac.full_scale_volts = config.dac.full_scale_v;
     dac.safe_volts = safe_volts;
+    dac.watchdog.timeout_register = config.dac.modbus_comm_timeout_register;
+    dac.watchdog.timeout = std::chrono::duration_cast<std::chrono::nanoseconds>(
+        std::chrono::duration<double>(config.dac.modbus_comm_timeout_s));
+    dac.watchdog.timeout_counts = static_cast<std::uint16_t>(std::clamp(
+        std::lround(config.dac.modbus_comm_timeout_s * config.dac.modbus_comm_timeout_counts_per_s),
+        1L, 65535L));
+    dac.watchdog.safe_value_register = config.dac.modbus_safe_value_register;
     return std::make_shared<io::hw::ModbusAnalogOutput>(dac);
   }
   io::hw::IioAnalogOutputConfig dac;

@@ -176,6 +176,11 @@ struct DacSection {
   int modbus_slave_id;
   int modbus_register;
   double modbus_volts_per_count;
+  // The module's own fail-safe on a silent master (ModbusCommWatchdog); -1: none.
+  int modbus_comm_timeout_register;
+  double modbus_comm_timeout_s;
+  double modbus_comm_timeout_counts_per_s;  // the module's unit of that register
+  int modbus_safe_value_register;
   int write_failures_tolerated;  // in a row, before output_write_failed
 };
 

@@ -547,6 +547,32 @@ class Loader {
         c.adc.modbus_register_type == "holding" && c.adc.modbus_register == c.dac.modbus_register) {
       fail("dac.modbus_register", "is the register the pressure is read from");
     }
+    if (dac && c.dac.modbus_comm_timeout_register >= 0) {
+      const double counts = c.dac.modbus_comm_timeout_s * c.dac.modbus_comm_timeout_counts_per_s;
+      if (counts < 1 || counts > 65535) {
+        fail("dac.modbus_comm_timeout_s",
+             format_number(c.dac.modbus_comm_timeout_s) + " s is " + format_number(counts) +
+                 " counts of dac.modbus_comm_timeout_counts_per_s = " +
+                 format_number(c.dac.modbus_comm_timeout_counts_per_s) +
+                 ": the register holds 1..65535");
+      }
+      // The worker rewrites every third of the timeout, at the pressure loop's write slots.
+      if (c.dac.modbus_comm_timeout_s < 6.0 / c.pressure.loop_hz) {
+        fail("dac.modbus_comm_timeout_s",
+             "must be at least 6 periods of pressure.loop_hz = " +
+                 format_number(c.pressure.loop_hz) + " (" +
+                 format_number(6000.0 / c.pressure.loop_hz) +
+                 " ms): the value is rewritten every third of it, at the loop's write slots");
+      }
+    }
+    const int dac_registers[] = {c.dac.modbus_comm_timeout_register,
+                                 c.dac.modbus_safe_value_register};
+    for (const int reg : dac_registers) {
+      if (dac && reg == c.dac.modbus_register) {
+        fail("dac.modbus_register",
+             "is also the module's communication-timeout or safe-value register");
+      }
+    }
     // One RTU transaction: 8-byte request + 7-byte answer + two 3.5-character silences, 11 bits
     // a character. The converters' thread reads at most half a loop period ahead.
     const double transaction_s = 22.0 * 11.0 / c.analog_modbus.baud;

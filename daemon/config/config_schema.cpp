@@ -352,6 +352,21 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "source = \"modbus\": the holding register written with the valve voltage (function 06)"},
     {WS_KEY(dac, modbus_volts_per_count), 0.001, 1e-9, 1, "V/count",
      "source = \"modbus\": register value = volts / this"},
+    {WS_KEY(dac, modbus_comm_timeout_register), -1, -1, 65535, "",
+     "source = \"modbus\": the module's communication-timeout holding register (its manual: "
+     "\"watchdog\", \"communication loss\" or \"host timeout\"), so that the module itself "
+     "sets its output safe when the daemon stops writing (a crash, a freeze, a cut RS-485 "
+     "pair); the daemon then rewrites an unchanged value every third of the timeout. -1: "
+     "the module has none"},
+    {WS_KEY(dac, modbus_comm_timeout_s), 0.5, 0.05, 60, "s",
+     "source = \"modbus\": the communication timeout written there"},
+    {WS_KEY(dac, modbus_comm_timeout_counts_per_s), 1000.0, 0.001, 1e6, "counts/s",
+     "source = \"modbus\": the timeout register's unit, as counts per second (1000: "
+     "milliseconds, 10: tenths of a second, 1: seconds)"},
+    {WS_KEY(dac, modbus_safe_value_register), -1, -1, 65535, "",
+     "source = \"modbus\": the holding register of the value the module puts out on a "
+     "communication loss (and, on many modules, at power-up); written with the return valve's "
+     "safe value at start. -1: the module has none"},
     {WS_KEY(dac, write_failures_tolerated), 2, 0, 20, "",
      "failed DAC writes in a row that are only counted and logged, not a fault: each is "
      "superseded by the next pressure-loop period's write and the valve holds its last value "

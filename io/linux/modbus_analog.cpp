@@ -66,8 +66,29 @@ ModbusAnalogOutput::ModbusAnalogOutput(const ModbusAnalogOutputConfig& config) :
   if (!(config.volts_per_count > 0.0))
     throw std::runtime_error("modbus analog output (" + config.port.device +
                              "): volts_per_count must be > 0");
+  const ModbusCommWatchdog& watchdog = config.watchdog;
+  if (watchdog.timeout_register >= 0) {
+    check_register(watchdog.timeout_register, "modbus analog output watchdog", config.port.device);
+    if (watchdog.timeout_counts == 0 || watchdog.timeout <= std::chrono::nanoseconds::zero())
+      throw std::runtime_error("modbus analog output (" + config.port.device +
+                               "): the communication timeout must be > 0");
+  }
+  if (watchdog.safe_value_register >= 0)
+    check_register(watchdog.safe_value_register, "modbus analog output safe value",
+                   config.port.device);
   ctx_ = detail::open_modbus_rtu(config.port, "modbus analog output",
                                  detail::ModbusRecovery::kFlushOnly);
+  // The safe value first: a timeout armed before it would put out whatever the module held.
+  const auto store = [&](int address, std::uint16_t value, const char* what) {
+    if (address < 0) return;
+    if (modbus_write_register(ctx_.get(), address, value) != 1)
+      throw std::runtime_error("modbus analog output (" + describe() + "): writing " + what +
+                               " to holding register " + std::to_string(address) +
+                               " failed: " + modbus_strerror(errno) +
+                               " (a module without that register: set it to -1)");
+  };
+  store(watchdog.safe_value_register, counts(config.safe_volts), "the safe value");
+  store(watchdog.timeout_register, watchdog.timeout_counts, "the communication timeout");
   if (write(config.safe_volts) != 0)
     throw std::runtime_error("modbus analog output (" + config.port.device +
                              "): writing the safe value failed: " + modbus_strerror(errno));
@@ -77,12 +98,20 @@ ModbusAnalogOutput::~ModbusAnalogOutput() {
   force_safe();
 }
 
-int ModbusAnalogOutput::write(double volts) noexcept {
+std::uint16_t ModbusAnalogOutput::counts(double volts) const noexcept {
   const double clamped =
       std::clamp(std::isfinite(volts) ? volts : config_.safe_volts, 0.0, config_.full_scale_volts);
-  const long raw = std::clamp(std::lround(clamped / config_.volts_per_count), 0L, 0xFFFFL);
-  if (modbus_write_register(ctx_.get(), config_.register_address,
-                            static_cast<std::uint16_t>(raw)) != 1) {
+  return static_cast<std::uint16_t>(
+      std::clamp(std::lround(clamped / config_.volts_per_count), 0L, 0xFFFFL));
+}
+
+std::chrono::nanoseconds ModbusAnalogOutput::rewrite_within() const noexcept {
+  return config_.watchdog.timeout_register >= 0 ? config_.watchdog.timeout / 3
+                                                : std::chrono::nanoseconds::zero();
+}
+
+int ModbusAnalogOutput::write(double volts) noexcept {
+  if (modbus_write_register(ctx_.get(), config_.register_address, counts(volts)) != 1) {
     const int err = errno;
     ++errors_;
     detail::recover_after_error(ctx_.get(), err, reopen_clock(), last_reopen_);

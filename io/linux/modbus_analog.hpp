@@ -21,12 +21,24 @@ struct ModbusAnalogInputConfig {
   double volts_per_count = 0.001;
 };
 
+// A module's own fail-safe for a silent master (a crashed or frozen daemon, a cut RS-485 pair):
+// when no write arrives within its communication timeout, the module sets its output to a
+// stored safe value by itself. Both are holding registers whose addresses and units the
+// module's manual gives; -1: the module has no such register.
+struct ModbusCommWatchdog {
+  int timeout_register = -1;
+  std::uint16_t timeout_counts = 0;  // the timeout in the module's unit (e.g. ms, 0.1 s)
+  std::chrono::nanoseconds timeout{0};
+  int safe_value_register = -1;  // written with the safe value's counts
+};
+
 struct ModbusAnalogOutputConfig {
   ModbusRtuSettings port;
   int register_address = 0;  // holding register, written with function 06
   double volts_per_count = 0.001;
   double full_scale_volts = 10.0;
   double safe_volts = 0.0;
+  ModbusCommWatchdog watchdog;
 };
 
 class ModbusAnalogInput final : public AnalogInput {
@@ -48,7 +60,9 @@ class ModbusAnalogInput final : public AnalogInput {
 
 class ModbusAnalogOutput final : public AnalogOutput {
  public:
-  // Opens the port and writes safe_volts. Throws std::runtime_error naming the device.
+  // Opens the port, stores the safe value and the timeout in the module's watchdog registers
+  // (those configured), then writes safe_volts. Throws std::runtime_error naming the device and
+  // the register that failed.
   explicit ModbusAnalogOutput(const ModbusAnalogOutputConfig& config);
   ~ModbusAnalogOutput() override;  // force_safe()
   int write(double volts) noexcept override;
@@ -56,8 +70,13 @@ class ModbusAnalogOutput final : public AnalogOutput {
   std::string describe() const override;
   double full_scale_volts() const noexcept override { return config_.full_scale_volts; }
   std::uint64_t error_count() const noexcept override { return errors_; }
+  // A third of the module's communication timeout, so that two lost writes in a row still
+  // leave the output where it was; zero without a watchdog.
+  std::chrono::nanoseconds rewrite_within() const noexcept override;
 
  private:
+  std::uint16_t counts(double volts) const noexcept;
+
   ModbusAnalogOutputConfig config_;
   ModbusContext ctx_;
   std::uint64_t errors_ = 0;

@@ -146,7 +146,7 @@ TEST_F(ModbusPeer, AnalogModuleInputAndOutputRoundTrip) {
   EXPECT_NEAR(in.volts, 1.234, 1e-9);
 
   {
-    ModbusAnalogOutput dac({port, 5, 0.001, 10.0, 0.5});  // writes the safe 0.5 V at start
+    ModbusAnalogOutput dac({port, 5, 0.001, 10.0, 0.5, {}});  // writes the safe 0.5 V at start
     ModbusAnalogInput readback({port, 5, false, 0.001}, clock_);
     EXPECT_NEAR(readback.read().volts, 0.5, 1e-9);
     EXPECT_EQ(dac.write(2.5), 0);
@@ -156,6 +156,27 @@ TEST_F(ModbusPeer, AnalogModuleInputAndOutputRoundTrip) {
   }
   ModbusAnalogInput readback({port, 5, false, 0.001}, clock_);
   EXPECT_NEAR(readback.read().volts, 0.5, 1e-9) << "destructor forces safe";
+}
+
+// A module with a communication watchdog gets the safe value and the timeout in its own
+// registers before the output is used, so it goes safe by itself when the daemon falls silent.
+TEST_F(ModbusPeer, AnalogOutputArmsTheModulesCommunicationWatchdog) {
+  start_slave({"normal", "7", "0=523"});
+  ModbusTankLevel probe(config(0), clock_);  // waits until the peer serves
+  ASSERT_TRUE(first_ok(probe, 20).ok) << probe.last_error();
+  const ModbusRtuSettings port{master_.string(), 9600, 'N', 8, 1, 7, 300ms};
+  ModbusAnalogOutputConfig with_watchdog{port, 5, 0.001, 10.0, 0.5, {}};
+  with_watchdog.watchdog = {
+      .timeout_register = 20, .timeout_counts = 500, .timeout = 500ms, .safe_value_register = 21};
+  ModbusAnalogOutput dac(with_watchdog);
+  EXPECT_EQ(dac.rewrite_within(), std::chrono::nanoseconds(500ms) / 3);
+  ModbusAnalogInput timeout({port, 20, false, 1.0}, clock_);
+  ModbusAnalogInput safe_value({port, 21, false, 0.001}, clock_);
+  EXPECT_DOUBLE_EQ(timeout.read().volts, 500.0);
+  EXPECT_NEAR(safe_value.read().volts, 0.5, 1e-9);
+
+  ModbusAnalogOutput plain({port, 5, 0.001, 10.0, 0.5, {}});
+  EXPECT_EQ(plain.rewrite_within(), std::chrono::nanoseconds::zero()) << "no watchdog, no rewrite";
 }
 
 TEST_F(ModbusPeer, AnalogInputCountsErrorsOnASilentModule) {

@@ -498,6 +498,33 @@ TEST(ConfigSchema, ModbusAnalogModulesOnTheirOwnBus) {
   EXPECT_EQ(same_register.key(), "dac.modbus_register");
 }
 
+TEST(ConfigSchema, ModbusDacWatchdogFitsItsRegisterAndTheLoop) {
+  const Config armed = parse(
+      "[dac]\nsource = \"modbus\"\nmodbus_comm_timeout_register = 40\n"
+      "modbus_comm_timeout_s = 0.3\nmodbus_safe_value_register = 41\n");
+  EXPECT_EQ(armed.dac.modbus_comm_timeout_register, 40);
+  EXPECT_EQ(armed.dac.modbus_safe_value_register, 41);
+  // 120 s in milliseconds does not fit a 16-bit register.
+  const auto too_long =
+      parse_error({{"main.toml",
+                    "[dac]\nsource = \"modbus\"\nmodbus_comm_timeout_register = 40\n"
+                    "modbus_comm_timeout_s = 60\nmodbus_comm_timeout_counts_per_s = 10000\n"}});
+  EXPECT_EQ(too_long.key(), "dac.modbus_comm_timeout_s");
+  EXPECT_NE(std::string(too_long.what()).find("1..65535"), std::string::npos) << too_long.what();
+  // At 10 Hz the value is rewritten every 0.1 s at best: a 0.2 s timeout would expire.
+  const auto too_short = parse_error(
+      {{"main.toml",
+        "[dac]\nsource = \"modbus\"\nmodbus_comm_timeout_register = 40\n"
+        "modbus_comm_timeout_s = 0.2\n[pressure]\nloop_hz = 10\n[analog_modbus]\nbaud = 9600\n"}});
+  EXPECT_EQ(too_short.key(), "dac.modbus_comm_timeout_s");
+  EXPECT_NE(std::string(too_short.what()).find("6 periods"), std::string::npos) << too_short.what();
+  const auto clash =
+      parse_error({{"main.toml", "[dac]\nsource = \"modbus\"\nmodbus_safe_value_register = 0\n"}});
+  EXPECT_EQ(clash.key(), "dac.modbus_register");
+  // An IIO DAC ignores the Modbus keys.
+  EXPECT_NO_THROW((void)parse("[dac]\nmodbus_comm_timeout_register = 0\n"));
+}
+
 TEST(ConfigSchema, FlowMeterOnAKernelCounterOrAGpioLineNotBoth) {
   EXPECT_EQ(parse("[flow]\ncounter = \"weedspray-flow\"\n").flow.counter, "weedspray-flow");
   const auto both =

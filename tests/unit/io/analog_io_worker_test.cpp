@@ -67,8 +67,10 @@ class RecordingDac final : public AnalogOutput {
   }
   double full_scale_volts() const noexcept override { return 3.3; }
   std::uint64_t error_count() const noexcept override { return errors_; }
+  nanoseconds rewrite_within() const noexcept override { return rewrite; }
 
   static constexpr double kSafe = -1.0;
+  nanoseconds rewrite{};  // a module watchdog's need to hear from the daemon
   struct Write {
     nanoseconds time;
     double volts;
@@ -161,6 +163,24 @@ TEST(AnalogIoWorker, WritesTheNewestCommandAfterTheDeadlineAndOnlyWhenItChanges)
   worker.run(adc.stop.get_token(), clock.now() + kPeriod);
   ASSERT_EQ(dac.writes.size(), 2U);
   EXPECT_EQ(dac.writes[1].volts, RecordingDac::kSafe);
+}
+
+// A Modbus module with a communication watchdog puts its output safe when no write arrives
+// within its timeout: an unchanged command is written again once rewrite_within has passed.
+TEST(AnalogIoWorker, AnUnchangedCommandIsRewrittenBeforeTheOutputsWatchdogExpires) {
+  sim::ManualClock clock;
+  TimedAdc adc(clock, 0ns);
+  adc.stop_after = 13;
+  RecordingDac dac(clock);
+  dac.rewrite = 30ms;
+  AnalogIoWorker worker(adc, dac, clock, timing());
+  worker.command(1.5);
+  worker.run(adc.stop.get_token(), kFirstDeadline);
+  ASSERT_EQ(dac.writes.size(), 5U) << "slots 0, 3, 6, 9 and 12 of 13";
+  for (std::size_t i = 0; i < dac.writes.size(); ++i) {
+    EXPECT_DOUBLE_EQ(dac.writes[i].volts, 1.5);
+    EXPECT_EQ(dac.writes[i].time, kFirstDeadline + 1ms + static_cast<int>(i) * 3 * kPeriod);
+  }
 }
 
 TEST(AnalogIoWorker, AFailedWriteIsRetriedAtTheNextSlot) {
