@@ -32,12 +32,9 @@
 #include "daemon/config/config.hpp"
 #include "daemon/config/live_reload.hpp"
 #include "daemon/logging.hpp"
-#include "daemon/records/as_applied_log.hpp"
-#include "daemon/records/as_applied_reader.hpp"
 #include "daemon/records/map_geometry.hpp"
-#include "daemon/records/records_space.hpp"
 #include "daemon/records/run_marker.hpp"
-#include "daemon/records/totals.hpp"
+#include "daemon/records/run_records.hpp"
 #include "daemon/sprayer/calibrations.hpp"
 #include "daemon/sprayer/live_view.hpp"
 #include "daemon/sprayer/sprayer.hpp"
@@ -122,7 +119,6 @@ class Daemon final : public CommandHandler {
     const std::size_t emergency = backends_.register_emergency_writes();
     if (!options_.sim) spdlog::info("fatal-exit safe writes armed for {} outputs", emergency);
     if (exit_watcher_.watcher().socket_fd >= 0) hand_outputs_to_exit_watcher();
-    totals_file_ = std::filesystem::path(config_.daemon.state_dir) / "totals.toml";
     std::filesystem::create_directories(config_.daemon.state_dir);
     run_marker_.emplace(std::filesystem::path(config_.daemon.state_dir) / "running");
     // A fresh simulation starts from nothing, its last run's end included.
@@ -132,14 +128,7 @@ class Daemon final : public CommandHandler {
       spdlog::warn(
           "the last run did not end in an orderly stop (a crash, kill -9, the watchdog or a "
           "power cut): the sprayer waits for Start whatever daemon.autostart says");
-    std::string totals_error;
-    if (options_.sim && !options_.resume) {
-      spdlog::info("simulation: totals start from zero in {} (--resume continues them)",
-                   config_.daemon.state_dir);
-    } else {
-      base_totals_ = load_totals(totals_file_, &totals_error);
-    }
-    if (!totals_error.empty()) spdlog::warn("totals not restored: {}", totals_error);
+    records_.emplace(config_, options_.sim && !options_.resume);
     std::function<double()> sim_delivered_l;
     if (backends_.plant_truth) {
       sim_delivered_l = [truth = backends_.plant_truth] {
@@ -147,14 +136,7 @@ class Daemon final : public CommandHandler {
       };
     }
     calibrations_.emplace(config_, config_.daemon.state_dir, std::move(sim_delivered_l));
-    log_ = std::make_unique<AsAppliedLog>(
-        config_.as_applied_dir(), static_cast<std::uintmax_t>(config_.log.rotate_bytes),
-        config_.log.keep_files,
-        NozzlePlacement{
-            config_.boom.nozzle_width_m,
-            {config_.gnss.antenna_ahead_of_nozzles_m, config_.gnss.antenna_right_of_centre_m}});
-    reconcile_totals_with_log();
-    persist_totals();  // a mark in the log from the start: a crash in the first minute is matched
+    records_->open_log(config_);
 
     check(sd_event_default(&event_), "sd_event_default");
     for (int signal : {SIGTERM, SIGINT, SIGHUP}) {
@@ -193,9 +175,7 @@ class Daemon final : public CommandHandler {
     // [log] takes a restart: the writer keeps its own copy of the floor.
     const std::uint64_t records_floor_bytes =
         static_cast<std::uint64_t>(config_.log.min_free_mb) * 1'000'000;
-    log_thread_ = std::jthread([this, records_floor_bytes](std::stop_token stop) {
-      log_writer(stop, records_floor_bytes);
-    });
+    records_->start_writer(*sprayer_, records_floor_bytes);
 
     uint64_t watchdog_usec = 0;
     if (sd_watchdog_enabled(0, &watchdog_usec) > 0)
@@ -229,8 +209,10 @@ class Daemon final : public CommandHandler {
     if (!options_.sim_truth_file.empty() && backends_.plant_truth) {
       std::ofstream(options_.sim_truth_file) << backends_.plant_truth();
     }
-    log_thread_ = {};  // joins after draining
-    persist_totals();
+    if (records_) {
+      records_->stop_writer();
+      records_->persist();
+    }
   }
 
   // --- D-Bus commands (main thread) ---
@@ -489,7 +471,7 @@ class Daemon final : public CommandHandler {
     }
     if (t - last_persist_s_ >= 60.0) {
       last_persist_s_ = t;
-      persist_totals();
+      records_->persist();
     }
     if (options_.run_seconds > 0 && t >= options_.run_seconds) sd_event_exit(event_, 0);
   }
@@ -674,7 +656,7 @@ class Daemon final : public CommandHandler {
       }
       case AlarmId::kRecordsDiskFull:
         return fmt::format("log.min_free_mb = {} MB in {}", config_.log.min_free_mb,
-                           log_->dir().string());
+                           records_->log_dir().string());
       case AlarmId::kVisionModelFailed:
         return vision_failures;
       case AlarmId::kExitWatcherLost:
@@ -754,7 +736,7 @@ class Daemon final : public CommandHandler {
     in.calibration_ratio = control.calibration_ratio;
     const EstopStatus estop = sprayer_->estop();
     in.estop_latched = estop.latched;
-    in.records_at_risk = records_at_risk_.load();
+    in.records_at_risk = records_->at_risk();
 
     const AlarmMask raised = alarms_.evaluate(in);
     for (std::size_t i = 0; i < kAlarmCount; ++i) {
@@ -980,55 +962,6 @@ class Daemon final : public CommandHandler {
     sd_notify(0, "WATCHDOG=1");
   }
 
-  Totals current_totals() const {
-    const ControlStatus control = sprayer_ ? sprayer_->control() : ControlStatus{};
-    Totals totals = base_totals_;
-    totals.area_m2 += control.area_m2;
-    totals.volume_l += control.volume_l;
-    totals.uniform_volume_l += control.uniform_volume_l;
-    return totals;
-  }
-
-  // The log's records after the saved totals' mark, less what the totals already held of them,
-  // were sprayed after the last save (a crash or power cut: up to a minute): added back. The
-  // seq numbers run on after the log's last.
-  void reconcile_totals_with_log() noexcept {
-    const TotalsLogMark mark = base_totals_.log;
-    try {
-      if (!mark.known) {
-        log_->continue_after(last_as_applied_seq(log_->dir()));
-        return;
-      }
-      const AsAppliedSummary after = read_as_applied_after(log_->dir(), mark.seq);
-      log_->continue_after(std::max(after.last_seq, mark.seq));
-      const double missing_l = after.volume_l - mark.queued_l;
-      if (missing_l <= 0) return;
-      base_totals_.volume_l += missing_l;
-      spdlog::info(
-          "totals: {:.3f} L added from {} as-applied records (seq {}..{}) written after they "
-          "were last saved",
-          missing_l, after.records, after.first_seq, after.last_seq);
-    } catch (const std::exception& error) {
-      log_->continue_after(mark.seq);  // at least no seq the totals' mark names twice
-      spdlog::warn("totals not reconciled with the as-applied log: {}", error.what());
-    }
-  }
-
-  void persist_totals() noexcept {
-    if (totals_file_.empty()) return;
-    try {
-      // The log's progress first: records handed to it after this are not in its mark.
-      const std::optional<AsAppliedProgress> logged =
-          log_ ? std::optional(log_->progress()) : std::nullopt;
-      Totals totals = current_totals();
-      const double this_run_l = totals.volume_l - base_totals_.volume_l;
-      if (logged) totals.log = {true, logged->seq, std::max(0.0, this_run_l - logged->volume_l)};
-      save_totals(totals_file_, totals);
-    } catch (const std::exception& error) {
-      spdlog::error("totals not saved: {}", error.what());
-    }
-  }
-
   Status make_status(const PressureStatus& pressure, const ControlStatus& control) const {
     Status s;
     s.state = std::string(to_string(state_.state()));
@@ -1062,7 +995,7 @@ class Daemon final : public CommandHandler {
                                  (alarms_.present() & alarm_bit(id)) != 0,
                                  std::string(alarm_catalog_entry(id).remedy)});
     }
-    const Totals totals = current_totals();
+    const Totals totals = records_->totals();
     s.volume_sprayed_l = totals.volume_l;
     s.area_covered_m2 = totals.area_m2;
     s.savings_pct = totals.savings_pct();
@@ -1119,72 +1052,6 @@ class Daemon final : public CommandHandler {
     std::fflush(stdout);
   }
 
-  // As-applied writer (normal priority): drains the control loop's queue; once a second writes
-  // the lines held while writes failed, fdatasyncs (a crash loses at most the last second) and
-  // judges the free space (records_disk_full, raised and cleared by the main loop).
-  void log_writer(std::stop_token stop, std::uint64_t floor_bytes) {
-    auto last_flush = std::chrono::steady_clock::now();
-    bool reported = false;
-    AsAppliedHealth seen;
-    const auto drain = [&] {
-      while (auto record = sprayer_->records().try_pop()) log_->write(*record);
-    };
-    const auto flush = [&] {
-      log_->flush();
-      const AsAppliedHealth health = log_->health();
-      const std::optional<std::uint64_t> available = available_bytes(log_->dir());
-      records_at_risk_.store(records_at_risk(health, available, floor_bytes));
-      report_records(seen, health, available);
-      seen = health;
-    };
-    // An exception must not end the process through std::terminate from this thread: log it
-    // and keep draining (the control loop drops records only when the queue is full).
-    const auto guarded = [&](auto&& step) {
-      try {
-        step();
-      } catch (const std::exception& error) {
-        if (!reported) spdlog::error("as-applied log: {}", error.what());
-        reported = true;
-      }
-    };
-    while (!stop.stop_requested()) {
-      guarded(drain);
-      if (std::chrono::steady_clock::now() - last_flush >= 1s) {
-        guarded(flush);
-        last_flush = std::chrono::steady_clock::now();
-      }
-      std::this_thread::sleep_for(100ms);
-    }
-    guarded(drain);
-    guarded(flush);
-    if (seen.held_lines > 0)
-      spdlog::error("as-applied log: {} lines not written at exit ({})", seen.held_lines,
-                    std::strerror(seen.error));
-  }
-
-  // The journal lines for the as-applied log's changes since `seen`.
-  void report_records(const AsAppliedHealth& seen, const AsAppliedHealth& now,
-                      std::optional<std::uint64_t> available) const {
-    const std::string folder = log_->dir().string();
-    if (now.error != 0 && seen.error == 0) {
-      spdlog::error(
-          "as-applied log: cannot write in {} ({}; {} MB free): lines wait in memory (up to "
-          "{} MB) and are written once it works again",
-          folder, std::strerror(now.error), available.value_or(0) / 1'000'000,
-          kHeldLinesMaxBytes / 1'000'000);
-    }
-    if (now.dropped_lines != seen.dropped_lines) {
-      spdlog::error(
-          "as-applied log: {} lines dropped ({} in all), memory full: their seq numbers are "
-          "missing from the file",
-          now.dropped_lines - seen.dropped_lines, now.dropped_lines);
-    }
-    if (now.error == 0 && seen.error != 0) {
-      spdlog::info("as-applied log: writing again in {} ({} lines dropped in all)", folder,
-                   now.dropped_lines);
-    }
-  }
-
   Options options_;
   Config config_;
   Backends backends_;
@@ -1196,11 +1063,7 @@ class Daemon final : public CommandHandler {
   sd_event* event_ = nullptr;
   sd_event_source* tick_source_ = nullptr;
   std::vector<sd_event_source*> signal_sources_;
-  std::unique_ptr<AsAppliedLog> log_;
-  std::atomic<bool> records_at_risk_{false};  // from the writer thread
-  std::jthread log_thread_;
-  std::filesystem::path totals_file_;
-  Totals base_totals_;
+  std::optional<RunRecords> records_;         // from run() on; its writer drains sprayer_'s records
   std::optional<Calibrations> calibrations_;  // from run() on
   double setpoint_mpa_;
   std::uint64_t trip_reset_ = 0;
