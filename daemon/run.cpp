@@ -29,10 +29,10 @@
 #include "daemon/backends/sim_faults.hpp"
 #include "daemon/bus/dbus_service.hpp"
 #include "daemon/bus/status.hpp"
+#include "daemon/bus/status_builder.hpp"
 #include "daemon/config/config.hpp"
 #include "daemon/config/live_reload.hpp"
 #include "daemon/logging.hpp"
-#include "daemon/records/map_geometry.hpp"
 #include "daemon/records/run_marker.hpp"
 #include "daemon/records/run_records.hpp"
 #include "daemon/sprayer/calibrations.hpp"
@@ -61,11 +61,6 @@ double seconds(Nanos t) {
 
 Nanos from_seconds(double s) {
   return std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(s));
-}
-
-// "2026-06-24T14:30:05.000Z" (the as-applied log's format); "" for 0 (unknown).
-std::string utc_iso8601(std::int64_t utc_ns) {
-  return utc_ns == 0 ? std::string() : format_utc_ms(utc_ns);
 }
 
 // Where a simulation keeps its totals and as-applied logs: never the sprayer's own records.
@@ -963,78 +958,10 @@ class Daemon final : public CommandHandler {
   }
 
   Status make_status(const PressureStatus& pressure, const ControlStatus& control) const {
-    Status s;
-    s.state = std::string(to_string(state_.state()));
-    s.mode = backends_.mode;
-    s.pressure_mpa = pressure.pressure_mpa;
-    s.pressure_setpoint_mpa = setpoint_mpa_;
-    s.flow_l_per_min = control.flow_l_per_min;
-    s.tank_level_pct = sprayer_->tank().level_pct;
-    s.speed_m_per_s = control.speed_m_per_s;
-    s.speed_source = std::string(to_string(control.speed_source));
-    s.yaw_rate_deg_per_s = control.yaw_rate_deg_per_s;
-    const WheelCalibrationReport calibration = sprayer_->wheel_calibration();
-    s.wheel_calibration_request = calibration.request;
-    s.wheel_calibration_state = std::string(to_string(calibration.status.state));
-    s.wheel_calibration_distance_m = calibration.status.distance_m;
-    s.wheel_calibration_pulses = calibration.status.pulses;
-    s.wheel_calibration_pulses_per_metre = calibration.status.pulses_per_metre;
-    if (control.speed_fell_back) s.speed_source += " (gnss fix lost)";
-    s.distance_m = control.distance_m;
-    if (backends_.gnss != nullptr) {
-      add_gnss_status(s, sprayer_->gnss(), backends_.clock->now(),
-                      from_seconds(config_.gnss.lost_fix_timeout_s));
-    }
-    s.nozzle_duty_pct.assign(control.duty_pct.begin(), control.duty_pct.begin() + control.nozzles);
-    s.zone_density.assign(control.density.begin(), control.density.begin() + control.nozzles);
-    for (std::size_t i = 0; i < kAlarmCount; ++i) {
-      const auto id = static_cast<AlarmId>(i);
-      if (!(alarms_.active() & alarm_bit(id))) continue;
-      s.alarms.emplace_back(alarm_name(id));
-      s.alarm_details.push_back({std::string(alarm_name(id)), std::string(alarm_severity(id)),
-                                 (alarms_.present() & alarm_bit(id)) != 0,
-                                 std::string(alarm_catalog_entry(id).remedy)});
-    }
-    const Totals totals = records_->totals();
-    s.volume_sprayed_l = totals.volume_l;
-    s.area_covered_m2 = totals.area_m2;
-    s.savings_pct = totals.savings_pct();
-    for (std::size_t i = 0; i < sprayer_->camera_count(); ++i) {
-      s.frame_rate_hz += sprayer_->camera(i).frame_rate_hz;
-    }
-    s.vision_latency_ms = control.last_latency_ms;
-    s.vision_latency_p99_ms = latency_p99();
-    s.control_overruns = total_overruns(pressure, control);
-    if (calibrations_) calibrations_->fill_status(s);
-    if (config_.nozzle_health.enabled) {
-      const std::size_t n = std::min<std::size_t>(control.nozzles, control::kMaxHealthNozzles);
-      s.nozzle_flow_ratio.assign(control.nozzle_flow_ratio.begin(),
-                                 control.nozzle_flow_ratio.begin() + n);
-    }
-    s.flow_trim_correction = control.flow_trim_correction;
-    s.calibration_ratio = control.calibration_ratio_known ? control.calibration_ratio : 0.0;
-    s.flow_trim_active = control.flow_trim_active;
-    const EstopStatus estop = sprayer_->estop();
-    s.estop_circuit_closed = estop.circuit_closed;
-    s.estop_latched = estop.latched;
-    s.estop_reaction_ms = std::chrono::duration<double, std::milli>(estop.last_reaction).count();
-    return s;
-  }
-
-  // The latest fix: its mode ("none" too once older than the lost-fix timeout), and the
-  // position and motion it reported (NaN: not given).
-  static void add_gnss_status(Status& s, const GnssSample& sample, Nanos now, Nanos timeout) {
-    const io::GnssFix& fix = sample.value;
-    const bool fresh = now - sample.sample_time <= timeout;
-    s.gnss_fix = std::string(io::to_string(fresh ? fix.mode : io::GnssFixMode::kNone));
-    s.latitude_deg = fix.latitude_deg;
-    s.longitude_deg = fix.longitude_deg;
-    s.altitude_m = fix.altitude_m;
-    s.gnss_speed_m_per_s = fix.speed_m_per_s;
-    s.course_deg = fix.course_deg;
-    s.gnss_hdop = fix.hdop;
-    s.gnss_satellites = fix.satellites_used;
-    s.gnss_utc = utc_iso8601(fix.utc_ns);
+    return build_status({config_, backends_, *sprayer_, state_.state(), setpoint_mpa_, alarms_,
+                         records_->totals(), latency_p99(), total_overruns(pressure, control),
+                         calibrations_ ? &*calibrations_ : nullptr},
+                        pressure, control);
   }
 
   static void print_status_line(const Status& s) {
