@@ -26,12 +26,13 @@
 #include "daemon/backends/backends.hpp"
 #include "daemon/backends/emergency_write_handoff.hpp"
 #include "daemon/backends/output_manifest.hpp"
-#include "daemon/backends/sim_faults.hpp"
+#include "daemon/backends/pick_backends.hpp"
 #include "daemon/bus/dbus_service.hpp"
 #include "daemon/bus/status.hpp"
 #include "daemon/bus/status_builder.hpp"
 #include "daemon/config/config.hpp"
 #include "daemon/config/live_reload.hpp"
+#include "daemon/config/run_config.hpp"
 #include "daemon/logging.hpp"
 #include "daemon/records/run_marker.hpp"
 #include "daemon/records/run_records.hpp"
@@ -41,7 +42,7 @@
 #include "daemon/supervision/alarm_catalog.hpp"
 #include "daemon/supervision/alarm_log.hpp"
 #include "daemon/supervision/alarms.hpp"
-#include "daemon/supervision/exit_watcher.hpp"
+#include "daemon/supervision/exit_watch.hpp"
 #include "daemon/supervision/loop_timing.hpp"
 #include "daemon/supervision/state_machine.hpp"
 #include "daemon/test_crash_hook.hpp"
@@ -63,28 +64,6 @@ Nanos from_seconds(double s) {
   return std::chrono::duration_cast<Nanos>(std::chrono::duration<double>(s));
 }
 
-// Where a simulation keeps its totals and as-applied logs: never the sprayer's own records.
-std::string sim_state_dir() {
-  if (const char* xdg = std::getenv("XDG_STATE_HOME"); xdg != nullptr && *xdg == '/')
-    return std::string(xdg) + "/weedspray-sim";
-  if (const char* home = std::getenv("HOME"); home != nullptr && *home == '/')
-    return std::string(home) + "/.local/state/weedspray-sim";
-  return "/tmp/weedspray-sim";
-}
-
-Config load_with_overrides(const Options& options) {
-  // A simulation needs no file: every key has a default. Hardware mode always reads one.
-  const bool defaults_only =
-      options.sim && !options.config_given && !std::filesystem::exists(options.config_path);
-  Config config = defaults_only ? default_config() : load_config(options.config_path);
-  if (options.sim) {
-    config.daemon.state_dir = sim_state_dir();
-    config.log.dir.clear();
-  }
-  if (!options.state_dir.empty()) config.daemon.state_dir = options.state_dir;
-  return config;
-}
-
 class Daemon final : public CommandHandler {
  public:
   Daemon(const Options& options, Config config)
@@ -104,33 +83,23 @@ class Daemon final : public CommandHandler {
     if (event_ != nullptr) sd_event_unref(event_);
   }
 
-  // The exit watcher (supervision/exit_watcher.hpp): run() hands it the outputs, each tick
-  // keeps one running.
-  void set_exit_watcher(ExitWatcherKeeper keeper) noexcept { exit_watcher_ = std::move(keeper); }
+  // The safe writers outside this process: run() hands them the outputs, each tick keeps the
+  // exit watcher running.
+  void set_exit_watch(ExitWatch exit_watch) noexcept { exit_watch_.emplace(std::move(exit_watch)); }
 
   int run() {
-    backends_ = options_.sim ? make_sim_backends(config_, options_) : make_hw_backends(config_);
-    spdlog::info("backends: {}", backends_.mode);
-    const std::size_t emergency = backends_.register_emergency_writes();
-    if (!options_.sim) spdlog::info("fatal-exit safe writes armed for {} outputs", emergency);
-    if (exit_watcher_.watcher().socket_fd >= 0) hand_outputs_to_exit_watcher();
+    world_ = pick_backends(config_, options_, backends_);
+    if (exit_watch_->has_watcher()) exit_watch_->hand_outputs();
     std::filesystem::create_directories(config_.daemon.state_dir);
     run_marker_.emplace(std::filesystem::path(config_.daemon.state_dir) / "running");
-    // A fresh simulation starts from nothing, its last run's end included.
-    previous_run_unfinished_ =
-        run_marker_->previous_run_unfinished() && !(options_.sim && !options_.resume);
+    // A fresh start begins from nothing, its last run's end included.
+    previous_run_unfinished_ = run_marker_->previous_run_unfinished() && !world_->starts_afresh();
     if (previous_run_unfinished_)
       spdlog::warn(
           "the last run did not end in an orderly stop (a crash, kill -9, the watchdog or a "
           "power cut): the sprayer waits for Start whatever daemon.autostart says");
-    records_.emplace(config_, options_.sim && !options_.resume);
-    std::function<double()> sim_delivered_l;
-    if (backends_.plant_truth) {
-      sim_delivered_l = [truth = backends_.plant_truth] {
-        return std::strtod(truth().c_str() + std::strlen("sprayed_l="), nullptr);
-      };
-    }
-    calibrations_.emplace(config_, config_.daemon.state_dir, std::move(sim_delivered_l));
+    records_.emplace(config_, world_->starts_afresh());
+    calibrations_.emplace(config_, config_.daemon.state_dir, world_->delivered_litres());
     records_->open_log(config_);
 
     check(sd_event_default(&event_), "sd_event_default");
@@ -144,9 +113,7 @@ class Daemon final : public CommandHandler {
       try {
         dbus_ = std::make_unique<DbusService>(event_, options_.user_bus, *this);
       } catch (const std::exception& error) {
-        if (!options_.sim) throw;
-        // Nothing could send Start: spray as soon as the simulation is up.
-        spdlog::warn("{}; simulating without D-Bus, spraying at once", error.what());
+        if (!world_->runs_without_bus(error.what())) throw;
         config_.daemon.autostart = true;
       }
     }
@@ -155,7 +122,7 @@ class Daemon final : public CommandHandler {
     std::vector<int> first_nozzles;
     for (const auto& camera : config_.cameras) first_nozzles.push_back(camera.first_nozzle);
     live_view_ = std::make_unique<LiveView>(*sprayer_, std::move(first_nozzles));
-    if (backends_.drive_world) backends_.drive_world(0.0);
+    world_->start();
     request_cpu_wakeup_latency();
     sprayer_->start();
     output_watch_.emplace(backends_.output_devices());
@@ -198,12 +165,7 @@ class Daemon final : public CommandHandler {
     report_safe_writes(backends_.force_safe());
     report_timing();
     cpu_latency_ = {};
-    if (!options_.valve_state_file.empty() && backends_.describe_outputs) {
-      std::ofstream(options_.valve_state_file) << backends_.describe_outputs();
-    }
-    if (!options_.sim_truth_file.empty() && backends_.plant_truth) {
-      std::ofstream(options_.sim_truth_file) << backends_.plant_truth();
-    }
+    if (world_) world_->finish();
     if (records_) {
       records_->stop_writer();
       records_->persist();
@@ -276,7 +238,7 @@ class Daemon final : public CommandHandler {
       const std::chrono::milliseconds delay = test_reload_delay();
       if (delay.count() > 0) std::this_thread::sleep_for(delay);
       try {
-        running->config = load_with_overrides(options);
+        running->config = load_config_with_overrides(options);
       } catch (const std::exception& error) {  // ConfigError, or a conf.d that cannot be listed
         running->error = error.what();
       }
@@ -424,8 +386,7 @@ class Daemon final : public CommandHandler {
     run_requested_test_fault();
     const Nanos now = backends_.clock->now();
     const double t = seconds(now - start_time_);
-    if (backends_.drive_world) backends_.drive_world(t);
-    inject_sim_faults(t);
+    world_->step(t);
     const PressureStatus pressure = sprayer_->pressure();
     const ControlStatus control = sprayer_->control();
     report_stalls(pressure);
@@ -459,28 +420,13 @@ class Daemon final : public CommandHandler {
       last_status_s_ = t;
       const Status status = make_status(pressure, control);
       if (dbus_) dbus_->update(status);
-      if (options_.sim && t - last_print_s_ >= 1.0) {
-        last_print_s_ = t;
-        print_status_line(status);
-      }
+      world_->status_published(status, t);
     }
     if (t - last_persist_s_ >= 60.0) {
       last_persist_s_ = t;
       records_->persist();
     }
     if (options_.run_seconds > 0 && t >= options_.run_seconds) sd_event_exit(event_, 0);
-  }
-
-  void apply_sim_fault(const SimFault& fault) {
-    spdlog::warn("sim: injecting fault {}", fault.name);
-    if (fault.output) {
-      if (backends_.fail_output_writes)
-        backends_.fail_output_writes(*fault.output, fault.output_error, fault.output_write_count);
-    } else if (!fault.device.empty()) {
-      if (backends_.device_fault) backends_.device_fault(fault.device);
-    } else {
-      backends_.with_plant(fault.apply);
-    }
   }
 
   CommandResult snapshot(std::uint32_t camera, SnapshotReply reply) override {
@@ -547,25 +493,7 @@ class Daemon final : public CommandHandler {
   }
 
   CommandResult inject_sim_fault(const std::string& name) override {
-    if (!backends_.with_plant)
-      return {kErrorNotPermitted, "InjectSimFault: only a simulation (--sim) takes faults"};
-    const auto fault = parse_sim_fault(name + "@0");
-    if (!fault)
-      return {kErrorInvalidArgument,
-              "InjectSimFault: unknown fault '" + name + "' (known: " + kSimFaultNames + ")"};
-    apply_sim_fault(*fault);
-    return {};
-  }
-
-  void inject_sim_faults(double t) {
-    if (!backends_.with_plant) return;
-    sim_faults_done_.resize(options_.sim_faults.size(), false);
-    for (std::size_t i = 0; i < options_.sim_faults.size(); ++i) {
-      const auto fault = parse_sim_fault(options_.sim_faults[i]);
-      if (sim_faults_done_[i] || !fault || t < fault->at_s) continue;
-      apply_sim_fault(*fault);
-      sim_faults_done_[i] = true;
-    }
+    return world_->inject_fault(name);
   }
 
   void drain_latencies() {
@@ -655,7 +583,7 @@ class Daemon final : public CommandHandler {
       case AlarmId::kVisionModelFailed:
         return vision_failures;
       case AlarmId::kExitWatcherLost:
-        return exit_watcher_lost_said_;
+        return exit_watch_->lost_because();
       case AlarmId::kTankLow:
       case AlarmId::kTankEmpty:
         return fmt::format("{:.0f} %", in.tank_level_pct);
@@ -678,7 +606,8 @@ class Daemon final : public CommandHandler {
     // From the control loop's own cycles: a valve open between two ticks still counts.
     if (control.cycles > 0 && control.open_fraction == 0.0)
       in.valves_closed_s = seconds(control.time - control.valves_last_open);
-    in.tank_enabled = backends_.tank != nullptr && (config_.modbus.enabled || options_.sim);
+    in.tank_enabled =
+        backends_.tank != nullptr && (config_.modbus.enabled || world_->tank_always_read());
     const io::TankLevelSample tank = sprayer_->tank();
     in.tank_valid = tank.ok;
     in.tank_level_pct = tank.level_pct;
@@ -696,7 +625,8 @@ class Daemon final : public CommandHandler {
     }
     in.speed_m_per_s = control.speed_m_per_s;
     in.expected_frame_interval_s = 0;
-    if (backends_.mode == "sim" && control.speed_m_per_s > 0.05 && sprayer_->camera_count() > 0) {
+    if (world_->frames_per_footprint() && control.speed_m_per_s > 0.05 &&
+        sprayer_->camera_count() > 0) {
       const auto footprint = sprayer_->footprint(0);
       in.expected_frame_interval_s = (footprint.far_m - footprint.near_m) / control.speed_m_per_s;
     }
@@ -723,7 +653,7 @@ class Daemon final : public CommandHandler {
     in.vision_model_failed = !vision_failures.empty();
     const std::string output_failures = check_outputs();
     in.output_write_failed = !output_failures.empty();
-    in.exit_watcher_lost = !exit_watcher_running(now);
+    in.exit_watcher_lost = !exit_watch_->running(now);
     in.gnss_fix_lost = backends_.gnss != nullptr && gnss_lost_fix_->lost(sprayer_->gnss(), now);
     // Not from a status older than the last ClearAlarms (the detector restarts on it).
     in.nozzle_flow_fault =
@@ -912,35 +842,6 @@ class Daemon final : public CommandHandler {
     }
   }
 
-  void hand_outputs_to_exit_watcher() {
-    const int handed = hand_emergency_writes(exit_watcher_.watcher().socket_fd);
-    if (handed < 0)
-      spdlog::warn(
-          "exit watcher: outputs not handed over ({}): it writes them only after this process "
-          "is gone",
-          std::strerror(-handed));
-    else
-      spdlog::info("exit watcher (pid {}) holds the safe writes of {} outputs",
-                   exit_watcher_.watcher().pid, handed);
-  }
-
-  // Hardware mode: a watcher that ended is started again and handed the outputs; false while
-  // none runs (the exit_watcher_lost alarm).
-  bool exit_watcher_running(Nanos now) {
-    const ExitWatcherKeeper::Check check = exit_watcher_.check(now);
-    if (check.started) {
-      spdlog::warn("{}: started again (pid {})", check.what, exit_watcher_.watcher().pid);
-      hand_outputs_to_exit_watcher();
-    }
-    if (check.state != ExitWatcherKeeper::State::kLost) {
-      exit_watcher_lost_said_.clear();
-      return true;
-    }
-    if (check.what != exit_watcher_lost_said_) spdlog::error("{}", check.what);
-    exit_watcher_lost_said_ = check.what;
-    return false;
-  }
-
   // The watchdog is fed only while the real-time loops make progress.
   void heartbeat(Nanos now, const PressureStatus& pressure, const ControlStatus& control) {
     if (watchdog_interval_.count() == 0 || now - last_watchdog_ < watchdog_interval_) return;
@@ -964,24 +865,10 @@ class Daemon final : public CommandHandler {
                         pressure, control);
   }
 
-  static void print_status_line(const Status& s) {
-    std::printf("%-8s P %.3f/%.3f MPa  Q %.3f L/min  v %.2f m/s  d %.1f m  duty", s.state.c_str(),
-                s.pressure_mpa, s.pressure_setpoint_mpa, s.flow_l_per_min, s.speed_m_per_s,
-                s.distance_m);
-    for (double duty : s.nozzle_duty_pct) std::printf(" %3.0f", duty);
-    std::printf("  %.1f L %.0f m2 saved %.0f%%  lat %.2f ms (p99 %.2f)", s.volume_sprayed_l,
-                s.area_covered_m2, s.savings_pct, s.vision_latency_ms, s.vision_latency_p99_ms);
-    if (!s.alarms.empty()) {
-      std::printf("  ALARMS:");
-      for (const auto& alarm : s.alarms) std::printf(" %s", alarm.c_str());
-    }
-    std::printf("\n");
-    std::fflush(stdout);
-  }
-
   Options options_;
   Config config_;
   Backends backends_;
+  std::unique_ptr<WorldDriver> world_;  // around backends_: a simulated world, or none
   std::unique_ptr<Sprayer> sprayer_;
   std::unique_ptr<LiveView> live_view_;  // main thread; before sprayer_ in destruction
   StateMachine state_;
@@ -995,7 +882,6 @@ class Daemon final : public CommandHandler {
   double setpoint_mpa_;
   std::uint64_t trip_reset_ = 0;
   std::uint64_t key_changes_ = 0;
-  std::vector<bool> sim_faults_done_;
   std::uint64_t coverage_gaps_seen_ = 0;
   Nanos start_time_{};
   Nanos tank_last_ok_{};
@@ -1021,7 +907,6 @@ class Daemon final : public CommandHandler {
   std::vector<float> latencies_;
   std::size_t latency_next_ = 0;
   double last_status_s_ = -1e9;
-  double last_print_s_ = -1e9;
   double last_persist_s_ = 0;
   int exit_code_ = 0;
   std::optional<RunMarker> run_marker_;  // present once the state folder is set up
@@ -1035,8 +920,7 @@ class Daemon final : public CommandHandler {
   bool start_when_ready_ = false;                      // Start arrived while Starting
   std::vector<ReloadReply> reload_waiters_;            // asked for a reload not yet started
   std::unique_ptr<ReloadJob> reload_job_;
-  ExitWatcherKeeper exit_watcher_;
-  std::string exit_watcher_lost_said_;  // logged once per cause
+  std::optional<ExitWatch> exit_watch_;
 };
 
 }  // namespace
@@ -1052,26 +936,18 @@ int run_daemon(const Options& options) {
 #ifndef WEEDSPRAY_SELFTEST_NO_FAILSAFE  // only the HIL harness's self-test builds without it
   io::install_fatal_exit_handlers();
 #endif
-  Config config;
-  bool no_heartbeat = false;
-  bool no_estop = false;
+  RunConfig run;
   try {
-    config = load_with_overrides(options);
-    if (!options.sim) no_heartbeat = require_heartbeat(config);
-    if (!options.sim) no_estop = require_estop(config);
+    run = load_run_config(options);
   } catch (const ConfigError& error) {
     std::fprintf(stderr, "weedsprayd: %s\n", error.what());
     return 1;
   }
-  setup_logging(config.daemon.log_level);
-  if (no_heartbeat) spdlog::warn("{}", kNoHeartbeatWarning);
-  if (no_estop) spdlog::warn("{}", kNoEstopWarning);
+  setup_logging(run.config.daemon.log_level);
+  for (const auto& warning : run.warnings) spdlog::warn("{}", warning);
   if (install_test_crash_hook())
     spdlog::warn("test crash hook enabled (WEEDSPRAY_TEST_CRASH_HOOK)");
-  if (options.sim && !options.config_given && !std::filesystem::exists(options.config_path)) {
-    spdlog::info("simulating on the built-in defaults ({} not found; --config FILE to use one)",
-                 options.config_path);
-  }
+  if (!run.note.empty()) spdlog::info("{}", run.note);
   // Block the signals sd-event handles before any thread exists, so every thread inherits the
   // mask and they arrive only through the event loop.
   sigset_t signals;
@@ -1080,38 +956,10 @@ int run_daemon(const Options& options) {
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
   if (io::lock_memory() != 0) spdlog::info("memory not locked (mlockall not permitted)");
 
-  if (!options.sim && !options.output_manifest.empty()) {
-    try {
-      write_output_manifest(config, options.output_manifest);
-    } catch (const std::exception& error) {
-      spdlog::critical("{}: the safe writers would depend on the editable files; not starting",
-                       error.what());
-      return 1;
-    }
-  }
-  ExitWatcherKeeper exit_watcher;  // keeps nothing in the self-test build: no watcher, no handoff
-#ifndef WEEDSPRAY_SELFTEST_NO_FAILSAFE
-  // Hardware mode: before any line is requested, a watcher process that writes the outputs
-  // safe when this one ends in any way (kill -9 included); ExecStopPost is the second layer.
-  if (!options.sim) {
-    const ExitWatcherKeeper::Launch launch{options.config_path, options.output_manifest,
-                                           default_exit_watcher_program()};
-    std::string error;
-    const ExitWatcher watcher =
-        start_exit_watcher(launch.config, launch.manifest, launch.program, error);
-    if (watcher.pid < 0)
-      spdlog::error(
-          "exit watcher not started ({}): after a kill -9 only ExecStopPost closes "
-          "the valves",
-          error);
-    else
-      spdlog::info("exit watcher started (pid {})", watcher.pid);
-    exit_watcher = ExitWatcherKeeper(launch, watcher,
-                                     error.empty() ? "" : "exit watcher not started: " + error);
-  }
-#endif
-  Daemon daemon(options, std::move(config));
-  daemon.set_exit_watcher(std::move(exit_watcher));
+  std::optional<ExitWatch> exit_watch = ExitWatch::arm(run.config, options);
+  if (!exit_watch) return 1;
+  Daemon daemon(options, std::move(run.config));
+  daemon.set_exit_watch(std::move(*exit_watch));
   try {
     return daemon.run();
   } catch (const std::exception& error) {
