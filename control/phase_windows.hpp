@@ -45,6 +45,9 @@ class PhaseWindows {
   std::span<const double> open_s() const noexcept { return done_open_s_; }
   double metered_l() const noexcept { return done_l_; }
   double window_s() const noexcept { return std::chrono::duration<double>(window_).count(); }
+  // When the closed window's liquid has passed the meter (the next update at or after it can
+  // complete it); negative when none is pending.
+  Nanos meter_due() const noexcept { return pending_due_; }
 
  private:
   using Times = std::array<double, kMaxHealthNozzles>;
