@@ -17,10 +17,12 @@
 #include <vector>
 
 #include "control/flow_feedback.hpp"
+#include "control/flow_trim_step.hpp"
 #include "control/nozzle_health.hpp"
 #include "control/nozzle_scheduler.hpp"
 #include "control/odometry.hpp"
-#include "control/pressure_controller.hpp"
+#include "control/phase_windows.hpp"
+#include "control/pressure_loop_step.hpp"
 #include "control/pwm_schedule.hpp"
 #include "control/spray_rate_law.hpp"
 #include "control/wheel_calibration.hpp"
@@ -29,7 +31,6 @@
 #include "daemon/sprayer/estop_guard.hpp"
 #include "daemon/sprayer/ground_speed.hpp"
 #include "daemon/sprayer/inference_gate.hpp"
-#include "daemon/sprayer/phase_windows.hpp"
 #include "daemon/sprayer/runtime_types.hpp"
 #include "daemon/sprayer/snapshot_handoff.hpp"
 #include "daemon/supervision/loop_timing.hpp"
@@ -145,8 +146,8 @@ class Sprayer {
   void hold_valves_for_pressure(bool fault, PressureStatus& status) noexcept;
   void pressure_loop(std::stop_token stop, Nanos first_deadline) noexcept;
   void control_loop(std::stop_token stop) noexcept;
-  void feed_nozzle_health(PhaseWindows& windows, Nanos now, bool spraying, std::uint64_t pulses,
-                          double pulses_per_litre) noexcept;
+  void feed_nozzle_health(control::PhaseWindows& windows, Nanos now, bool spraying,
+                          std::uint64_t pulses, double pulses_per_litre) noexcept;
   void camera_loop(std::stop_token stop, CameraWorker& worker) noexcept;
   void tank_loop(std::stop_token stop) noexcept;
   void imu_loop(std::stop_token stop) noexcept;
@@ -168,16 +169,14 @@ class Sprayer {
   std::atomic<std::uint64_t> wheel_calibration_distance_bits_{0};
   std::atomic<std::uint64_t> wheel_calibration_requests_{0};
   SpeedSource speed_source_ = SpeedSource::kWheel;
-  std::unique_ptr<control::PressureController> controller_;
+  std::unique_ptr<control::PressureLoopStep> pressure_step_;
   std::unique_ptr<io::AnalogIoWorker> analog_io_;
   std::unique_ptr<control::PwmSchedule> schedule_;
   std::unique_ptr<io::ValvePwmDriver<control::PwmSchedule>> pwm_driver_;
   std::optional<control::Odometry> odometry_;
   // The meter against the lines at the commanded duties, in 1 s windows (whole PWM periods at
   // whole Hz): the trim's (fast) and calibration_drift's (slow) ratio.
-  control::FlowTrimWindows meter_windows_;
-  control::FlowTrim flow_trim_;
-  control::CalibrationRatio calibration_ratio_;
+  control::FlowTrimStep flow_trim_;
   std::unique_ptr<EstopGuard> estop_;  // its latch is read by the valve and pressure loops
   std::optional<control::NozzleHealth> nozzle_health_;  // [nozzle_health] enabled; control loop
   std::vector<control::DutyQuantiser> quantisers_;

@@ -6,15 +6,41 @@
 #include <limits>
 #include <stdexcept>
 
+#include "daemon/sprayer/step_settings.hpp"
+#include "io/signal_conversion.hpp"
+
 namespace weedspray::lab::experiments {
 namespace {
 
+// The daemon's valve schedule (order, immediate start/stop) for the rig's boom and timing.
 PwmConfig pwm_config(const RigConfig& c) {
-  PwmConfig p;
-  p.valve_count = static_cast<std::size_t>(c.plant.nozzle_count);
-  p.frequency_hz = c.pwm_frequency_hz;
-  p.phase_mode = c.fixes.staggered ? PwmPhaseMode::kStaggered : PwmPhaseMode::kSynchronous;
+  daemon::Config config = daemon::default_settings();
+  config.boom.nozzles = c.plant.nozzle_count;
+  config.pwm.frequency_hz = c.pwm_frequency_hz;
+  config.pwm.staggered = c.fixes.staggered;
+  config.pwm.min_on_s = c.pwm_min_on_s;
+  config.pwm.min_off_s = c.pwm_min_off_s;
+  return daemon::pwm_config(config);
+}
+
+PressureLoopConfig pressure_loop_config(const RigConfig& c) {
+  PressureLoopConfig p;
+  p.mode = c.controller_mode;
+  p.controller = c.controller;
+  p.period_s = c.control_period_s;
   return p;
+}
+
+FlowTrimStepConfig flow_trim_step_config(const RigConfig& c) {
+  FlowTrimStepConfig t;
+  t.trim = c.flow_trim;
+  t.window_s = c.flow_trim_window_s;
+  t.pressure_filter_s = c.compensation_filter_s;
+  return t;
+}
+
+std::chrono::nanoseconds nanos(double s) {
+  return std::chrono::nanoseconds(std::llround(s * 1e9));
 }
 
 // The valve's datasheet timing the phase-window fit assumes (not the machine's drawn truth),
@@ -47,13 +73,27 @@ PidGains default_conventional_pid_gains() {
   return {35.2, 225.3, 0.1408};
 }
 
+const PressureLoopConfig& daemon_pressure_loop_config() {
+  static const PressureLoopConfig config = daemon::pressure_loop_config(daemon::default_settings());
+  return config;
+}
+double daemon_pwm_min_on_s() {
+  return daemon::default_settings().pwm.min_on_s;
+}
+double daemon_pwm_min_off_s() {
+  return daemon::default_settings().pwm.min_off_s;
+}
+double daemon_over_pressure_mpa() {
+  return daemon::default_settings().alarms.over_pressure_mpa;
+}
+
 ClosedLoopRig::ClosedLoopRig(const RigConfig& config)
     : config_(config),
       plant_(config.plant, config.seed),
-      controller_(config.controller_mode, config.controller),
+      pressure_step_(pressure_loop_config(config)),
       pwm_(pwm_config(config)),
-      trim_(config.flow_trim),
-      trim_windows_(config.flow_trim_window_s) {
+      trim_step_(flow_trim_step_config(config)),
+      compensation_filter_(config.compensation_filter_s) {
   if (!(config.control_period_s > 0.0 && config.control_period_s <= 0.1))
     throw std::invalid_argument("RigConfig.control_period_s must be in (0, 0.1]");
   if (config.adc_bits < 8 || config.adc_bits > 24)
@@ -65,8 +105,6 @@ ClosedLoopRig::ClosedLoopRig(const RigConfig& config)
   }
   if (!(config.meter_pulses_per_l > 0.0))
     throw std::invalid_argument("RigConfig.meter_pulses_per_l must be > 0");
-  if (!(config.flow_trim_window_s > 0.0))
-    throw std::invalid_argument("RigConfig.flow_trim_window_s must be > 0");
   if (config.duty_clamp) validate(*config.duty_clamp);
   for (auto& line : lines_) line = NozzleLine{};
   if (config.nozzle_health) {
@@ -75,12 +113,9 @@ ClosedLoopRig::ClosedLoopRig(const RigConfig& config)
     health_.emplace(h);
   }
   if (config.identify_nozzles) fit_.emplace(static_cast<std::size_t>(config.plant.nozzle_count));
-  phase_windows_ = health_ || fit_;
-  if (phase_windows_) {
-    health_window_s_ = 1.0 / (config.pwm_frequency_hz * config.plant.nozzle_count);
-    if (!(config.health_flow_lag_s >= 0.0 && config.health_flow_lag_s < health_window_s_))
-      throw std::invalid_argument("RigConfig.health_flow_lag_s must be in [0, one PWM phase)");
-  }
+  // One staggered phase, as the daemon cuts it.
+  phase_window_s_ = 1.0 / (config.pwm_frequency_hz * config.plant.nozzle_count);
+  if (health_) health_windows_.emplace(nanos(phase_window_s_), kMeterLag);
   if (config.fixes.flow_feedback && config.fixes.model_trim) boom_trim_.emplace(config.boom_trim);
   plant_.set_ground_speed(config.ground_speed_m_per_s);
   plant_.set_return_valve_volts(10.0);  // fully open: the safe state, no pressure
@@ -106,7 +141,8 @@ void ClosedLoopRig::request_flows(std::span<const double> flow_l_per_min) {
   const std::size_t n = std::min(flow_l_per_min.size(), requested_flows_.size());
   std::copy_n(flow_l_per_min.begin(), n, requested_flows_.begin());
   flows_requested_ = true;
-  apply_flow_requests();
+  // Once running, the next control tick takes them (as the daemon's next cycle does).
+  if (!started_) apply_flow_requests(0.0);
 }
 
 void ClosedLoopRig::command_duties(std::span<const double> duty_pct) {
@@ -114,90 +150,111 @@ void ClosedLoopRig::command_duties(std::span<const double> duty_pct) {
   duties_.fill(0.0);
   const std::size_t n = std::min(duty_pct.size(), static_cast<std::size_t>(plant_.nozzle_count()));
   for (std::size_t i = 0; i < n; ++i) duties_[i] = std::clamp(duty_pct[i], 0.0, 100.0);
-  pwm_.set_duties(std::span<const double>(duties_.data(), n));
+  set_pwm_duties();
 }
 
-void ClosedLoopRig::apply_flow_requests() {
+void ClosedLoopRig::set_pwm_duties() {
+  const std::span<const double> duties(duties_.data(),
+                                       static_cast<std::size_t>(plant_.nozzle_count()));
+  // Before start() the schedule is not running: the duties are latched at its start.
+  if (started_) {
+    pwm_.set_duties(duties, nanos(plant_.time_s() - pwm_start_s_));
+  } else {
+    pwm_.set_duties(duties);
+  }
+}
+
+void ClosedLoopRig::apply_flow_requests(double dt_s) {
   const int n = plant_.nozzle_count();
   const double pressure = config_.fixes.pressure_compensation ? filtered_pressure_mpa_ : 0.0;
+  std::array<NozzleLine, plant::kMaxNozzles> lines{};
   for (int i = 0; i < n; ++i) {
     const auto k = static_cast<std::size_t>(i);
     // The spray-rate law owns the full-open rule (spray_rate_law.hpp); the rig only hands it
     // the calibrated full-open flow.
-    NozzleLine line = lines_[k];
-    if (full_open_flows_[k] > 0.0) line.full_open_flow_l_per_min = full_open_flows_[k];
+    lines[k] = lines_[k];
+    if (full_open_flows_[k] > 0.0) lines[k].full_open_flow_l_per_min = full_open_flows_[k];
     // The model trim asks the line for what makes this nozzle deliver the request, but never
     // below a full opening the law chose (boom_trim.hpp).
     double flow = requested_flows_[k];
-    line_slopes_[k] = line_slope_l_per_min_per_pct(line, pressure);
-    if (boom_trim_ && flow > 0.0 && raw_duty_for_flow_pct(line, flow, pressure) < 100.0)
+    line_slopes_[k] = line_slope_l_per_min_per_pct(lines[k], pressure);
+    if (boom_trim_ && flow > 0.0 && raw_duty_for_flow_pct(lines[k], flow, pressure) < 100.0)
       flow = boom_trim_->flow_to_ask(flow, line_slopes_[k]);
-    double duty = flow > 0.0 ? raw_duty_for_flow_pct(line, flow, pressure) : 0.0;
+    double duty = flow > 0.0 ? raw_duty_for_flow_pct(lines[k], flow, pressure) : 0.0;
     if (config_.duty_clamp) duty = clamp_duty_for_flow_pct(*config_.duty_clamp, duty, flow);
-    // What the law promises for the duty it chose (the trim's reference): a clamp that raised
-    // or lowered the duty changed the promise too.
-    promised_flows_[k] = promised_flow_l_per_min(line, duty, pressure);
-    if (config_.fixes.flow_feedback && !boom_trim_)
-      duty = trimmed_duty_pct(line, duty, trim_.correction(), pressure);
     duties_[k] = std::clamp(duty, 0.0, 100.0);
-    commanded_promise_[k] = promised_flow_l_per_min(line, duties_[k], pressure);
+    // What the law promises for the duty it chose (the model trim's reference): a clamp that
+    // raised or lowered the duty changed the promise too.
+    promised_flows_[k] = promised_flow_l_per_min(lines[k], duties_[k], pressure);
   }
-  pwm_.set_duties(std::span<const double>(duties_.data(), static_cast<std::size_t>(n)));
+  // The daemon's flow trim on the law's duties (flow_trim_step.hpp): it decides itself
+  // whether a window is usable (pressure off set-point, too little flow).
+  if (config_.fixes.flow_feedback && !boom_trim_ && dt_s > 0.0) {
+    FlowTrimStepInputs trim;
+    trim.dt_s = dt_s;
+    trim.spraying = true;
+    trim.pressure_mpa = measured_pressure_mpa_;
+    trim.setpoint_mpa = config_.setpoint_mpa;
+    trim.compensation_pressure_mpa = pressure;
+    trim.pulses = plant_.flow_meter_pulses();
+    trim.pulses_per_litre = config_.meter_pulses_per_l;
+    trim.duty_pct = std::span<double>(duties_.data(), static_cast<std::size_t>(n));
+    trim.lines = std::span<const NozzleLine>(lines.data(), static_cast<std::size_t>(n));
+    trim.min_duty_pct = config_.duty_clamp ? config_.duty_clamp->min_duty_pct : 0.0;
+    trim.max_duty_pct = config_.duty_clamp ? config_.duty_clamp->max_duty_pct : 100.0;
+    trim_step_.step(trim);
+  }
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    commanded_promise_[k] = promised_flow_l_per_min(lines[k], duties_[k], pressure);
+  }
+  set_pwm_duties();
 }
 
 void ClosedLoopRig::start() {
   if (started_) return;
-  started_ = true;
   plant_.set_pump(true);
   const double now = plant_.time_s();
   measured_pressure_mpa_ = read_pressure_mpa();
-  filtered_pressure_mpa_ = measured_pressure_mpa_;
-  controller_.enable(0.0, config_.setpoint_mpa, measured_pressure_mpa_);
+  compensation_filter_.reset();
+  filtered_pressure_mpa_ = compensation_filter_.update(measured_pressure_mpa_, 0.0);
   pwm_start_s_ = now;
   pwm_.start(std::chrono::nanoseconds(0));
+  started_ = true;
   pending_edge_ = pwm_.next_edge();
+  last_edge_s_ = now;
   next_control_s_ = now;
   sampled_pressure_mpa_ = measured_pressure_mpa_;
   next_sample_s_ = now + config_.control_period_s - config_.converter_lead_s;
   dac_due_s_ = -1.0;
   next_record_s_ = now;
   boom_trim_windows_.reset();
-  trim_windows_.reset();
-  if (phase_windows_) {
-    next_health_window_s_ = now + health_window_s_;
-    next_health_meter_s_ = -1.0;
-    health_open_s_.fill(0.0);
-    window_promised_l_.fill(0.0);
-    health_pulses_ = plant_.flow_meter_pulses();
-  }
-}
-
-void ClosedLoopRig::health_window_closed() {
-  health_pending_open_s_ = health_open_s_;
-  health_open_s_.fill(0.0);
+  if (health_windows_) health_windows_->restart();
   if (fit_) {
-    const std::uint64_t pulses = plant_.flow_meter_pulses();
-    fit_->add_window(std::span<const double>(window_promised_l_.data(),
-                                             static_cast<std::size_t>(plant_.nozzle_count())),
-                     static_cast<double>(pulses - fit_pulses_) / config_.meter_pulses_per_l);
-    fit_pulses_ = pulses;
+    next_fit_window_s_ = now + phase_window_s_;
     window_promised_l_.fill(0.0);
   }
-  const double closed_at_s = next_health_window_s_;
-  next_health_window_s_ += health_window_s_;
-  if (!health_) return;  // the fit reads the meter at the window's own end (above)
-  next_health_meter_s_ = closed_at_s + config_.health_flow_lag_s;
-  if (config_.health_flow_lag_s <= 0.0) health_meter_window_closed();
 }
 
-void ClosedLoopRig::health_meter_window_closed() {
+void ClosedLoopRig::fit_window_closed() {
   const std::uint64_t pulses = plant_.flow_meter_pulses();
-  const double litres = static_cast<double>(pulses - health_pulses_) / config_.meter_pulses_per_l;
-  health_pulses_ = pulses;
-  next_health_meter_s_ = -1.0;
+  fit_->add_window(std::span<const double>(window_promised_l_.data(),
+                                           static_cast<std::size_t>(plant_.nozzle_count())),
+                   static_cast<double>(pulses - fit_pulses_) / config_.meter_pulses_per_l);
+  fit_pulses_ = pulses;
+  window_promised_l_.fill(0.0);
+  next_fit_window_s_ += phase_window_s_;
+}
+
+void ClosedLoopRig::update_health_windows() {
+  const double now = plant_.time_s();
+  if (!health_windows_->update(std::chrono::nanoseconds(0), applied_mask_,
+                               nanos(last_edge_s_ - pwm_start_s_), nanos(now - pwm_start_s_),
+                               plant_.flow_meter_pulses(), config_.meter_pulses_per_l))
+    return;
   const auto nozzles = static_cast<std::size_t>(plant_.nozzle_count());
-  health_->add_window(std::span<const double>(health_pending_open_s_.data(), nozzles), litres,
-                      health_window_s_);
+  health_->add_window(health_windows_->open_s().first(nozzles), health_windows_->metered_l(),
+                      health_windows_->window_s());
   for (std::size_t i = 0; i < nozzles; ++i)
     health_max_evidence_ = std::max(health_max_evidence_, health_->evidence(i));
 }
@@ -207,8 +264,6 @@ void ClosedLoopRig::account_open_time(double step_s) {
   const double t1 = t0 + step_s;
   for (int i = 0; i < plant_.nozzle_count(); ++i) {
     const auto k = static_cast<std::size_t>(i);
-    if ((applied_mask_ >> i) & 1U) health_open_s_[k] += step_s;
-    if (!fit_) continue;
     fit_promised_l_[k] += step_s * commanded_promise_[k] / 60.0;
     // The fit counts the time the nozzle flows by its valve's label timing (the commanded
     // pulse moved by the mean open and close lags), at the line's flow per flowing second
@@ -228,6 +283,8 @@ void ClosedLoopRig::account_open_time(double step_s) {
 void ClosedLoopRig::valve_edge(std::uint32_t mask) {
   const double now = plant_.time_s();
   const plant::NozzleParams label = kValveLabel;
+  // The pressure step holds the valves closed while its reading is no pressure or it tripped.
+  if (pressure_step_.outputs().hold_valves) mask = 0;
   for (int i = 0; i < plant_.nozzle_count(); ++i) {
     const auto k = static_cast<std::size_t>(i);
     const bool was = (applied_mask_ >> i) & 1U;
@@ -240,6 +297,7 @@ void ClosedLoopRig::valve_edge(std::uint32_t mask) {
       flow_current_[k].second = now + label.close_delay_s + label.close_travel_s / 2.0;
     }
   }
+  if (mask != applied_mask_) last_edge_s_ = now;
   plant_.set_valves(mask);
   applied_mask_ = mask;
 }
@@ -251,14 +309,23 @@ void ClosedLoopRig::restart_identification() {
   fit_pulses_ = plant_.flow_meter_pulses();
 }
 
-double ClosedLoopRig::read_pressure_mpa() const {
-  // ADC quantisation, then the label conversion volts -> mA -> MPa.
+ClosedLoopRig::PressureReading ClosedLoopRig::read_pressure() const {
+  // ADC quantisation, then the label conversion volts -> mA -> MPa with the daemon's fault rule.
   const double full = static_cast<double>((1L << config_.adc_bits) - 1);
   const double counts = std::round(
       std::clamp(plant_.pressure_sensor_volts() / config_.adc_reference_volts, 0.0, 1.0) * full);
-  const double volts = counts / full * config_.adc_reference_volts;
-  const double milliamps = volts / config_.sensor_shunt_ohms * 1000.0;
-  return (milliamps - 4.0) / 16.0 * config_.sensor_full_scale_mpa;
+  io::CurrentLoopSensorConfig sensor;
+  sensor.shunt_ohms = config_.sensor_shunt_ohms;
+  sensor.pressure_at_max_mpa = config_.sensor_full_scale_mpa;
+  const io::PressureReading reading =
+      io::pressure_from_sensor_volts(counts / full * config_.adc_reference_volts, sensor);
+  return {reading.pressure_mpa, reading.ok()};
+}
+
+double ClosedLoopRig::read_pressure_mpa() {
+  const PressureReading reading = read_pressure();
+  sensor_ok_ = reading.ok;
+  return reading.pressure_mpa;
 }
 
 double ClosedLoopRig::next_edge_time_s() const {
@@ -269,34 +336,25 @@ void ClosedLoopRig::control_tick() {
   const double dt = config_.control_period_s;
   measured_pressure_mpa_ =
       config_.converter_lead_s > 0.0 ? sampled_pressure_mpa_ : read_pressure_mpa();
-  const double alpha = 1.0 - std::exp(-dt / config_.compensation_filter_s);
-  filtered_pressure_mpa_ += alpha * (measured_pressure_mpa_ - filtered_pressure_mpa_);
-  const double u = controller_.update(config_.setpoint_mpa, measured_pressure_mpa_, dt);
+  filtered_pressure_mpa_ = compensation_filter_.update(measured_pressure_mpa_, dt);
+  PressureLoopInputs in;
+  in.pressure_mpa = measured_pressure_mpa_;
+  in.sensor_ok = sensor_ok_;
+  in.setpoint_mpa = config_.setpoint_mpa;
+  in.over_pressure_mpa = config_.over_pressure_mpa;
+  in.pump_enabled = true;
+  const PressureLoopOutputs& out = pressure_step_.step(in);
+  plant_.set_pump(out.run);
+  const double volts = 10.0 * (1.0 - out.closure);
   if (config_.converter_lag_s > 0.0) {
-    dac_pending_volts_ = 10.0 * (1.0 - u);
+    dac_pending_volts_ = volts;
     dac_due_s_ = plant_.time_s() + config_.converter_lag_s;
   } else {
-    plant_.set_return_valve_volts(10.0 * (1.0 - u));
+    plant_.set_return_valve_volts(volts);
   }
+  if (out.hold_valves && applied_mask_ != 0) valve_edge(0);
 
-  const double pressure_error =
-      std::abs(filtered_pressure_mpa_ - config_.setpoint_mpa) / config_.setpoint_mpa;
-  // FlowTrim decides itself whether a window is usable (pressure off set-point, too little
-  // flow); the rig only measures, through the daemon's window cutter.
-  if (config_.fixes.flow_feedback && !boom_trim_ && flows_requested_) {
-    FlowTrimTick tick;
-    for (int i = 0; i < plant_.nozzle_count(); ++i) {
-      const auto k = static_cast<std::size_t>(i);
-      // The trim compares against what the lines promise for the duties actually latched.
-      tick.promised_l_per_min += commanded_promise_[k];
-      tick.open_fraction += duties_[k] / 100.0 / plant_.nozzle_count();
-    }
-    tick.pressure_error_fraction = pressure_error;
-    tick.pulses = plant_.flow_meter_pulses();
-    FlowTrimInput input;
-    if (trim_windows_.tick(dt, tick, config_.meter_pulses_per_l, input)) trim_.update(input);
-  }
-  if (flows_requested_) apply_flow_requests();
+  if (flows_requested_) apply_flow_requests(dt);
   if (boom_trim_) {
     // The model trim (lab only, boom_trim.hpp), fed a tick at a time: the lines' promise at
     // the duties just latched.
@@ -307,6 +365,8 @@ void ClosedLoopRig::control_tick() {
       if (duties_[k] > 0.0) promised += promised_flows_[k];
       if (duties_[k] > 0.0 && duties_[k] < 100.0) slope += line_slopes_[k];
     }
+    const double pressure_error =
+        std::abs(filtered_pressure_mpa_ - config_.setpoint_mpa) / config_.setpoint_mpa;
     const bool usable =
         flows_requested_ && pressure_error <= config_.flow_trim.max_pressure_error_fraction;
     BoomTrimWindow window;
@@ -325,20 +385,19 @@ void ClosedLoopRig::run_for(double duration_s) {
     if (config_.record_period_s > 0.0) next = std::min(next, next_record_s_);
     if (config_.converter_lead_s > 0.0) next = std::min(next, next_sample_s_);
     if (dac_due_s_ >= 0.0) next = std::min(next, dac_due_s_);
-    if (phase_windows_) {
-      next = std::min(next, next_health_window_s_);
-      if (next_health_meter_s_ >= 0.0) next = std::min(next, next_health_meter_s_);
-    }
+    if (fit_) next = std::min(next, next_fit_window_s_);
+    if (health_windows_ && health_windows_->meter_due().count() >= 0)
+      next = std::min(next, pwm_start_s_ + seconds(health_windows_->meter_due()));
     if (next > plant_.time_s()) {
       const double step_s = next - plant_.time_s();
-      if (phase_windows_) account_open_time(step_s);
+      if (fit_) account_open_time(step_s);
       plant_.step(step_s);
     }
     const double now = plant_.time_s();
     constexpr double kEps = 1e-9;
-    if (phase_windows_ && next_health_meter_s_ >= 0.0 && next_health_meter_s_ <= now + kEps)
-      health_meter_window_closed();
-    if (phase_windows_ && next_health_window_s_ <= now + kEps) health_window_closed();
+    if (fit_ && next_fit_window_s_ <= now + kEps) fit_window_closed();
+    // The windows see the mask that held until now, then the edges of this instant.
+    if (health_windows_) update_health_windows();
     while (next_edge_time_s() <= now + kEps) {
       valve_edge(pending_edge_.valve_mask);
       pending_edge_ = pwm_.next_edge();
@@ -358,7 +417,7 @@ void ClosedLoopRig::run_for(double duration_s) {
     if (config_.record_period_s > 0.0 && next_record_s_ <= now + kEps) {
       trace_.push_back({now, plant_.line_pressure_mpa(), plant_.boom_pressure_mpa(),
                         measured_pressure_mpa_, plant_.total_nozzle_flow_l_per_min(),
-                        10.0 * (1.0 - controller_.output()), applied_mask_});
+                        10.0 * (1.0 - pressure_step_.outputs().closure), applied_mask_});
       next_record_s_ += config_.record_period_s;
     }
     if (now >= end - kEps) break;

@@ -1,9 +1,15 @@
-// The simulated machine the experiments run on: the hydraulic plant with the real control
-// algorithms around it, in simulated time.
+// The simulated machine the experiments run on: the hydraulic plant with the daemon's control
+// steps around it, in simulated time (like a vehicle's code under SITL, the steps do not know).
 //
-//   pressure sensor volts -> ADC counts -> MPa -> PressureController -> DAC -> return valve
-//   requested flows -> (calibrated lines, sqrt(Pcal/P), flow trim) -> duties -> PwmSchedule
-//   -> exact valve edges -> plant
+//   pressure sensor volts -> ADC counts -> 4-20 mA -> MPa (io/signal_conversion.hpp, with its
+//   fault rule) -> control::PressureLoopStep -> DAC -> return valve, pump
+//   requested flows -> (calibrated lines, sqrt(Pcal/P)) -> control::FlowTrimStep -> duties
+//   -> PwmSchedule (the daemon's pwm_config) -> exact valve edges -> plant
+//   valve edges + meter -> control::PhaseWindows (kMeterLag) -> NozzleHealth
+//
+// The settings the daemon has in its configuration (gains, pressure loop rate, valve minimum
+// on/off times, the over-pressure trip) default to the daemon's defaults
+// (daemon/sprayer/step_settings.hpp); an experiment changes them only where it says so.
 //
 // Every "fix" of the papers is a switch here (RigFixes), so each experiment can run with and
 // without them on the same plant and seed. Pure: no clocks, no threads.
@@ -18,8 +24,10 @@
 
 #include "control/calibration.hpp"
 #include "control/flow_feedback.hpp"
+#include "control/flow_trim_step.hpp"
 #include "control/nozzle_health.hpp"
-#include "control/pressure_controller.hpp"
+#include "control/phase_windows.hpp"
+#include "control/pressure_loop_step.hpp"
 #include "control/pwm_schedule.hpp"
 #include "control/spray_rate_law.hpp"
 #include "lab/experiments/boom_trim.hpp"
@@ -35,6 +43,13 @@ namespace weedspray::lab::experiments {
 FuzzyPidConfig default_fuzzy_pid_config();
 PidGains default_conventional_pid_gains();
 
+// The daemon's pressure loop from its default configuration ([pressure]: controller, gains,
+// loop_hz), and its [pwm] and [alarms] defaults the rig takes.
+const PressureLoopConfig& daemon_pressure_loop_config();
+double daemon_pwm_min_on_s();
+double daemon_pwm_min_off_s();
+double daemon_over_pressure_mpa();
+
 // The fixes of the papers that can be switched off to show the raw machine.
 struct RigFixes {
   bool staggered = true;              // staggered PWM phases (else synchronous)
@@ -49,10 +64,12 @@ struct RigFixes {
 struct RigConfig {
   plant::PlantParams plant{};
   std::uint64_t seed = 1;
-  PressureControlMode controller_mode = PressureControlMode::kFuzzyPid;
-  FuzzyPidConfig controller = default_fuzzy_pid_config();
+  PressureControlMode controller_mode = daemon_pressure_loop_config().mode;
+  FuzzyPidConfig controller = daemon_pressure_loop_config().controller;
   double setpoint_mpa = 0.2;
-  double control_period_s = 0.005;  // pressure loop at 200 Hz
+  // The pressure loop's period; the duties and the trim are stepped on the same tick.
+  double control_period_s = daemon_pressure_loop_config().period_s;
+  double over_pressure_mpa = daemon_over_pressure_mpa();  // the pressure step trips above it
   // The daemon's converters' thread (io::AnalogIoWorker): the ADC is sampled this long before
   // each control tick and the DAC written this long after it. 0 = at the tick (ideal I/O).
   double converter_lead_s = 0.0;
@@ -63,6 +80,8 @@ struct RigConfig {
   int adc_bits = 12;
   double adc_reference_volts = 3.3;
   double pwm_frequency_hz = 3.0;
+  double pwm_min_on_s = daemon_pwm_min_on_s();
+  double pwm_min_off_s = daemon_pwm_min_off_s();
   RigFixes fixes{};
   // Flow meter K-factor the controller uses (label 8500 until a catch test replaced it).
   double meter_pulses_per_l = 8500.0;
@@ -71,16 +90,13 @@ struct RigConfig {
   // The spray law's duty clamp (< min -> 0, > max -> 100), applied to requested flows' duties.
   std::optional<SprayLawConfig> duty_clamp{};
   // Time constant of the pressure filter the compensation uses (noise would otherwise jitter
-  // the duties).
-  double compensation_filter_s = 0.1;
+  // the duties): the trim's.
+  double compensation_filter_s = PressureFilter::kTimeConstantS;
   double ground_speed_m_per_s = 1.0;
   double record_period_s = 0.005;  // 0 = no trace
   // Per-nozzle health from the line meter, fed one window per PWM phase (period / nozzles,
-  // aligned to the PWM start). The meter's window lags the commanded one by health_flow_lag_s:
-  // the valves' mean dead time (flow starts 15 ms after the open command, stops 25 ms after
-  // the close command).
+  // aligned to the PWM start) by the daemon's PhaseWindows, the meter read kMeterLag late.
   std::optional<NozzleHealthConfig> nozzle_health{};
-  double health_flow_lag_s = 0.03;
   BoomTrimConfig boom_trim{};  // fixes.model_trim
   // Fit each nozzle's metered / promised ratio from the same phase windows (PhaseWindowFit, a
   // lab diagnostic: it changes no duty).
@@ -124,7 +140,7 @@ class ClosedLoopRig {
   void clear_trace() { trace_.clear(); }
   double time_s() const { return plant_.time_s(); }
   double measured_pressure_mpa() const { return measured_pressure_mpa_; }
-  double flow_trim_correction() const { return trim_.correction(); }
+  double flow_trim_correction() const { return trim_step_.correction(); }
   std::array<double, plant::kMaxNozzles> commanded_duties_pct() const { return duties_; }
   const RigConfig& config() const { return config_; }
   // The detector (config.nozzle_health set), else nullptr.
@@ -142,20 +158,29 @@ class ClosedLoopRig {
 
  private:
   void control_tick();
-  void health_window_closed();
-  void health_meter_window_closed();
-  // Phase windows: each nozzle's commanded open time and promised volume over step_s.
+  // The nozzle-health windows at `now` (the daemon's PhaseWindows, fed the rig's exact edges).
+  void update_health_windows();
+  void fit_window_closed();
+  // The fit's windows: each nozzle's promised volume over step_s.
   void account_open_time(double step_s);
   void valve_edge(std::uint32_t mask);  // applies an edge's valve states
-  void apply_flow_requests();
-  double read_pressure_mpa() const;
+  // The law's duties for the requested flows, then (dt_s > 0: a control tick) the flow trim.
+  void apply_flow_requests(double dt_s);
+  void set_pwm_duties();
+  struct PressureReading {
+    double pressure_mpa = 0.0;
+    bool ok = false;  // inside the sensor's fault limits
+  };
+  PressureReading read_pressure() const;
+  double read_pressure_mpa();  // read_pressure(), its fault into sensor_ok_
   double next_edge_time_s() const;
 
   RigConfig config_;
   plant::HydraulicPlant plant_;
-  PressureController controller_;
+  PressureLoopStep pressure_step_;
   PwmSchedule pwm_;
-  FlowTrim trim_;
+  FlowTrimStep trim_step_;
+  PressureFilter compensation_filter_;
   std::array<NozzleLine, plant::kMaxNozzles> lines_{};
   std::array<double, plant::kMaxNozzles> requested_flows_{};
   std::array<double, plant::kMaxNozzles> full_open_flows_{};
@@ -175,15 +200,16 @@ class ClosedLoopRig {
   double next_record_s_ = 0.0;
   double pwm_start_s_ = 0.0;
   double measured_pressure_mpa_ = 0.0;
+  bool sensor_ok_ = true;
   double filtered_pressure_mpa_ = 0.0;
-  FlowTrimWindows trim_windows_;
   std::vector<TraceSample> trace_;
   std::optional<NozzleHealth> health_;
   std::optional<BoomTrim> boom_trim_;
   std::optional<PhaseWindowFit> fit_;
   std::array<double, plant::kMaxNozzles> fit_promised_l_{};
-  bool phase_windows_ = false;  // health_ or fit_: phase windows are cut
-  std::array<double, plant::kMaxNozzles> window_promised_l_{};  // ...in the window being cut
+  std::optional<PhaseWindows> health_windows_;
+  double last_edge_s_ = 0.0;                                    // when the valve mask last changed
+  std::array<double, plant::kMaxNozzles> window_promised_l_{};  // in the fit's window being cut
   std::uint64_t fit_pulses_ = 0;  // meter pulses at the fit's last window
   // Each nozzle's flowing interval by its valve's label timing: the pulse now and the one
   // before it (its tail can run into the next opening).
@@ -192,12 +218,8 @@ class ClosedLoopRig {
   std::array<Interval, plant::kMaxNozzles> flow_current_{};
   BoomTrimWindows boom_trim_windows_{};
   std::array<double, plant::kMaxNozzles> line_slopes_{};  // dL/dd now [L/min per % duty]
-  double health_window_s_ = 0.0;
-  double next_health_window_s_ = -1.0;  // end of the commanded-open window
-  double next_health_meter_s_ = -1.0;   // end of the lagged meter window (< 0: none pending)
-  std::array<double, plant::kMaxNozzles> health_open_s_{};
-  std::array<double, plant::kMaxNozzles> health_pending_open_s_{};
-  std::uint64_t health_pulses_ = 0;
+  double phase_window_s_ = 0.0;
+  double next_fit_window_s_ = -1.0;  // end of the fit's window being cut
   double health_max_evidence_ = 0.0;
 };
 

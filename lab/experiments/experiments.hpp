@@ -147,6 +147,8 @@ struct SprayRunOptions {
   bool recalibrated = false;
   // Also fit each nozzle's ratio from the phase windows (PhaseWindowFit; orthogonal only).
   bool identify_nozzles = false;
+  // The daemon's flow trim settings (control::FlowTrimStep, which the rig runs).
+  FlowTrimConfig flow_trim{};
 };
 LinearityResult run_linearity(const SprayRunOptions& options);
 

@@ -46,6 +46,7 @@ PreparedMachine prepare_machine(const SprayRunOptions& options) {
   const CalibrationResult& cal = cached_calibration(cal_options);
   m.config.fixes = {true, true, options.flow_feedback, options.model_trim};
   m.config.identify_nozzles = options.identify_nozzles;
+  m.config.flow_trim = options.flow_trim;
   m.config.meter_pulses_per_l = cal.meter.pulses_per_litre;
   for (const auto& n : cal.nozzles) m.lines.push_back(n.fitted);
   m.full_flows = calibrated_full_flows(cal);

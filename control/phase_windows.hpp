@@ -10,7 +10,8 @@
 // the hose put the metered flow behind the writes), and the pulses since the previous read are
 // that window's volume. The first window after a (re)start is partial: it only marks the meter.
 //
-// Pure (times in, windows out), fixed size: no allocation, locks or clocks in the control loop.
+// The daemon's control loop and the lab's closed-loop rig both cut their windows with this and
+// kMeterLag. Pure (times in, windows out), fixed size: no allocation, locks or clocks.
 #pragma once
 
 #include <array>
@@ -20,7 +21,12 @@
 
 #include "control/nozzle_health.hpp"
 
-namespace weedspray::daemon {
+namespace weedspray::control {
+
+// How long the line meter's count lags the valve writes: the valves' mean dead time (flow starts
+// ~15 ms after the open command, stops ~25 ms after the close; the plant model's label valve),
+// what the lab's blockage experiment names nozzles with.
+inline constexpr std::chrono::nanoseconds kMeterLag{30'000'000};
 
 class PhaseWindows {
  public:
@@ -39,9 +45,12 @@ class PhaseWindows {
   std::span<const double> open_s() const noexcept { return done_open_s_; }
   double metered_l() const noexcept { return done_l_; }
   double window_s() const noexcept { return std::chrono::duration<double>(window_).count(); }
+  // When the closed window's liquid has passed the meter (the next update at or after it can
+  // complete it); negative when none is pending.
+  Nanos meter_due() const noexcept { return pending_due_; }
 
  private:
-  using Times = std::array<double, control::kMaxHealthNozzles>;
+  using Times = std::array<double, kMaxHealthNozzles>;
   // Adds [from, to) with `mask` open, closing the windows it crosses.
   void account(Nanos from, Nanos to, std::uint32_t mask) noexcept;
 
@@ -61,4 +70,4 @@ class PhaseWindows {
   double done_l_ = 0.0;
 };
 
-}  // namespace weedspray::daemon
+}  // namespace weedspray::control

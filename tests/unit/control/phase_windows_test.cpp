@@ -1,8 +1,8 @@
-// Phase windows for nozzle health (daemon/sprayer/phase_windows.hpp): a staggered boom whose
+// Phase windows for nozzle health (control/phase_windows.hpp): a staggered boom whose
 // valve writes and meter are known exactly, sampled like the control loop (every 2 ms, some
 // cycles missed): each window's open times are the true ones, its volume the true volume a meter
 // lag later, and the detector fed them learns each nozzle's own flow.
-#include "daemon/sprayer/phase_windows.hpp"
+#include "control/phase_windows.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 
 #include "control/nozzle_health.hpp"
 
-namespace weedspray::daemon {
+namespace weedspray::control {
 namespace {
 
 using namespace std::chrono_literals;
@@ -122,4 +122,4 @@ TEST(PhaseWindows, TheDetectorFedThemLearnsEachNozzlesFlow) {
 }
 
 }  // namespace
-}  // namespace weedspray::daemon
+}  // namespace weedspray::control

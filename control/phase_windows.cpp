@@ -1,8 +1,8 @@
-#include "daemon/sprayer/phase_windows.hpp"
+#include "control/phase_windows.hpp"
 
 #include <algorithm>
 
-namespace weedspray::daemon {
+namespace weedspray::control {
 
 void PhaseWindows::account(Nanos from, Nanos to, std::uint32_t mask) noexcept {
   while (from < to) {
@@ -54,4 +54,4 @@ bool PhaseWindows::update(Nanos schedule_start, std::uint32_t mask, Nanos writte
   return complete;
 }
 
-}  // namespace weedspray::daemon
+}  // namespace weedspray::control

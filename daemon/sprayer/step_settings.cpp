@@ -1,0 +1,65 @@
+#include "daemon/sprayer/step_settings.hpp"
+
+#include <algorithm>
+#include <cstdint>
+
+namespace weedspray::daemon {
+namespace {
+
+std::chrono::nanoseconds from_seconds(double s) {
+  return std::chrono::nanoseconds(static_cast<std::int64_t>(s * 1e9));
+}
+
+}  // namespace
+
+control::FuzzyPidConfig pressure_controller_config(const Config& config) {
+  const auto& p = config.pressure;
+  control::FuzzyPidConfig c;
+  c.base.gains = {p.kp, p.ki, p.kd};
+  c.base.output_min = p.output_min;
+  c.base.output_max = p.output_max;
+  c.base.anti_windup = control::AntiWindup::kBackCalculation;
+  c.base.derivative_filter_s = 0.01;
+  c.correction_weights = {p.cp, p.ci, p.cd};
+  c.error_range = p.range_mpa;
+  return c;
+}
+
+control::PressureLoopConfig pressure_loop_config(const Config& config) {
+  control::PressureLoopConfig c;
+  c.mode = config.pressure.controller == "pid" ? control::PressureControlMode::kPid
+                                               : control::PressureControlMode::kFuzzyPid;
+  c.controller = pressure_controller_config(config);
+  c.period_s = 1.0 / config.pressure.loop_hz;
+  return c;
+}
+
+control::PwmConfig pwm_config(const Config& config) {
+  control::PwmConfig pwm;
+  const auto n = static_cast<std::size_t>(config.boom.nozzles);
+  pwm.valve_count = n;
+  pwm.frequency_hz = config.pwm.frequency_hz;
+  pwm.phase_mode = config.pwm.staggered ? control::PwmPhaseMode::kStaggered
+                                        : control::PwmPhaseMode::kSynchronous;
+  if (config.pwm.order == "outer_first") {
+    pwm.order = control::outer_first_order(n);
+  } else if (config.pwm.order == "inner_first") {
+    pwm.order = control::outer_first_order(n);
+    std::reverse(pwm.order.begin(), pwm.order.end());
+  } else {
+    for (std::size_t i = 0; i < n; ++i) pwm.order.push_back(i);
+  }
+  pwm.min_on_time = from_seconds(config.pwm.min_on_s);
+  pwm.min_off_time = from_seconds(config.pwm.min_off_s);
+  // A spray start/stop happens when the ground under the nozzle starts/stops needing it, not at
+  // the valve's next period start (up to 50 cm later at 2.5 m/s and 5 Hz).
+  pwm.immediate_start_stop = true;
+  return pwm;
+}
+
+const Config& default_settings() {
+  static const Config defaults = default_config();
+  return defaults;
+}
+
+}  // namespace weedspray::daemon
