@@ -10,7 +10,7 @@ namespace weedspray::lab {
 
 // vision-eval, segment, bench-vision (lab/vision_commands.cpp)
 void add_vision_commands(CLI::App& app);
-// experiment NAME (lab/experiment_commands.cpp)
+// experiment NAME (lab/experiment_commands/: register.cpp, one file per NAME)
 void add_experiment_commands(CLI::App& app);
 // bench-pwm (lab/io_commands.cpp)
 void add_io_commands(CLI::App& app);
