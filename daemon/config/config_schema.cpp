@@ -576,6 +576,41 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "the simulated wheel sensor turns this much more than the ground it covers (a driven "
      "wheel spinning > 0, a trailed wheel skidding < 0): its pulses per ground metre are "
      "wheel.pulses_per_metre x (1 + slip), what sprayctl calibrate-wheel measures"},
+    // [fleet]
+    {WS_KEY(fleet, enabled), false, 0, 1, "",
+     "weedspray-fleet joins this board to the machine over an MQTT broker: it publishes the "
+     "daemon's state and forwards the broker's commands as D-Bus calls (docs/fleet.md); the "
+     "daemon itself ignores [fleet]"},
+    {WS_KEY(fleet, host), std::string("localhost"), 0, 0, "", "the MQTT broker's host"},
+    {WS_KEY(fleet, port), 1883, 1, 65535, "",
+     "the broker's TCP port (1883 plain, 8883 usually with TLS)"},
+    {WS_KEY(fleet, machine), std::string("sprayer"), 0, 0, "",
+     "the machine's name, shared by all its boards: topics weedspray/<machine>/<board>/...; "
+     "letters, digits, '-' and '_'"},
+    {WS_KEY(fleet, board), std::string("board1"), 0, 0, "",
+     "this board's name on the machine, unique on it; letters, digits, '-' and '_'"},
+    {WS_KEY(fleet, first_nozzle_offset_m), 0.0, -50, 50, "m",
+     "this board's first nozzle along the boom: its distance from the boom's left end, looking "
+     "forward (the cab draws the boards' nozzles in this order)"},
+    {WS_KEY(fleet, keepalive_s), 5, 5, 300, "s",
+     "MQTT keep-alive: the broker marks a board whose link went silent lost after 1.5 x this "
+     "(a bridge that exits or is killed is marked lost at once)"},
+    {WS_KEY(fleet, username), std::string(""), 0, 0, "",
+     "the broker user name (empty = anonymous)"},
+    {WS_KEY(fleet, password_file), std::string(""), 0, 0, "path",
+     "a file whose first line is the broker password (empty = none); readable by the bridge's "
+     "user only"},
+    {WS_KEY(fleet, tls_cafile), std::string(""), 0, 0, "path",
+     "TLS: the CA certificate that signed the broker's (empty = no TLS)"},
+    {WS_KEY(fleet, tls_certfile), std::string(""), 0, 0, "path",
+     "TLS: this board's client certificate, for brokers that require one (with tls_keyfile)"},
+    {WS_KEY(fleet, tls_keyfile), std::string(""), 0, 0, "path",
+     "TLS: the client certificate's private key"},
+    {WS_KEY(fleet, commands), std::string("operator"), 0, 0, "",
+     "the command kinds taken from the broker, as the D-Bus groups split them: none (publish "
+     "only), operator (start, stop, set_pressure, clear_alarms), admin (also reload_config); "
+     "any other is refused as unauthorised",
+     {"none", "operator", "admin"}},
   };
   // clang-format on
   return keys;
