@@ -12,26 +12,11 @@
 
 #include "daemon/config/config.hpp"
 #include "fleet/bridge.hpp"
+#include "fleet/broker_settings.hpp"
 
 namespace {
 
 using namespace weedspray;
-
-fleet::MqttSettings mqtt_settings(const daemon::FleetSection& f, const fleet::Topics& topics) {
-  fleet::MqttSettings s;
-  s.host = f.host;
-  s.port = f.port;
-  s.keepalive_s = f.keepalive_s;
-  s.client_id = "weedspray-" + f.machine + "-" + f.board;
-  s.username = f.username;
-  if (!f.password_file.empty()) s.password = fleet::read_password_file(f.password_file);
-  s.tls_cafile = f.tls_cafile;
-  s.tls_certfile = f.tls_certfile;
-  s.tls_keyfile = f.tls_keyfile;
-  s.will_topic = topics.board("online");
-  s.subscriptions = {topics.machine_commands(), topics.board_commands()};
-  return s;
-}
 
 int on_signal(sd_event_source* source, const signalfd_siginfo*, void*) {
   return sd_event_exit(sd_event_source_get_event(source), 0);
@@ -54,7 +39,9 @@ int run(const daemon::Config& config, bool user_bus) {
   sigprocmask(SIG_BLOCK, &signals, nullptr);
   const auto& f = config.fleet;
   const fleet::Topics topics(f.machine, f.board);
-  fleet::MqttLink mqtt(mqtt_settings(f, topics));
+  fleet::MqttLink mqtt(
+      fleet::broker_settings(f, "weedspray-" + f.machine + "-" + f.board, topics.board("online"),
+                             {topics.machine_commands(), topics.board_commands()}));
   fleet::Bridge bridge(mqtt, {f.machine, f.board, config.boom.nozzles, config.boom.nozzle_width_m,
                               f.first_nozzle_offset_m, f.commands});
   sd_event* event = nullptr;
