@@ -319,6 +319,13 @@ struct FleetSection {
   std::string commands;  // none|operator|admin: the command kinds taken from the broker
 };
 
+// The cab page (weedspray-cab, a program of its own; the daemon ignores these keys): where it
+// listens. It reads the broker named in [fleet].
+struct CabSection {
+  std::string listen_address;
+  int port;
+};
+
 // Where a key's value came from (file and line; line 0 = built-in default).
 struct KeySource {
   std::string file;
@@ -349,6 +356,7 @@ struct Config {
   LogSection log;
   SimSection sim;
   FleetSection fleet;
+  CabSection cab;
 
   std::shared_ptr<const LoadedModel> model;  // null unless vision.weed_source needs one
 

@@ -611,6 +611,12 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "only), operator (start, stop, set_pressure, clear_alarms), admin (also reload_config); "
      "any other is refused as unauthorised",
      {"none", "operator", "admin"}},
+    // [cab]
+    {WS_KEY(cab, listen_address), std::string("127.0.0.1"), 0, 0, "",
+     "weedspray-cab serves the cab page on this address: the cab's network address (or "
+     "0.0.0.0) for a phone or tablet; whoever reaches it can start and stop the machine. It "
+     "reads the boards from the broker and machine of [fleet]"},
+    {WS_KEY(cab, port), 8080, 1, 65535, "", "the cab page's TCP port"},
   };
   // clang-format on
   return keys;
