@@ -48,8 +48,10 @@ start_broker() {
   fail "mosquitto never listened on port $PORT"
 }
 
-# Field frames all green: every zone is weed, so a spraying board's duties are above 0.
+# Field frames all green (SIM_IMAGES, the boards' camera): every zone is weed, so a spraying
+# board's duties are above 0. Without it the boards see the bundled field images.
 make_green_field() {
+  SIM_IMAGES="$T/images"
   mkdir -p "$T/images"
   /usr/bin/python3 - "$T/images/field.png" "$SOURCE/tests/integration/daemon" <<'PYEOF'
 import sys
@@ -78,7 +80,8 @@ start_board() {  # start_board N: its daemon on a bus of its own, until Idle
   BUS[$n]=$(cat "$T/b$n/bus.addr")
   PIDS+=("$(cat "$T/b$n/bus.pid")")
   DBUS_SESSION_BUS_ADDRESS=${BUS[$n]} "$BUILD/daemon/weedsprayd" --sim --user \
-    --config "$T/b$n/weedspray.toml" --state-dir "$T/b$n/state" --sim-images "$T/images" \
+    --config "$T/b$n/weedspray.toml" --state-dir "$T/b$n/state" \
+    ${SIM_IMAGES:+--sim-images "$SIM_IMAGES"} \
     >"$T/daemon$n.log" 2>&1 &
   DAEMON_PID[$n]=$!
   PIDS+=($!)
