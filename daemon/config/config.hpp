@@ -316,7 +316,9 @@ struct FleetSection {
   std::string tls_cafile;        // "" = no TLS
   std::string tls_certfile;      // client certificate (with tls_keyfile)
   std::string tls_keyfile;
-  std::string commands;  // none|operator|admin: the command kinds taken from the broker
+  std::string commands;        // none|operator|admin: the command kinds taken from the broker
+  std::string on_board_lost;   // continue|stop: another board of the machine lost
+  std::string on_broker_lost;  // continue|stop: this board's link to the broker lost
 };
 
 // The cab page (weedspray-cab, a program of its own; the daemon ignores these keys): where it

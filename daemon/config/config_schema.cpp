@@ -611,6 +611,15 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "only), operator (start, stop, set_pressure, clear_alarms), admin (also reload_config); "
      "any other is refused as unauthorised",
      {"none", "operator", "admin"}},
+    {WS_KEY(fleet, on_board_lost), std::string("continue"), 0, 0, "",
+     "when another board of the machine is lost (its bridge or daemon gone, the broker's last "
+     "will), this board sprays on (continue) or stops (stop: the whole boom stops with any "
+     "board)",
+     {"continue", "stop"}},
+    {WS_KEY(fleet, on_broker_lost), std::string("stop"), 0, 0, "",
+     "when this board's connection to the broker is lost (so the cab can no longer stop it), it "
+     "stops spraying (stop) or sprays on (continue); it reconnects by itself either way",
+     {"stop", "continue"}},
     // [cab]
     {WS_KEY(cab, listen_address), std::string("127.0.0.1"), 0, 0, "",
      "weedspray-cab serves the cab page on this address: the cab's network address (or "
