@@ -16,8 +16,8 @@ double unix_time_s() {
 
 }  // namespace
 
-Bridge::Bridge(MqttLink& mqtt, BoardInfo info)
-    : mqtt_(mqtt), info_(std::move(info)), topics_(info_.machine, info_.board) {}
+Bridge::Bridge(MqttLink& mqtt, BoardInfo info, LossPolicy policy)
+    : mqtt_(mqtt), info_(std::move(info)), policy_(policy), topics_(info_.machine, info_.board) {}
 
 void Bridge::publish_snapshot(bool every_topic) {
   if (daemon_ == nullptr || !daemon_->present()) return;
@@ -67,12 +67,39 @@ void Bridge::on_mqtt_events() {
         break;
       case MqttEvent::Kind::kDisconnected:
         std::fprintf(stderr, "the broker connection closed; reconnecting\n");
+        if (policy_.stop_on_broker_lost) stop_board("the broker connection was lost");
         break;
       case MqttEvent::Kind::kMessage:
-        handle_command(event);
+        if (const auto board = topics_.online_board(event.topic)) {
+          board_online(*board, event.payload, event.retained);
+        } else {
+          handle_command(event);
+        }
         break;
     }
   }
+}
+
+void Bridge::board_online(const std::string& board, const std::string& payload, bool retained) {
+  // A board already lost before this connection is no news: only a loss seen live stops.
+  if (board == info_.board || retained || payload != "false") return;
+  std::fprintf(stderr, "board %s of the machine is lost\n", board.c_str());
+  if (policy_.stop_on_board_lost) stop_board("board " + board + " was lost");
+}
+
+void Bridge::stop_board(const std::string& why) {
+  if (daemon_ == nullptr || !daemon_->present() || daemon_->snapshot().state != "Spraying") return;
+  std::fprintf(stderr, "stopping: %s\n", why.c_str());
+  daemon_->call({"Stop", std::nullopt}, [this, why](Refusal refusal, const std::string& message) {
+    std::fprintf(stderr, "stop (%s): %s\n", why.c_str(),
+                 refusal == Refusal::kNone ? "done" : message.c_str());
+    const nlohmann::json event{{"command", "stop"},
+                               {"id", nullptr},
+                               {"ok", refusal == Refusal::kNone},
+                               {"reason", refusal_name(refusal)},
+                               {"message", "stopped by the bridge: " + why}};
+    mqtt_.publish(topics_.board("reply"), event.dump(), false);
+  });
 }
 
 void Bridge::handle_command(const MqttEvent& event) {

@@ -14,9 +14,15 @@
 
 namespace weedspray::fleet {
 
+// What the board does when the machine falls apart (fleet.on_board_lost, on_broker_lost).
+struct LossPolicy {
+  bool stop_on_board_lost = false;  // another board's online turned false
+  bool stop_on_broker_lost = true;  // this board's broker connection closed
+};
+
 class Bridge : public DaemonListener {
  public:
-  Bridge(MqttLink& mqtt, BoardInfo info);
+  Bridge(MqttLink& mqtt, BoardInfo info, LossPolicy policy);
   // The daemon's side; set once both exist (the client calls back into the bridge).
   void attach(DaemonClient& daemon) { daemon_ = &daemon; }
 
@@ -36,10 +42,15 @@ class Bridge : public DaemonListener {
   void publish_online();
   void handle_command(const MqttEvent& event);
   void finish(const ParsedCommand& command, Refusal refusal, const std::string& message);
+  // Another board's online flag; `retained`: a value from before this connection.
+  void board_online(const std::string& board, const std::string& payload, bool retained);
+  // Stops the daemon on the bridge's own account (the loss policy), saying why.
+  void stop_board(const std::string& why);
 
   MqttLink& mqtt_;
   DaemonClient* daemon_ = nullptr;
   BoardInfo info_;
+  LossPolicy policy_;
   Topics topics_;
   std::map<std::string, std::string> published_;  // leaf -> payload without its time stamp
   CommandCounters counters_;

@@ -39,11 +39,13 @@ int run(const daemon::Config& config, bool user_bus) {
   sigprocmask(SIG_BLOCK, &signals, nullptr);
   const auto& f = config.fleet;
   const fleet::Topics topics(f.machine, f.board);
-  fleet::MqttLink mqtt(
-      fleet::broker_settings(f, "weedspray-" + f.machine + "-" + f.board, topics.board("online"),
-                             {topics.machine_commands(), topics.board_commands()}));
-  fleet::Bridge bridge(mqtt, {f.machine, f.board, config.boom.nozzles, config.boom.nozzle_width_m,
-                              f.first_nozzle_offset_m, f.commands});
+  fleet::MqttLink mqtt(fleet::broker_settings(
+      f, "weedspray-" + f.machine + "-" + f.board, topics.board("online"),
+      {topics.machine_commands(), topics.board_commands(), topics.every_online()}));
+  fleet::Bridge bridge(mqtt,
+                       {f.machine, f.board, config.boom.nozzles, config.boom.nozzle_width_m,
+                        f.first_nozzle_offset_m, f.commands},
+                       {f.on_board_lost == "stop", f.on_broker_lost == "stop"});
   sd_event* event = nullptr;
   if (sd_event_default(&event) < 0) throw std::runtime_error("cannot make the event loop");
   std::unique_ptr<sd_event, decltype(&sd_event_unref)> event_owner(event, &sd_event_unref);

@@ -3,7 +3,9 @@
 // commands it takes.
 #pragma once
 
+#include <optional>
 #include <string>
+#include <string_view>
 
 namespace weedspray::fleet {
 
@@ -16,6 +18,21 @@ class Topics {
   [[nodiscard]] std::string board(const std::string& leaf) const { return board_ + "/" + leaf; }
   [[nodiscard]] std::string machine_commands() const { return machine_ + "/cmd"; }
   [[nodiscard]] std::string board_commands() const { return board_ + "/cmd"; }
+  // weedspray/<machine>/+/online: every board's online flag.
+  [[nodiscard]] std::string every_online() const { return machine_ + "/+/online"; }
+  // The board whose online flag `topic` is, if it is one of this machine's.
+  [[nodiscard]] std::optional<std::string> online_board(std::string_view topic) const {
+    const std::string_view suffix = "/online";
+    if (topic.size() <= machine_.size() + 1 + suffix.size() ||
+        topic.substr(0, machine_.size() + 1) != machine_ + "/" ||
+        topic.substr(topic.size() - suffix.size()) != suffix) {
+      return std::nullopt;
+    }
+    topic.remove_prefix(machine_.size() + 1);
+    topic.remove_suffix(suffix.size());
+    if (topic.find('/') != std::string_view::npos) return std::nullopt;
+    return std::string(topic);
+  }
 
  private:
   std::string machine_;

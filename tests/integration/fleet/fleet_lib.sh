@@ -38,7 +38,12 @@ start_broker() {
   PORT=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
   printf '%s\n' "listener $PORT 127.0.0.1" "allow_anonymous true" "persistence false" \
     "log_dest stderr" >"$T/mosquitto.conf"
-  "$(command -v mosquitto || echo /usr/sbin/mosquitto)" -c "$T/mosquitto.conf" >"$T/mosquitto.log" 2>&1 &
+  restart_broker
+}
+
+restart_broker() {  # mosquitto on $PORT again (after start_broker), until it answers
+  "$(command -v mosquitto || echo /usr/sbin/mosquitto)" -c "$T/mosquitto.conf" >>"$T/mosquitto.log" 2>&1 &
+  BROKER_PID=$!
   PIDS+=($!)
   local _
   for _ in $(seq 1 50); do

@@ -4,7 +4,9 @@
 # appears retained on the broker; "start" on the machine's command topic makes every board
 # spray within 1 s (State and duties over D-Bus); a malformed and an unauthorised command are
 # refused with a reply and counted; "stop" closes every valve; a killed bridge and a killed
-# daemon each turn their board's online to false; a bridge that stops says goodbye the same way.
+# daemon each turn their board's online to false, and a board set to stop when another is lost
+# stops while one set to continue sprays on; a board whose broker is lost stops, and reconnects
+# once it is back; a bridge that stops says goodbye the same way.
 # usage: mqtt_fleet_test.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
 BUILD=$(realpath "$1")
@@ -15,10 +17,10 @@ BOARDS=(1 2 3)
 
 start_broker
 make_green_field
-for n in "${BOARDS[@]}"; do
-  write_board_config "$n"
-  start_board "$n"
-done
+write_board_config 1 'on_board_lost = "stop"'
+write_board_config 2
+write_board_config 3
+for n in "${BOARDS[@]}"; do start_board "$n"; done
 for n in "${BOARDS[@]}"; do wait_board_state "$n" Idle 30; done
 for n in "${BOARDS[@]}"; do start_bridge "$n"; done
 
@@ -86,16 +88,35 @@ for n in "${BOARDS[@]}"; do
 done
 echo "ok: stop closed every board"
 
-# A killed bridge: the broker publishes its last will at once.
+# The machine loses a board: board 1 (fleet.on_board_lost = "stop") stops, board 2 ("continue",
+# the default) sprays on. A killed bridge: the broker publishes its last will at once.
+publish "weedspray/$MACHINE/cmd" '{"command":"start"}'
+for n in "${BOARDS[@]}"; do wait_board_state "$n" Spraying 2; done
 kill -KILL "${BRIDGE_PID[3]}"
 t0=$(now)
 wait_retained "weedspray/$MACHINE/b3/online" '^false$' 3
 echo "ok: board 3 lost $(elapsed_since "$t0") s after its bridge was killed"
+wait_board_closed 1 1
+echo "ok: board 1 stopped $(elapsed_since "$t0") s after board 3 was lost (on_board_lost = stop)"
+sleep 1
+[ "$(board_prop 2 State)" = '"Spraying"' ] || fail "board 2 (on_board_lost = continue) stopped"
+echo "ok: board 2 sprays on (on_board_lost = continue)"
 # A killed daemon: its bridge sees the name go and says the board is lost.
 kill -KILL "${DAEMON_PID[2]}"
 t0=$(now)
 wait_retained "weedspray/$MACHINE/b2/online" '^false$' 3
 echo "ok: board 2 lost $(elapsed_since "$t0") s after its daemon was killed"
+# The broker lost: board 1 (fleet.on_broker_lost = "stop", the default) stops, since the cab can
+# no longer stop it; once the broker is back, its bridge reconnects and says it is online.
+publish "weedspray/$MACHINE/b1/cmd" '{"command":"start"}'
+wait_board_state 1 Spraying 2
+kill -KILL "$BROKER_PID"
+t0=$(now)
+wait_board_closed 1 2
+echo "ok: board 1 stopped $(elapsed_since "$t0") s after the broker was lost"
+restart_broker
+wait_retained "weedspray/$MACHINE/b1/online" '^true$' 15
+echo "ok: board 1 back online $(elapsed_since "$t0") s after the broker went"
 # A bridge told to stop says goodbye the same way.
 kill -TERM "${BRIDGE_PID[1]}"
 wait "${BRIDGE_PID[1]}" || fail "weedspray-fleet exit status $?"

@@ -40,6 +40,11 @@ TEST(FleetTopics, MachineAndBoardLevels) {
   EXPECT_EQ(topics.board("state"), "weedspray/m1/left/state");
   EXPECT_EQ(topics.machine_commands(), "weedspray/m1/cmd");
   EXPECT_EQ(topics.board_commands(), "weedspray/m1/left/cmd");
+  EXPECT_EQ(topics.every_online(), "weedspray/m1/+/online");
+  EXPECT_EQ(topics.online_board("weedspray/m1/right/online"), "right");
+  EXPECT_FALSE(topics.online_board("weedspray/m2/right/online"));
+  EXPECT_FALSE(topics.online_board("weedspray/m1/right/state"));
+  EXPECT_FALSE(topics.online_board("weedspray/m1/online"));
 }
 
 }  // namespace
