@@ -15,6 +15,10 @@ declare -A BUS DAEMON_PID BRIDGE_PID
 
 cleanup() {
   local pid
+  # TERM first: Chromium then ends its own child processes, which would otherwise write into
+  # its profile under $T while it is being removed.
+  for pid in "${PIDS[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  sleep 0.5
   for pid in "${PIDS[@]}"; do kill -KILL "$pid" 2>/dev/null || true; done
   [ -n "${KEEP:-}" ] || rm -rf "$T"
 }
