@@ -25,8 +25,9 @@ set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 # procps: /bin/kill, the unit's ExecReload (a minimal Debian has no /bin/kill without it).
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "dbus, systemd, procps")
-# [gnss] reads the receiver through gpsd (optional: off by default).
-set(CPACK_DEBIAN_PACKAGE_SUGGESTS "gpsd")
+# [gnss] reads the receiver through gpsd, [fleet] joins an MQTT broker such as mosquitto (both
+# optional: off by default).
+set(CPACK_DEBIAN_PACKAGE_SUGGESTS "gpsd, mosquitto")
 # The configuration file is a conffile: upgrades keep the user's edits.
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
     "${CMAKE_CURRENT_BINARY_DIR}/conffiles;${PROJECT_SOURCE_DIR}/systemd/debian/postinst")

@@ -15,6 +15,7 @@ root="${1:-${WEEDSPRAY_ARM64_SYSROOT:-/opt/weedspray-sysroot-arm64}}"
 packages=(
   libopencv-dev libgpiod-dev libmodbus-dev libv4l-dev libturbojpeg0-dev libpng-dev libspdlog-dev libsystemd-dev libgps-dev
   libtomlplusplus-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev nlohmann-json3-dev
+  libmosquitto-dev libcpp-httplib-dev
 )
 case "$root" in
   /*/*) ;;

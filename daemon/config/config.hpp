@@ -306,6 +306,33 @@ struct SimSection {
   double wheel_slip_pct;  // the simulated wheel's slip (calibrate-wheel's truth)
 };
 
+// The fleet bridge (weedspray-fleet, a program of its own; the daemon ignores these keys): the
+// MQTT broker, the board's name and place on the boom, credentials, TLS, accepted commands.
+struct FleetSection {
+  bool enabled;
+  std::string host;
+  int port;
+  std::string machine;           // topic level: weedspray/<machine>/<board>/...
+  std::string board;             // topic level
+  double first_nozzle_offset_m;  // the first nozzle's place along the boom, from its left end
+  int keepalive_s;               // the broker marks the board lost after 1.5 x this of silence
+  std::string username;          // "" = anonymous
+  std::string password_file;     // its first line is the password
+  std::string tls_cafile;        // "" = no TLS
+  std::string tls_certfile;      // client certificate (with tls_keyfile)
+  std::string tls_keyfile;
+  std::string commands;        // none|operator|admin: the command kinds taken from the broker
+  std::string on_board_lost;   // continue|stop: another board of the machine lost
+  std::string on_broker_lost;  // continue|stop: this board's link to the broker lost
+};
+
+// The cab page (weedspray-cab, a program of its own; the daemon ignores these keys): where it
+// listens. It reads the broker named in [fleet].
+struct CabSection {
+  std::string listen_address;
+  int port;
+};
+
 // Where a key's value came from (file and line; line 0 = built-in default).
 struct KeySource {
   std::string file;
@@ -335,6 +362,8 @@ struct Config {
   AlarmsSection alarms;
   LogSection log;
   SimSection sim;
+  FleetSection fleet;
+  CabSection cab;
 
   std::shared_ptr<const LoadedModel> model;  // null unless vision.weed_source needs one
 

@@ -1,6 +1,7 @@
 // Parses TOML documents into Config against the key table of config_schema.cpp.
 #include <toml++/toml.h>
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -512,6 +513,26 @@ class Loader {
     }
     if (c.sim.speed_min_m_per_s > c.sim.speed_max_m_per_s) {
       fail("sim.speed_min_m_per_s", "must not exceed sim.speed_max_m_per_s");
+    }
+    validate_fleet();
+  }
+
+  // The fleet bridge's names become MQTT topic levels.
+  void validate_fleet() const {
+    const auto& f = config_.fleet;
+    const auto topic_level_ok = [](const std::string& name) {
+      return !name.empty() && std::all_of(name.begin(), name.end(), [](char ch) {
+        return std::isalnum(static_cast<unsigned char>(ch)) != 0 || ch == '-' || ch == '_';
+      });
+    };
+    for (const auto& [key, value] :
+         {std::pair{"fleet.machine", &f.machine}, std::pair{"fleet.board", &f.board}}) {
+      if (!topic_level_ok(*value)) {
+        std::string message = "\"";
+        message += *value;
+        message += "\": needs letters, digits, '-' or '_' only (a topic level)";
+        fail(key, message);
+      }
     }
   }
 

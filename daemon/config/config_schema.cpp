@@ -591,6 +591,56 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "the simulated wheel sensor turns this much more than the ground it covers (a driven "
      "wheel spinning > 0, a trailed wheel skidding < 0): its pulses per ground metre are "
      "wheel.pulses_per_metre x (1 + slip), what sprayctl calibrate-wheel measures"},
+    // [fleet]
+    {WS_KEY(fleet, enabled), false, 0, 1, "",
+     "weedspray-fleet joins this board to the machine over an MQTT broker: it publishes the "
+     "daemon's state and forwards the broker's commands as D-Bus calls (docs/fleet.md); the "
+     "daemon itself ignores [fleet]"},
+    {WS_KEY(fleet, host), std::string("localhost"), 0, 0, "", "the MQTT broker's host"},
+    {WS_KEY(fleet, port), 1883, 1, 65535, "",
+     "the broker's TCP port (1883 plain, 8883 usually with TLS)"},
+    {WS_KEY(fleet, machine), std::string("sprayer"), 0, 0, "",
+     "the machine's name, shared by all its boards: topics weedspray/<machine>/<board>/...; "
+     "letters, digits, '-' and '_'"},
+    {WS_KEY(fleet, board), std::string("board1"), 0, 0, "",
+     "this board's name on the machine, unique on it; letters, digits, '-' and '_'"},
+    {WS_KEY(fleet, first_nozzle_offset_m), 0.0, -50, 50, "m",
+     "this board's first nozzle along the boom: its distance from the boom's left end, looking "
+     "forward (the cab draws the boards' nozzles in this order)"},
+    {WS_KEY(fleet, keepalive_s), 5, 5, 300, "s",
+     "MQTT keep-alive: the broker marks a board whose link went silent lost after 1.5 x this "
+     "(a bridge that exits or is killed is marked lost at once)"},
+    {WS_KEY(fleet, username), std::string(""), 0, 0, "",
+     "the broker user name (empty = anonymous)"},
+    {WS_KEY(fleet, password_file), std::string(""), 0, 0, "path",
+     "a file whose first line is the broker password (empty = none); readable by the bridge's "
+     "user only"},
+    {WS_KEY(fleet, tls_cafile), std::string(""), 0, 0, "path",
+     "TLS: the CA certificate that signed the broker's (empty = no TLS)"},
+    {WS_KEY(fleet, tls_certfile), std::string(""), 0, 0, "path",
+     "TLS: this board's client certificate, for brokers that require one (with tls_keyfile)"},
+    {WS_KEY(fleet, tls_keyfile), std::string(""), 0, 0, "path",
+     "TLS: the client certificate's private key"},
+    {WS_KEY(fleet, commands), std::string("operator"), 0, 0, "",
+     "the command kinds taken from the broker, as the D-Bus groups split them: none (publish "
+     "only), operator (start, stop, set_pressure, clear_alarms), admin (also reload_config); "
+     "any other is refused as unauthorised",
+     {"none", "operator", "admin"}},
+    {WS_KEY(fleet, on_board_lost), std::string("continue"), 0, 0, "",
+     "when another board of the machine is lost (its bridge or daemon gone, the broker's last "
+     "will), this board sprays on (continue) or stops (stop: the whole boom stops with any "
+     "board)",
+     {"continue", "stop"}},
+    {WS_KEY(fleet, on_broker_lost), std::string("stop"), 0, 0, "",
+     "when this board's connection to the broker is lost (so the cab can no longer stop it), it "
+     "stops spraying (stop) or sprays on (continue); it reconnects by itself either way",
+     {"stop", "continue"}},
+    // [cab]
+    {WS_KEY(cab, listen_address), std::string("127.0.0.1"), 0, 0, "",
+     "weedspray-cab serves the cab page on this address: the cab's network address (or "
+     "0.0.0.0) for a phone or tablet; whoever reaches it can start and stop the machine. It "
+     "reads the boards from the broker and machine of [fleet]"},
+    {WS_KEY(cab, port), 8080, 1, 65535, "", "the cab page's TCP port"},
   };
   // clang-format on
   return keys;

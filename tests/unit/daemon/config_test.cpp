@@ -559,6 +559,20 @@ TEST(ConfigSchema, ImuYawSourceNeedsItsDevice) {
   EXPECT_EQ(axis.key(), "turn.imu_axis");
 }
 
+TEST(ConfigSchema, FleetNamesAreTopicLevels) {
+  const Config config = parse("[fleet]\nmachine = \"north-field_2\"\nboard = \"left\"\n");
+  EXPECT_EQ(config.fleet.machine, "north-field_2");
+  EXPECT_FALSE(config.fleet.enabled);
+  EXPECT_EQ(config.fleet.commands, "operator");
+  for (const char* bad : {"a/b", "#", "+", "", "two words"}) {
+    SCOPED_TRACE(bad);
+    const auto error =
+        parse_error({{"main.toml", std::string("[fleet]\nboard = \"") + bad + "\"\n"}});
+    EXPECT_EQ(error.key(), "fleet.board");
+    EXPECT_EQ(error.line(), 2);
+  }
+}
+
 class ConfigFiles : public ::testing::Test {
  protected:
   void SetUp() override {

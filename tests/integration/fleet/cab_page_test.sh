@@ -1,0 +1,91 @@
+#!/usr/bin/env bash
+# The cab page in Debian's headless Chromium, driven over the DevTools protocol (cdp.py): three
+# weedsprayd --sim boards with their fleet bridges on a loopback mosquitto, weedspray-cab serving
+# the page. The page shows every board; Start (then its confirmation) on the page -> every board
+# Spraying within 1 s (over D-Bus); a board's bridge killed -> the page shows it lost within 3 s;
+# Stop on the page -> every board left Idle with its valves closed.
+# usage: cab_page_test.sh BUILD_DIR SOURCE_DIR
+set -euo pipefail
+BUILD=$(realpath "$1")
+SOURCE=$(realpath "$2")
+PY=/usr/bin/python3
+CDP="$PY $(dirname "$(realpath "$0")")/cdp.py"
+. "$(dirname "$0")/fleet_lib.sh" cab
+BOARDS=(1 2 3)
+
+page() { $CDP "$T/chrome" "$1"; }  # page EXPRESSION -> its value as JSON
+# The boards the page shows, with their state: "b1:Idle b2:Idle ..." in boom order.
+page_boards() {
+  page '[...document.querySelectorAll(".board")].map(b => b.dataset.board + ":" + b.dataset.state).join(" ")' |
+    tr -d '"'
+}
+wait_page() {  # wait_page REGEX SECONDS: until page_boards matches
+  local shown _
+  for _ in $(seq 1 $(($2 * 10))); do
+    shown=$(page_boards 2>/dev/null || true)
+    [[ "$shown" =~ $1 ]] && return 0
+    sleep 0.1
+  done
+  fail "the page shows '$shown', expected /$1/ within $2 s"
+}
+
+start_broker
+make_green_field
+CAB_PORT=$($PY -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
+for n in "${BOARDS[@]}"; do
+  write_board_config "$n" "[cab]" "listen_address = \"127.0.0.1\"" "port = $CAB_PORT"
+  start_board "$n"
+done
+for n in "${BOARDS[@]}"; do wait_board_state "$n" Idle 30; done
+for n in "${BOARDS[@]}"; do start_bridge "$n"; done
+
+"$BUILD/cab/weedspray-cab" --config "$T/b1/weedspray.toml" >"$T/cab.log" 2>&1 &
+PIDS+=($!)
+for _ in $(seq 1 50); do
+  $PY -c 'import sys, urllib.request; urllib.request.urlopen(sys.argv[1], timeout=1)' \
+    "http://127.0.0.1:$CAB_PORT/api/machine" 2>/dev/null && break
+  sleep 0.1
+done
+chromium --headless=new --no-sandbox --disable-gpu --no-first-run --remote-debugging-port=0 \
+  --remote-allow-origins='*' --user-data-dir="$T/chrome" "http://127.0.0.1:$CAB_PORT/" \
+  >"$T/chromium.log" 2>&1 &
+PIDS+=($!)
+for _ in $(seq 1 300); do
+  [ -s "$T/chrome/DevToolsActivePort" ] && break
+  sleep 0.1
+done
+[ -s "$T/chrome/DevToolsActivePort" ] || fail "chromium never opened its DevTools port"
+
+wait_page '^b1:Idle b2:Idle b3:Idle$' 20
+echo "ok: the page shows the three boards Idle, in boom order"
+
+# Start is guarded: the first tap only asks.
+page 'document.getElementById("start").click()' >/dev/null
+sleep 0.5
+for n in "${BOARDS[@]}"; do
+  [ "$(board_prop "$n" State)" = '"Idle"' ] || fail "board $n started before the confirmation"
+done
+[ "$(page 'document.getElementById("confirm-bar").hidden')" = false ] || fail "no confirmation asked"
+t0=$(now)
+page 'document.getElementById("confirm").click()' >/dev/null
+wait_all_spraying "$t0" "Start on the page"
+echo "ok: every board Spraying ${took} s after Start was confirmed on the page"
+wait_page '^b1:Spraying b2:Spraying b3:Spraying$' 3
+# The nozzles are drawn as bars with the board's duties.
+bars=$(page '[...document.querySelectorAll("[data-board=b1] .bar")].length')
+[ "$bars" = 3 ] || fail "board 1 shows $bars nozzle bars, expected 3"
+
+# A board lost: its bridge killed.
+kill -KILL "${BRIDGE_PID[2]}"
+t0=$(now)
+wait_page '^b1:Spraying b2:LOST b3:Spraying$' 3
+echo "ok: the page shows board 2 lost $(elapsed_since "$t0") s after its bridge was killed"
+
+# Stop on the page: no confirmation, every board still reachable stops.
+page 'document.getElementById("stop").click()' >/dev/null
+for n in 1 3; do
+  wait_board_closed "$n" 1
+done
+wait_page '^b1:Idle b2:LOST b3:Idle$' 3
+echo "ok: Stop on the page closed every board"
+echo "PASS"
