@@ -181,14 +181,29 @@ vm_kernel_init() {
   module_root="$kernel_dir/modules" # lib/modules/$kernel_release with only what guests need
 }
 
+# The archive rebuilds host-side packages (linux-kbuild, linux-source) under a new Debian
+# revision without the image, so the exact version may be gone while the same upstream
+# release (6.1.192-3 for an image at 6.1.192-2) is there: take that, never another release.
+host_package_version() { # package wanted-version -> the version to download
+  local package="$1" wanted="$2" versions version
+  versions="$(apt-cache madison "$package" 2>/dev/null | awk -F'|' '{gsub(/ /, "", $2); print $2}')"
+  if echo "$versions" | grep -qxF "$wanted"; then echo "$wanted"; return 0; fi
+  version="$(echo "$versions" | awk -v release="${wanted%-*}-" 'index($0, release) == 1' |
+    sort -V | tail -n1)"
+  [ -n "$version" ] ||
+    die "no $package of upstream release ${wanted%-*} in the package index (has: $(echo $versions))"
+  echo "$version"
+}
+
 fetch_packages() { # -> $kernel_dir/debs
-  local debs="$kernel_dir/debs"
+  local debs="$kernel_dir/debs" package host=()
   mkdir -p "$debs"
   # The image and its headers are the guest's architecture; the common headers and the
   # sources are arch: all, and linux-kbuild (fixdep, modpost) must run here: the host's.
   local guest=("$image_package=$kernel_version" "linux-headers-$kernel_release=$kernel_version")
-  local host=("linux-headers-$abi-common=$kernel_version" "linux-kbuild-$series=$kernel_version"
-    "linux-source-$series=$kernel_version")
+  for package in "linux-headers-$abi-common" "linux-kbuild-$series" "linux-source-$series"; do
+    host+=("$package=$(host_package_version "$package" "$kernel_version")")
+  done
   [[ " ${built_modules[*]} " == *" v4l2loopback "* ]] && host+=(v4l2loopback-dkms)
   note "downloading ${guest[*]} ${host[*]} from the Debian archive"
   (cd "$debs" && vm_apt_get download -q "${guest[@]}" && apt-get download -q "${host[@]}") \
