@@ -96,6 +96,17 @@ CommandResult Commands::calibrate_nozzles() {
       [&](Calibrations& c) { return c.calibrate_nozzles(to_.operation.calibration_context()); });
 }
 
+CommandResult Commands::test_valve(std::uint32_t nozzle, double duty_pct, double seconds) {
+  return calibration_command([&](Calibrations& c) {
+    return c.test_valve(nozzle, duty_pct, seconds, to_.operation.calibration_context());
+  });
+}
+
+CommandResult Commands::test_pump(double seconds) {
+  return calibration_command(
+      [&](Calibrations& c) { return c.test_pump(seconds, to_.operation.calibration_context()); });
+}
+
 void Commands::bus_lost() {
   spdlog::critical(
       "D-Bus connection lost: sprayctl can no longer stop the sprayer, so it stops now "

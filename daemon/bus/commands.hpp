@@ -50,6 +50,8 @@ class Commands final : public CommandHandler {
   CommandResult start_catch_test(double seconds) override;
   CommandResult calibrate_meter(double volume_l) override;
   CommandResult calibrate_nozzles() override;
+  CommandResult test_valve(std::uint32_t nozzle, double duty_pct, double seconds) override;
+  CommandResult test_pump(double seconds) override;
   void bus_lost() override;
 
  private:

@@ -20,6 +20,9 @@ constexpr auto kMethodFlags = SD_BUS_VTABLE_UNPRIVILEGED;
 
 #define WS_PROPERTY(name, signature) \
   SD_BUS_PROPERTY(name, signature, DbusService::get_property, 0, kEmits)
+#define WS_METHOD(name, signature, in_names, result, out_names)                               \
+  SD_BUS_METHOD_WITH_NAMES(name, signature, in_names, result, out_names, DbusService::method, \
+                           kMethodFlags)
 
 std::runtime_error bus_error(const char* what, int r) {
   return std::runtime_error(std::string(what) + ": " + std::strerror(-r));
@@ -43,6 +46,8 @@ std::vector<const char*> changed_properties(const Status& a, const Status& b) {
   const auto check = [&](bool differs, const char* name) {
     if (differs) names.push_back(name);
   };
+  // NaN (not given) compares unequal to itself: only a change to or from a value counts.
+  const auto differs = [](double x, double y) { return !(x == y || (x != x && y != y)); };
   check(a.state != b.state, "State");
   check(a.pressure_mpa != b.pressure_mpa, "Pressure");
   check(a.pressure_setpoint_mpa != b.pressure_setpoint_mpa, "PressureSetpoint");
@@ -57,14 +62,14 @@ std::vector<const char*> changed_properties(const Status& a, const Status& b) {
   check(a.volume_sprayed_l != b.volume_sprayed_l, "VolumeSprayed");
   check(a.area_covered_m2 != b.area_covered_m2, "AreaCovered");
   check(a.savings_pct != b.savings_pct, "SavingsPercent");
+  check(differs(a.application_rate_l_per_ha, b.application_rate_l_per_ha), "ApplicationRate");
+  check(a.target_rate_l_per_ha != b.target_rate_l_per_ha, "TargetRate");
   check(a.frame_rate_hz != b.frame_rate_hz, "FrameRate");
   check(a.vision_latency_ms != b.vision_latency_ms, "VisionLatencyMs");
   check(a.vision_latency_p99_ms != b.vision_latency_p99_ms, "VisionLatencyP99Ms");
   check(a.control_overruns != b.control_overruns, "ControlOverruns");
   check(a.mode != b.mode, "Mode");
   check(a.speed_source != b.speed_source, "SpeedSource");
-  // NaN (not given) compares unequal to itself: only a change to or from a value counts.
-  const auto differs = [](double x, double y) { return !(x == y || (x != x && y != y)); };
   check(a.gnss_fix != b.gnss_fix, "GnssFix");
   check(differs(a.latitude_deg, b.latitude_deg) || differs(a.longitude_deg, b.longitude_deg) ||
             differs(a.altitude_m, b.altitude_m),
@@ -116,10 +121,14 @@ const sd_bus_vtable kVtable[] = {
     WS_PROPERTY("VolumeSprayed", "d"),
     WS_PROPERTY("AreaCovered", "d"),
     WS_PROPERTY("SavingsPercent", "d"),
+    WS_PROPERTY("ApplicationRate", "d"),
+    WS_PROPERTY("TargetRate", "d"),
     WS_PROPERTY("FrameRate", "d"),
     WS_PROPERTY("VisionLatencyMs", "d"),
     WS_PROPERTY("VisionLatencyP99Ms", "d"),
     WS_PROPERTY("ControlOverruns", "t"),
+    // Read on request only: counts and currents change every tick, no signal for each.
+    SD_BUS_PROPERTY("RawInputs", "a(sds)", DbusService::get_property, 0, 0),
     WS_PROPERTY("Mode", "s"),
     WS_PROPERTY("SpeedSource", "s"),
     WS_PROPERTY("GnssFix", "s"),
@@ -139,19 +148,23 @@ const sd_bus_vtable kVtable[] = {
     WS_PROPERTY("FlowTrimActive", "b"),
     WS_PROPERTY("MeteredOverCalibrated", "d"),
     WS_PROPERTY("Estop", "(bbd)"),
-    SD_BUS_METHOD("Start", "", "", DbusService::method, kMethodFlags),
-    SD_BUS_METHOD("Stop", "", "", DbusService::method, kMethodFlags),
-    SD_BUS_METHOD("SetPressureSetpoint", "d", "", DbusService::method, kMethodFlags),
-    SD_BUS_METHOD("ReloadConfig", "", "", DbusService::method, kMethodFlags),
-    SD_BUS_METHOD("ClearAlarms", "", "", DbusService::method, kMethodFlags),
-    SD_BUS_METHOD("InjectSimFault", "s", "", DbusService::method, kMethodFlags),
-    SD_BUS_METHOD("Snapshot", "u", "ay", DbusService::method, kMethodFlags),
-    SD_BUS_METHOD("CalibrateWheel", "d", "t", DbusService::method, kMethodFlags),
-    SD_BUS_METHOD("StartCatchTest", "d", "", DbusService::method, kMethodFlags),
-    SD_BUS_METHOD("CalibrateMeter", "d", "", DbusService::method, kMethodFlags),
-    SD_BUS_METHOD("CalibrateNozzles", "", "", DbusService::method, kMethodFlags),
-    SD_BUS_SIGNAL("AlarmRaised", "s", 0),
-    SD_BUS_SIGNAL("AlarmCleared", "s", 0),
+    WS_METHOD("Start", "", "", "", ""),
+    WS_METHOD("Stop", "", "", "", ""),
+    // Arguments named, so the interface's introspection (and the shipped XML) says what each is.
+    WS_METHOD("SetPressureSetpoint", "d", SD_BUS_PARAM(mpa), "", ""),
+    WS_METHOD("ReloadConfig", "", "", "", ""),
+    WS_METHOD("ClearAlarms", "", "", "", ""),
+    WS_METHOD("InjectSimFault", "s", SD_BUS_PARAM(fault), "", ""),
+    WS_METHOD("Snapshot", "u", SD_BUS_PARAM(camera), "ay", SD_BUS_PARAM(png)),
+    WS_METHOD("CalibrateWheel", "d", SD_BUS_PARAM(metres), "t", SD_BUS_PARAM(request)),
+    WS_METHOD("StartCatchTest", "d", SD_BUS_PARAM(seconds), "", ""),
+    WS_METHOD("CalibrateMeter", "d", SD_BUS_PARAM(litres), "", ""),
+    WS_METHOD("CalibrateNozzles", "", "", "", ""),
+    WS_METHOD("TestValve", "udd", SD_BUS_PARAM(nozzle) SD_BUS_PARAM(duty_pct) SD_BUS_PARAM(seconds),
+              "", ""),
+    WS_METHOD("TestPump", "d", SD_BUS_PARAM(seconds), "", ""),
+    SD_BUS_SIGNAL_WITH_NAMES("AlarmRaised", "s", SD_BUS_PARAM(alarm), 0),
+    SD_BUS_SIGNAL_WITH_NAMES("AlarmCleared", "s", SD_BUS_PARAM(alarm), 0),
     SD_BUS_VTABLE_END,
 };
 
@@ -237,6 +250,15 @@ int DbusService::get_property(sd_bus*, const char*, const char*, const char* pro
                                  s.estop_latched ? 1 : 0, s.estop_reaction_ms);
   if (p == "ZoneDensity") return append_doubles(reply, s.zone_density);
   if (p == "Alarms") return append_strings(reply, s.alarms);
+  if (p == "RawInputs") {
+    int r = sd_bus_message_open_container(reply, 'a', "(sds)");
+    for (const auto& input : s.raw_inputs) {
+      if (r >= 0)
+        r = sd_bus_message_append(reply, "(sds)", input.name.c_str(), input.value,
+                                  input.unit.c_str());
+    }
+    return r < 0 ? r : sd_bus_message_close_container(reply);
+  }
   if (p == "AlarmDetails") {
     int r = sd_bus_message_open_container(reply, 'a', "(ssbs)");
     for (const auto& alarm : s.alarm_details) {
@@ -250,6 +272,8 @@ int DbusService::get_property(sd_bus*, const char*, const char*, const char* pro
   if (p == "VolumeSprayed") return sd_bus_message_append(reply, "d", s.volume_sprayed_l);
   if (p == "AreaCovered") return sd_bus_message_append(reply, "d", s.area_covered_m2);
   if (p == "SavingsPercent") return sd_bus_message_append(reply, "d", s.savings_pct);
+  if (p == "ApplicationRate") return sd_bus_message_append(reply, "d", s.application_rate_l_per_ha);
+  if (p == "TargetRate") return sd_bus_message_append(reply, "d", s.target_rate_l_per_ha);
   if (p == "FrameRate") return sd_bus_message_append(reply, "d", s.frame_rate_hz);
   if (p == "VisionLatencyMs") return sd_bus_message_append(reply, "d", s.vision_latency_ms);
   if (p == "VisionLatencyP99Ms") return sd_bus_message_append(reply, "d", s.vision_latency_p99_ms);
@@ -381,6 +405,18 @@ int dispatch(sd_bus_message* message, CommandHandler& handler, sd_bus_error* err
                                         : handler.calibrate_meter(value);
   } else if (member == "CalibrateNozzles") {
     result = handler.calibrate_nozzles();
+  } else if (member == "TestValve") {
+    std::uint32_t nozzle = 0;
+    double duty_pct = 0;
+    double seconds = 0;
+    const int r = sd_bus_message_read(message, "udd", &nozzle, &duty_pct, &seconds);
+    if (r < 0) return r;
+    result = handler.test_valve(nozzle, duty_pct, seconds);
+  } else if (member == "TestPump") {
+    double seconds = 0;
+    const int r = sd_bus_message_read(message, "d", &seconds);
+    if (r < 0) return r;
+    result = handler.test_pump(seconds);
   } else {
     return sd_bus_error_setf(error, SD_BUS_ERROR_UNKNOWN_METHOD, "no method %s",
                              std::string(member).c_str());

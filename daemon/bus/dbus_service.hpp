@@ -2,18 +2,21 @@
 // thread's sd-event loop, so every callback runs on the main thread without locks.
 //   properties: State s, Pressure d, PressureSetpoint d (MPa), Flow d (L/min), TankLevel d (%),
 //     Speed d (m/s), Distance d (m), NozzleDuty ad (%), ZoneDensity ad, Alarms as,
-//     VolumeSprayed d (L), AreaCovered d (m^2), SavingsPercent d, FrameRate d (Hz),
+//     VolumeSprayed d (L), AreaCovered d (m^2), SavingsPercent d, ApplicationRate d and
+//     TargetRate d (L/ha), FrameRate d (Hz),
 //     VisionLatencyMs d, VisionLatencyP99Ms d, ControlOverruns t, Mode s, SpeedSource s,
 //     GnssFix s, Position (ddd), GnssSpeed d, Course d, GnssHdop d, GnssSatellites u,
 //     GnssTime s, YawRate d (deg/s clockwise), WheelCalibration (tsdtd), Calibration (sds),
 //     MeterCalibration (sddd), NozzleCalibration a(sddd), NozzleHealth ad, FlowTrim d,
-//     FlowTrimActive b, MeteredOverCalibrated d (README: D-Bus API)
+//     FlowTrimActive b, MeteredOverCalibrated d, RawInputs a(sds) (no change signal)
+//     (docs/dbus.md)
 //   methods: Start(), Stop(), SetPressureSetpoint(d), ReloadConfig(), ClearAlarms(),
 //     InjectSimFault(s) (simulation only), Snapshot(u camera) -> ay PNG (live view, at most
 //     2 a second; the reply comes when the camera's next frame is processed),
 //     CalibrateWheel(d metres) -> t request (wheel pulses per metre from GNSS over a straight
 //     run; the WheelCalibration property reports it), StartCatchTest(d seconds),
-//     CalibrateMeter(d litres), CalibrateNozzles() (the Calibration property follows them)
+//     CalibrateMeter(d litres), CalibrateNozzles(), TestValve(u nozzle, d duty %, d seconds),
+//     TestPump(d seconds) (the Calibration property follows them)
 //   signals: AlarmRaised(s), AlarmCleared(s)
 #pragma once
 

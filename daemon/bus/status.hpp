@@ -20,6 +20,14 @@ struct AlarmDetail {
   bool operator==(const AlarmDetail&) const = default;
 };
 
+// One input as the hardware gives it (commissioning: sprayctl inputs).
+struct RawInput {
+  std::string name;  // e.g. "pressure_sensor_current"
+  double value = 0;
+  std::string unit;  // "mA", "pulses", "0/1" ...
+  bool operator==(const RawInput&) const = default;
+};
+
 struct Status {
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   std::string state = "Starting";
@@ -36,6 +44,11 @@ struct Status {
   double volume_sprayed_l = 0;
   double area_covered_m2 = 0;
   double savings_pct = 0;  // liquid saved against uniform spraying at the nominal dose
+  // The metered flow spread over the boom's width at the current speed (L/ha; NaN below
+  // kRateMinSpeedMPerS, where it means nothing), and the configured dose at full weed cover.
+  static constexpr double kRateMinSpeedMPerS = 0.1;
+  double application_rate_l_per_ha = kNaN;
+  double target_rate_l_per_ha = 0;
   double frame_rate_hz = 0;
   double vision_latency_ms = 0;      // frame capture -> duty scheduled, latest frame
   double vision_latency_p99_ms = 0;  // over the last 1000 frames
@@ -94,6 +107,8 @@ struct Status {
   // The emergency stop: whether its circuit is closed (true when none is wired), whether the
   // stop is latched, and the latest trip's time from the edge to valves and pump written safe
   // (ms; 0 before the first trip).
+  // Each wired input's raw reading (subsystems not wired are left out).
+  std::vector<RawInput> raw_inputs;
   bool estop_circuit_closed = true;
   bool estop_latched = false;
   double estop_reaction_ms = 0;
@@ -148,6 +163,10 @@ class CommandHandler {
   virtual CommandResult start_catch_test(double seconds) = 0;
   virtual CommandResult calibrate_meter(double volume_l) = 0;
   virtual CommandResult calibrate_nozzles() = 0;
+  // Commissioning (Idle only, run as the calibrations are): nozzle `nozzle` at `duty_pct` for
+  // `seconds` with the pump on; the pump alone holding the set-point for `seconds`.
+  virtual CommandResult test_valve(std::uint32_t nozzle, double duty_pct, double seconds) = 0;
+  virtual CommandResult test_pump(double seconds) = 0;
   // The bus connection is gone (the bus daemon stopped or died): nobody can stop the sprayer
   // any more, so it must stop by itself.
   virtual void bus_lost() = 0;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 
+#include "daemon/bus/raw_inputs.hpp"
+#include "daemon/config/target_rate.hpp"
 #include "daemon/records/map_geometry.hpp"
 #include "daemon/supervision/alarm_catalog.hpp"
 
@@ -75,6 +77,14 @@ Status build_status(const StatusSources& from, const PressureStatus& pressure,
   s.volume_sprayed_l = from.totals.volume_l;
   s.area_covered_m2 = from.totals.area_m2;
   s.savings_pct = from.totals.savings_pct();
+  const double boom_width_m = from.config.boom.nozzle_width_m * from.config.boom.nozzles;
+  if (control.speed_m_per_s >= Status::kRateMinSpeedMPerS) {
+    s.application_rate_l_per_ha =
+        rate_for_nozzle_flow(control.flow_l_per_min, boom_width_m, control.speed_m_per_s);
+  }
+  s.target_rate_l_per_ha = rate_for_nozzle_flow(from.config.spray.nominal_flow_l_per_min,
+                                                from.config.boom.nozzle_width_m,
+                                                from.config.spray.nominal_speed_m_per_s);
   for (std::size_t i = 0; i < sprayer.camera_count(); ++i) {
     s.frame_rate_hz += sprayer.camera(i).frame_rate_hz;
   }
@@ -90,6 +100,7 @@ Status build_status(const StatusSources& from, const PressureStatus& pressure,
   s.flow_trim_correction = control.flow_trim_correction;
   s.calibration_ratio = control.calibration_ratio_known ? control.calibration_ratio : 0.0;
   s.flow_trim_active = control.flow_trim_active;
+  s.raw_inputs = raw_inputs(from.backends, pressure, sprayer.tank());
   const EstopStatus estop = sprayer.estop();
   s.estop_circuit_closed = estop.circuit_closed;
   s.estop_latched = estop.latched;

@@ -83,6 +83,8 @@ struct LoadedModel {
 };
 
 struct SpraySection {
+  // The dose at full weed cover in L/ha; > 0 sets nominal_flow_l_per_min from it at load.
+  double target_rate_l_per_ha;
   double nominal_flow_l_per_min;
   double nominal_speed_m_per_s;
   double max_density;

@@ -13,6 +13,7 @@
 #include "daemon/config/config.hpp"
 #include "daemon/config/config_loader.hpp"
 #include "daemon/config/config_schema.hpp"
+#include "daemon/config/target_rate.hpp"
 
 namespace weedspray::daemon {
 
@@ -292,6 +293,7 @@ class Loader {
     // Rules between keys judge values that all parsed; until then they would only add noise.
     if (!errors_.empty()) throw ConfigError::listing(errors_);
     if (!cameras_given_) config_.cameras.front().nozzle_count = config_.boom.nozzles;
+    apply_target_rate();
     validate();
     if (check != nullptr) {
       try {
@@ -518,6 +520,11 @@ class Loader {
   }
 
   // The fleet bridge's names become MQTT topic levels.
+  void apply_target_rate() {
+    const std::string error = apply_target_rate_l_per_ha(config_);
+    if (!error.empty()) fail("spray.target_rate_l_per_ha", error);
+  }
+
   void validate_fleet() const {
     const auto& f = config_.fleet;
     const auto topic_level_ok = [](const std::string& name) {

@@ -178,8 +178,13 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "model's ground scale; a camera that needs more is refused at load (inference time grows "
      "with it: weedspray-lab bench-vision)"},
     // [spray]
+    {WS_KEY(spray, target_rate_l_per_ha), 0.0, 0, 5000, "L/ha",
+     "the dose where the weeds cover a zone at max_density, in litres per hectare: sets "
+     "nominal_flow_l_per_min = rate x 60 x boom.nozzle_width_m x nominal_speed_m_per_s / 10000 "
+     "(set one of the two); 0 = the dose comes from nominal_flow_l_per_min"},
     {WS_KEY(spray, nominal_flow_l_per_min), 0.615, 0.01, 20, "L/min",
-     "q_nom: nozzle flow that gives the nominal dose at the nominal speed"},
+     "q_nom: nozzle flow that gives the nominal dose at the nominal speed (the dose in L/ha is "
+     "10000 q_nom / (60 w v_nom): 205 L/ha at the defaults)"},
     {WS_KEY(spray, nominal_speed_m_per_s), 1.0, 0.1, 10, "m/s",
      "v_nom: speed of the nominal dose u = q_nom / (60 w v_nom)"},
     {WS_KEY(spray, max_density), 1.0, 0.01, 1, "",

@@ -71,6 +71,14 @@ void BusClient::call(const char* method, const char* signature, double argument)
   if (r < 0) fail(error, r);
 }
 
+void BusClient::test_valve(std::uint32_t nozzle, double duty_pct, double seconds) {
+  sd_bus_error error = SD_BUS_ERROR_NULL;
+  Reply reply;
+  const int r = sd_bus_call_method(bus_, kBusName, kObjectPath, kInterface, "TestValve", &error,
+                                   &reply.m, "udd", nozzle, duty_pct, seconds);
+  if (r < 0) fail(error, r);
+}
+
 std::uint64_t BusClient::calibrate_wheel(double run_distance_m) {
   sd_bus_error error = SD_BUS_ERROR_NULL;
   Reply reply;

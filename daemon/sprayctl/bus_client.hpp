@@ -27,6 +27,9 @@ class BusClient {
   // Calls `method` without arguments or with one of `signature` ("d" or "u").
   void call(const char* method, const char* signature = "", double argument = 0);
 
+  // TestValve(u nozzle, d duty %, d seconds).
+  void test_valve(std::uint32_t nozzle, double duty_pct, double seconds);
+
   // Starts a wheel calibration; its request number.
   std::uint64_t calibrate_wheel(double run_distance_m);
 

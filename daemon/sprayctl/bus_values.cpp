@@ -108,6 +108,16 @@ Value read_contents(sd_bus_message* m, std::string_view sig) {
       return true;
     });
   }
+  if (sig == "a(sds)") {  // RawInputs: name, value, unit
+    return read_struct_array(m, "(sds)", [&](Value& item) {
+      const char* name = nullptr;
+      const char* unit = nullptr;
+      double value = 0;
+      if (sd_bus_message_read(m, "(sds)", &name, &value, &unit) <= 0) return false;
+      item = {{"name", name}, {"value", value}, {"unit", unit}};
+      return true;
+    });
+  }
   if (sig == "a(sddd)") {  // NozzleCalibration: each nozzle's line q = A s + b in use
     return read_struct_array(m, "(sddd)", [&](Value& item) {
       const char* source = nullptr;

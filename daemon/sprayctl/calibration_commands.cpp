@@ -1,5 +1,7 @@
-// The calibrations sprayctl starts and follows until they end, printing each step.
+// The calibrations and commissioning tests sprayctl starts and follows until they end,
+// printing each step.
 #include <chrono>
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <thread>
@@ -30,7 +32,7 @@ bool follow_calibration(BusClient& client, const char* wanted, double timeout_s)
       return state == wanted;
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
   }
-  std::cerr << "sprayctl: calibrate: not finished within " << timeout_s << " s\n";
+  std::cerr << "sprayctl: not finished within " << timeout_s << " s\n";
   return false;
 }
 
@@ -92,6 +94,37 @@ int run_nozzle_calibration(BusClient& client, double timeout_s) {
     std::cout << "nozzle " << i << ": " << text_value("NozzleCalibration", Value::array({lines[i]}))
               << "\n";
   return 0;
+}
+
+int run_valve_test(BusClient& client, std::uint32_t nozzle, double duty_pct, double seconds) {
+  client.test_valve(nozzle, duty_pct, seconds);
+  return follow_calibration(client, "done", seconds + 30.0) ? 0 : kExitRefused;
+}
+
+int run_pump_test(BusClient& client, double seconds) {
+  client.call("TestPump", "d", seconds);
+  return follow_calibration(client, "done", seconds + 30.0) ? 0 : kExitRefused;
+}
+
+void print_inputs(std::ostream& out, const Value& inputs, bool json,
+                  std::chrono::system_clock::time_point now) {
+  if (json) {
+    Value object = Value::object();
+    for (const auto& input : inputs)
+      object[input.value("name", "")] = {{"value", input.value("value", 0.0)},
+                                         {"unit", input.value("unit", "")}};
+    out << Value{{"RawInputs", object}, {"timestamp", utc_timestamp(now)}}.dump() << "\n";
+    return;
+  }
+  for (const auto& input : inputs) {
+    const double value = input.value("value", 0.0);
+    out << std::left << std::setw(26) << input.value("name", "") << std::right << std::setw(14);
+    if (value == std::floor(value) && std::abs(value) < 1e15)
+      out << static_cast<long long>(value);
+    else
+      out << std::fixed << std::setprecision(3) << value;
+    out << "  " << input.value("unit", "") << "\n";
+  }
 }
 
 }  // namespace weedspray::sprayctl

@@ -3,6 +3,8 @@
 //   MPA|alarms|clear-alarms|reload|snapshot [--camera N] OUT.png|calibrate-wheel [--distance M]
 //   sprayctl calibrate meter --seconds S | --volume L    catch test, then the collected volume
 //   sprayctl calibrate nozzles                            each nozzle's line over a duty sweep
+//   sprayctl test valve N [--duty P] [--seconds S] | test pump [--seconds S] | inputs
+//                                                         commissioning
 //   sprayctl export-map ...   runs weedspray-export-map (no bus; GDAL stays out of sprayctl)
 // Exit status: 0 done, 1 refused by the daemon or failed, 2 usage, 3 weedsprayd not reachable
 // (docs/man/sprayctl.1.in).
@@ -122,6 +124,30 @@ int main(int argc, char** argv) {
   double nozzle_timeout_s = 600.0;
   calibrate_nozzles->add_option("--timeout", nozzle_timeout_s, "give up after, seconds")
       ->capture_default_str();
+  auto* test = app.add_subcommand(
+      "test", "commissioning: one valve, or the pump alone (in Idle, run as a calibration)");
+  test->require_subcommand(1);
+  auto* test_valve = test->add_subcommand(
+      "valve",
+      "hold nozzle N's valve at --duty for --seconds with the pump on, the others closed; "
+      "prints the meter's pulses and flow over it");
+  std::uint32_t tested_nozzle = 0;
+  double tested_duty_pct = 100.0;
+  double valve_test_s = 5.0;
+  test_valve->add_option("N", tested_nozzle, "nozzle index (0 = the first)")->required();
+  test_valve->add_option("--duty", tested_duty_pct, "duty, % (> 0..100; 100 holds it open)")
+      ->capture_default_str();
+  test_valve->add_option("--seconds", valve_test_s, "how long, s (1..60)")->capture_default_str();
+  auto* test_pump = test->add_subcommand(
+      "pump",
+      "run the pump holding the pressure set-point for --seconds with every valve closed; "
+      "prints when the set-point was reached and the highest pressure");
+  double pump_test_s = 20.0;
+  test_pump->add_option("--seconds", pump_test_s, "how long, s (1..120)")->capture_default_str();
+  auto* inputs = app.add_subcommand(
+      "inputs",
+      "each wired input as the hardware gives it: the pressure sensor's mA, pulse counts, "
+      "the tank's reading, E-stop and key contacts (commissioning)");
   auto* export_map = app.add_subcommand(
       "export-map",
       "the as-applied log as a map a GIS opens: export-map [--from T] [--to T] --format "
@@ -130,7 +156,7 @@ int main(int argc, char** argv) {
   // Every argument after export-map, --help included, is the exporter's.
   export_map->prefix_command();
   export_map->set_help_flag();
-  for (auto* sub : {status, monitor, alarms}) sub->add_flag("--json", json, "JSON output");
+  for (auto* sub : {status, monitor, alarms, inputs}) sub->add_flag("--json", json, "JSON output");
   // A bare `sprayctl` prints its usage; usage errors exit with their own status (CLI11's
   // default, 106 and up, says nothing to a script).
   app.name("sprayctl");
@@ -182,6 +208,12 @@ int main(int argc, char** argv) {
       return run_meter_calibration(client, catch_test_s, collected_l);
     } else if (*calibrate_nozzles) {
       return run_nozzle_calibration(client, nozzle_timeout_s);
+    } else if (*test_valve) {
+      return run_valve_test(client, tested_nozzle, tested_duty_pct, valve_test_s);
+    } else if (*test_pump) {
+      return run_pump_test(client, pump_test_s);
+    } else if (*inputs) {
+      print_inputs(std::cout, client.get("RawInputs"), json, std::chrono::system_clock::now());
     } else if (*calibrate_wheel) {
       return run_wheel_calibration(client, run_distance_m, calibration_timeout_s);
     } else if (*snapshot) {

@@ -49,6 +49,16 @@ void print_status(std::ostream& out, const Properties& p, bool json,
          << std::setprecision(1) << ' ' << number(v[2]) << " m";
     return text.str();
   };
+  // The rate means nothing while the machine stands (NaN, null in JSON).
+  const auto rate = [&](const char* name) {
+    const auto found = p.find(name);
+    if (found == p.end() || !found->second.is_number()) return std::string("?");
+    const double l_per_ha = found->second.get<double>();
+    if (!std::isfinite(l_per_ha)) return std::string("- (standing)");
+    std::ostringstream text;
+    text << std::fixed << std::setprecision(1) << l_per_ha;
+    return text.str();
+  };
   // A receiver that is not configured has no position to show.
   const std::string gnss_line = get("GnssFix") == "off"
                                     ? std::string("GNSS:          off (gnss.enabled = false)\n")
@@ -61,6 +71,8 @@ void print_status(std::ostream& out, const Properties& p, bool json,
       << "Pressure:      " << get("Pressure") << " MPa (set-point " << get("PressureSetpoint")
       << " MPa)\n"
       << "Flow:          " << get("Flow") << " L/min\n"
+      << "Rate:          " << rate("ApplicationRate")
+      << " L/ha now over the boom (dose at full weed cover " << rate("TargetRate") << " L/ha)\n"
       << "Tank:          " << get("TankLevel") << " %\n"
       << "Speed:         " << get("Speed") << " m/s (" << get("SpeedSource") << "), distance "
       << get("Distance") << " m\n"

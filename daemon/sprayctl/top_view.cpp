@@ -65,6 +65,10 @@ std::string top_frame(const Properties& p, std::chrono::system_clock::time_point
   // The dose over the job so far: the litres sprayed over the area the boom covered.
   const double area_m2 = number(p, "AreaCovered");
   const double volume_l = number(p, "VolumeSprayed");
+  const double rate_now = number(p, "ApplicationRate");
+  out << "Rate     " << (std::isfinite(rate_now) ? fixed(rate_now, 1) : "-")
+      << " L/ha now over the boom (" << fixed(number(p, "TargetRate"), 0)
+      << " L/ha at full weed cover)\n";
   out << "Applied  " << (area_m2 > 0 ? fixed(volume_l / area_m2 * 10000.0, 1) : "-")
       << " L/ha over the job (" << fixed(volume_l, 2) << " L on " << fixed(area_m2, 0)
       << " m^2)   saving " << fixed(number(p, "SavingsPercent"), 0) << " %\n";

@@ -24,6 +24,8 @@ constexpr std::pair<std::string_view, const char*> kUnits[] = {
     {"VolumeSprayed", "L"},
     {"AreaCovered", "m^2"},
     {"SavingsPercent", "%"},
+    {"ApplicationRate", "L/ha"},
+    {"TargetRate", "L/ha"},
     {"FrameRate", "frames/s"},
     {"VisionLatencyMs", "ms"},
     {"VisionLatencyP99Ms", "ms"},

@@ -27,5 +27,11 @@ int run_top(BusClient& client, double interval_s, int frames);
 int run_wheel_calibration(BusClient& client, double run_distance_m, double timeout_s);
 int run_meter_calibration(BusClient& client, double catch_test_s, double volume_l);
 int run_nozzle_calibration(BusClient& client, double timeout_s);
+// Commissioning: one valve, or the pump alone, followed until done (output_test_commands.cpp).
+int run_valve_test(BusClient& client, std::uint32_t nozzle, double duty_pct, double seconds);
+int run_pump_test(BusClient& client, double seconds);
+// The RawInputs list, one input a line (or one JSON object).
+void print_inputs(std::ostream& out, const Value& inputs, bool json,
+                  std::chrono::system_clock::time_point now);
 
 }  // namespace weedspray::sprayctl

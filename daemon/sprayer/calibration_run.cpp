@@ -18,6 +18,10 @@ const char* to_string(CalibrationState state) noexcept {
       return "awaiting_volume";
     case CalibrationState::kNozzles:
       return "nozzles";
+    case CalibrationState::kValveTest:
+      return "valve_test";
+    case CalibrationState::kPumpTest:
+      return "pump_test";
     case CalibrationState::kDone:
       return "done";
     case CalibrationState::kCancelled:
@@ -117,6 +121,10 @@ void CalibrationRun::cancel(std::string_view why) {
 }
 
 void CalibrationRun::update(double now_s, std::uint64_t pulses) {
+  if (state_ == CalibrationState::kValveTest || state_ == CalibrationState::kPumpTest) {
+    update_output_test(now_s, pulses);
+    return;
+  }
   if (state_ == CalibrationState::kCatchTest) {
     const double elapsed = now_s - started_s_;
     progress_ = std::clamp(elapsed / (duration_s_ + kDrainS), 0.0, 0.999);

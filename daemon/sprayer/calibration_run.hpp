@@ -22,7 +22,18 @@
 
 namespace weedspray::daemon {
 
-enum class CalibrationState { kIdle, kCatchTest, kAwaitingVolume, kNozzles, kDone, kCancelled };
+// kValveTest, kPumpTest: the commissioning checks (sprayctl test), run and guarded as the
+// calibrations are.
+enum class CalibrationState {
+  kIdle,
+  kCatchTest,
+  kAwaitingVolume,
+  kNozzles,
+  kValveTest,
+  kPumpTest,
+  kDone,
+  kCancelled
+};
 const char* to_string(CalibrationState state) noexcept;
 
 struct NozzleSweepPlan {
@@ -58,14 +69,25 @@ class CalibrationRun {
                                                             double configured_pulses_per_litre,
                                                             double max_change_pct,
                                                             std::string& error);
+  // Commissioning (output_tests.cpp). A valve test holds `nozzle` at `duty_pct` for
+  // `duration_s` (1..60 s) with the pump on, then reports the meter's pulses over it
+  // (`pulses_per_litre` 0: no meter). A pump test runs the pump holding `setpoint_mpa` with
+  // every valve closed for `duration_s` (1..120 s), then reports the pressure it reached
+  // (observe_pressure() each tick). Each returns "" when started, else why not.
+  std::string start_valve_test(std::size_t nozzle, double duty_pct, double duration_s, double now_s,
+                               std::uint64_t pulses, double pulses_per_litre);
+  std::string start_pump_test(double duration_s, double now_s, double setpoint_mpa);
+  void observe_pressure(double now_s, double pressure_mpa) noexcept;
+
   // Ends a running calibration (or a catch test awaiting its volume): valves closed.
   void cancel(std::string_view why);
   // Every main-loop tick: the time and the meter's pulse count.
   void update(double now_s, std::uint64_t pulses);
 
-  // True while the calibration commands the valves (duties()).
+  // True while the calibration commands the valves (duties()) and runs the pump.
   bool running() const noexcept {
-    return state_ == CalibrationState::kCatchTest || state_ == CalibrationState::kNozzles;
+    return state_ == CalibrationState::kCatchTest || state_ == CalibrationState::kNozzles ||
+           state_ == CalibrationState::kValveTest || state_ == CalibrationState::kPumpTest;
   }
   const std::array<double, io::kMaxValves>& duties() const noexcept { return duties_; }
   CalibrationState state() const noexcept { return state_; }
@@ -80,6 +102,9 @@ class CalibrationRun {
   void set_point_duty();
   void finish_nozzle();
   std::size_t points_per_nozzle() const noexcept;
+  void update_output_test(double now_s, std::uint64_t pulses);
+  void finish_valve_test(std::uint64_t pulses);
+  void finish_pump_test();
   double point_duty_pct(std::size_t point) const noexcept;
 
   std::size_t nozzles_;
@@ -92,6 +117,13 @@ class CalibrationRun {
   double duration_s_ = 0.0;
   std::uint64_t start_pulses_ = 0;
   std::uint64_t catch_pulses_ = 0;
+  // Valve and pump tests (started_s_, duration_s_, start_pulses_ too).
+  std::size_t tested_nozzle_ = 0;
+  double tested_duty_pct_ = 0.0;
+  double test_pulses_per_litre_ = 0.0;
+  double test_setpoint_mpa_ = 0.0;
+  double peak_pressure_mpa_ = 0.0;
+  double reached_after_s_ = -1.0;  // first time within 5 % of the set-point; < 0: not yet
   // Nozzle sweep.
   NozzleSweepPlan plan_;
   std::size_t nozzle_ = 0;

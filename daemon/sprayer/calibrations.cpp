@@ -96,6 +96,26 @@ CommandResult Calibrations::calibrate_nozzles(const CalibrationContext& context)
   return {};
 }
 
+CommandResult Calibrations::test_valve(std::uint32_t nozzle, double duty_pct, double seconds,
+                                       const CalibrationContext& context) {
+  if (!context.idle) return refused("TestValve", "tests run in Idle, not while spraying");
+  const double k =
+      context.have_meter ? meter_pulses_per_litre(configured_pulses_per_litre_, stored_) : 0.0;
+  const std::string error =
+      run_.start_valve_test(nozzle, duty_pct, seconds, context.now_s, context.pulses, k);
+  if (!error.empty()) return refused("TestValve", error);
+  spdlog::info("{}", run_.message());
+  return {};
+}
+
+CommandResult Calibrations::test_pump(double seconds, const CalibrationContext& context) {
+  if (!context.idle) return refused("TestPump", "tests run in Idle, not while spraying");
+  const std::string error = run_.start_pump_test(seconds, context.now_s, context.setpoint_mpa);
+  if (!error.empty()) return refused("TestPump", error);
+  spdlog::info("{}", run_.message());
+  return {};
+}
+
 bool Calibrations::cancel(const char* why) {
   const CalibrationState before = run_.state();
   run_.cancel(why);
@@ -112,7 +132,13 @@ bool Calibrations::update(const CalibrationContext& context) {
   }
   const CalibrationState before = run_.state();
   const auto duties = run_.duties();
+  run_.observe_pressure(context.now_s, context.pressure_mpa);
   run_.update(context.now_s, context.pulses);
+  if ((before == CalibrationState::kValveTest || before == CalibrationState::kPumpTest) &&
+      run_.state() == CalibrationState::kDone) {
+    spdlog::info("{}", run_.message());
+    return true;
+  }
   if (before == CalibrationState::kCatchTest && run_.state() == CalibrationState::kAwaitingVolume) {
     spdlog::info("{}", run_.message());
     if (sim_delivered_l_) {

@@ -25,6 +25,7 @@ struct CalibrationContext {
   double now_s = 0;
   std::uint64_t pulses = 0;  // the meter's count (ControlStatus::flow_pulses)
   double setpoint_mpa = 0;
+  double pressure_mpa = 0;  // the line pressure now (the pump test's measure)
 };
 
 class Calibrations {
@@ -38,6 +39,10 @@ class Calibrations {
   CommandResult start_catch_test(double seconds, const CalibrationContext& context);
   CommandResult calibrate_meter(double volume_l);
   CommandResult calibrate_nozzles(const CalibrationContext& context);
+  // Commissioning: one valve at a duty, or the pump alone (calibration_run.hpp).
+  CommandResult test_valve(std::uint32_t nozzle, double duty_pct, double seconds,
+                           const CalibrationContext& context);
+  CommandResult test_pump(double seconds, const CalibrationContext& context);
   // Stop: true when a calibration was running (or awaiting its volume) and is now cancelled.
   bool cancel(const char* why);
   bool running() const noexcept { return run_.running(); }

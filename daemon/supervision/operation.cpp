@@ -27,6 +27,7 @@ CalibrationContext Operation::calibration_context() const {
                 .count();
   c.pulses = control.flow_pulses;
   c.setpoint_mpa = setpoint_mpa_;
+  c.pressure_mpa = sprayer_ != nullptr ? sprayer_->pressure().pressure_mpa : 0.0;
   return c;
 }
 

@@ -52,6 +52,16 @@ class Handler final : public weedspray::daemon::CommandHandler {
     return {};
   }
   CommandResult calibrate_nozzles() override { return {}; }
+  CommandResult test_valve(std::uint32_t nozzle, double duty_pct, double seconds) override {
+    if (nozzle >= 4 || !(duty_pct > 0 && duty_pct <= 100) || !(seconds >= 1 && seconds <= 60))
+      return {weedspray::daemon::kErrorInvalidArgument, "out of range"};
+    return {};
+  }
+  CommandResult test_pump(double seconds) override {
+    if (!(seconds >= 1 && seconds <= 120))
+      return {weedspray::daemon::kErrorInvalidArgument, "out of range"};
+    return {};
+  }
   void bus_lost() override {}
   // One camera; its reply at once (the daemon's comes from a later main-loop tick).
   CommandResult snapshot(std::uint32_t camera, weedspray::daemon::SnapshotReply reply) override {

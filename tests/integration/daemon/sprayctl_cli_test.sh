@@ -45,6 +45,8 @@ cat >"$T/weedspray.toml" <<'TOML'
 [sim]
 speed_profile = "constant"
 speed_max_m_per_s = 1.0
+[spray]
+target_rate_l_per_ha = 150.0
 TOML
 start_sim_daemon --run-seconds 60
 expect 0 "^State: *Idle" --user status
@@ -68,8 +70,22 @@ PY
 expect 0 '^\{"Alarms":\[.*\],"timestamp":"[0-9T:.-]+Z"\}$' --user alarms --json
 echo "ok: status --json typed, with units and a timestamp"
 
+# Commissioning in Idle: the raw inputs, one valve alone against the meter, the pump alone.
+expect 0 "^pressure_sensor_current +[0-9.]+  mA$" --user inputs
+grep -qE "^flow_pulses +[0-9]+  pulses$" "$T/out.txt" || fail "inputs: no flow meter: $(cat "$T/out.txt")"
+expect 0 '^\{"RawInputs":\{.*"flow_pulses":\{"unit":"pulses","value":[0-9.e+]+\}' --user inputs --json
+expect 0 "valve test: nozzle 1 at 100 % for 2 s: [0-9]+ pulses, [0-9.]+ L, 0\.[0-9]+ L/min by the meter" \
+  --user test valve 1 --seconds 2
+expect 0 "pump test: 0\.[0-9]+ MPa reached after [0-9.]+ s" --user test pump --seconds 4
+expect 1 "TestValve refused: nozzle 9 does not exist" --user test valve 9
+expect 1 "a valve test lasts 1\.\.60 s" --user test valve 0 --seconds 90
+expect 0 "dose at full weed cover 150\.0 L/ha" --user status
+echo "ok: sprayctl inputs, test valve, test pump"
+
 # The live view: two frames a fifth of a second apart, each with every nozzle's bar.
 "$SPRAYCTL" --user start || fail "start"
+expect 1 "TestPump refused: tests run in Idle" --user test pump
+expect 0 "^Rate: +[0-9]+\.[0-9] L/ha now over the boom" --user status
 expect 0 "Applied .* L/ha over the job" --user top --frames 2 --interval 0.2
 [ "$(grep -c '^weedsprayd  Spraying' "$T/out.txt")" -eq 2 ] || fail "top: not 2 frames: $(cat "$T/out.txt")"
 [ "$(grep -cE '^ +[0-9]+    \[[# ]{30}\] +[0-9]+ %' "$T/out.txt")" -eq 8 ] ||

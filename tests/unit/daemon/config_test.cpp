@@ -344,6 +344,37 @@ TEST(ConfigErrors, CrossKeyRulesNameTheKeyAndWhereItWasSet) {
   EXPECT_EQ(not_strings.key(), "gpio.valve_names");
 }
 
+TEST(ConfigDose, TargetRateInLitresPerHectareSetsTheNominalFlow) {
+  // 205 L/ha over 0.5 m at 1 m/s: 205 / 10000 x 60 x 0.5 x 1 = 0.615 L/min per nozzle.
+  const Config c = parse("[spray]\ntarget_rate_l_per_ha = 205\n");
+  EXPECT_NEAR(c.spray.nominal_flow_l_per_min, 0.615, 1e-12);
+  const Config wide_fast = parse(
+      "[boom]\nnozzle_width_m = 0.25\n[spray]\ntarget_rate_l_per_ha = 100\n"
+      "nominal_speed_m_per_s = 2.0\n");
+  EXPECT_NEAR(wide_fast.spray.nominal_flow_l_per_min, 0.3, 1e-12);
+  // Off (0): the flow key stands.
+  EXPECT_NEAR(parse("[spray]\nnominal_flow_l_per_min = 0.8\n").spray.nominal_flow_l_per_min, 0.8,
+              1e-12);
+}
+
+TEST(ConfigDose, ATargetRateThatDisagreesWithTheFlowOrNoNozzleCanGiveIsRefused) {
+  const auto both = parse_error(
+      {{"main.toml", "[spray]\nnominal_flow_l_per_min = 0.8\ntarget_rate_l_per_ha = 205\n"}});
+  EXPECT_EQ(both.key(), "spray.target_rate_l_per_ha");
+  EXPECT_EQ(both.line(), 3);
+  EXPECT_NE(std::string(both.what()).find("nominal_flow_l_per_min"), std::string::npos);
+  // 5000 L/ha at 10 m/s over 3 m: 900 L/min per nozzle.
+  const auto too_much =
+      parse_error({{"main.toml",
+                    "[boom]\nnozzle_width_m = 3\n[spray]\nnominal_speed_m_per_s = 10\n"
+                    "target_rate_l_per_ha = 5000\n"}});
+  EXPECT_EQ(too_much.key(), "spray.target_rate_l_per_ha");
+  EXPECT_NE(std::string(too_much.what()).find("900 L/min"), std::string::npos) << too_much.what();
+  // --dump-config writes both keys, in agreement: it parses back.
+  const Config c = parse("[spray]\ntarget_rate_l_per_ha = 150\n");
+  EXPECT_NO_THROW(parse(dump_config(c)));
+}
+
 // The pressure sensor's trip limits cannot be configured so that a cut wire reads as a
 // pressure, a short as a valid reading, or an over-pressure trip lies beyond what the sensor
 // can read.

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdarg>
 #include <stdexcept>
 
@@ -50,7 +51,17 @@ class RecordingHandler final : public CommandHandler {
     ++nozzle_calibrations;
     return {kErrorNotPermitted, "spraying"};
   }
+  CommandResult test_valve(std::uint32_t nozzle, double duty_pct, double seconds) override {
+    tested_valve = {static_cast<double>(nozzle), duty_pct, seconds};
+    return {};
+  }
+  CommandResult test_pump(double seconds) override {
+    pump_test_s = seconds;
+    return {};
+  }
   void bus_lost() override {}
+  std::array<double, 3> tested_valve{-1, -1, -1};
+  double pump_test_s = -1;
   double catch_test_s = -1;
   double meter_volume_l = -1;
   int nozzle_calibrations = 0;
@@ -104,6 +115,15 @@ TEST_F(DbusMethodTest, TheCalibrationMethodsReachTheirCommands) {
   EXPECT_EQ(handler_.nozzle_calibrations, 1);
   EXPECT_EQ(error_name(), kErrorNotPermitted);
   EXPECT_LT(call("CalibrateMeter"), 0) << "no volume given";
+}
+
+TEST_F(DbusMethodTest, TheCommissioningTestsReachTheirCommands) {
+  EXPECT_GE(call("TestValve", "udd", 2U, 50.0, 5.0), 0);
+  EXPECT_EQ(handler_.tested_valve, (std::array<double, 3>{2.0, 50.0, 5.0}));
+  EXPECT_GE(call("TestPump", "d", 20.0), 0);
+  EXPECT_DOUBLE_EQ(handler_.pump_test_s, 20.0);
+  EXPECT_LT(call("TestValve", "u", 1U), 0) << "no duty and time given";
+  EXPECT_EQ(handler_.tested_valve[0], 2.0);
 }
 
 TEST_F(DbusMethodTest, ARefusalBecomesTheNamedError) {

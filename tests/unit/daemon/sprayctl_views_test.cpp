@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cmath>
 #include <sstream>
 
 #include "daemon/sprayctl/value_text.hpp"
@@ -57,6 +58,24 @@ TEST(SprayctlTop, ShowsTheJobsDoseInLitresPerHectare) {
   Properties nothing_covered = spraying_boom();
   nothing_covered["AreaCovered"] = 0.0;
   EXPECT_NE(top_frame(nothing_covered, kTime).find("Applied  - L/ha"), std::string::npos);
+}
+
+TEST(SprayctlTop, ShowsTheRateNowAndADashWhileStanding) {
+  Properties moving = spraying_boom();
+  moving["ApplicationRate"] = 166.66;
+  moving["TargetRate"] = 205.0;
+  EXPECT_NE(top_frame(moving, kTime).find("Rate     166.7 L/ha now over the boom (205 L/ha"),
+            std::string::npos)
+      << top_frame(moving, kTime);
+  Properties standing = moving;
+  standing["ApplicationRate"] = std::nan("");
+  EXPECT_NE(top_frame(standing, kTime).find("Rate     - L/ha now"), std::string::npos);
+  std::ostringstream status;
+  print_status(status, standing, false, kTime);
+  EXPECT_NE(status.str().find("Rate:          - (standing) L/ha now over the boom (dose at full "
+                              "weed cover 205.0 L/ha)"),
+            std::string::npos)
+      << status.str();
 }
 
 TEST(SprayctlTop, TellsActiveAlarmsFromLatchedOnesWithWhatToDo) {
