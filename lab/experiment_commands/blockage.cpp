@@ -27,6 +27,7 @@ Table machine_table() {
 int run_blockage_command(const ExperimentOptions& o) {
   const ex::FleetOptions fleet{o.seed, o.plants > 0 ? o.plants : 20, false};
   ex::BlockageOptions options;
+  if (o.blockage) options.blockage = *o.blockage;
   options.health.judge =
       o.health_judge == "band" ? control::NozzleJudge::kBand : control::NozzleJudge::kCusum;
   const ex::BlockageFleetResult r = ex::run_blockage_fleet(fleet, options);

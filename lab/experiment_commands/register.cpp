@@ -107,6 +107,9 @@ void add_experiment_commands(CLI::App& app) {
   cmd->add_option("--health-judge", options->health_judge,
                   "blockage: the nozzle health detector's judge (control/nozzle_health.hpp)")
       ->check(CLI::IsMember({"band", "cusum"}));
+  cmd->add_option("--blockage", options->blockage,
+                  "blockage: the share of the blocked nozzle's flow lost (default 0.2)")
+      ->check(CLI::Range(0.01, 0.99));
   cmd->callback([options] {
     try {
       const int rc = run_experiment(*options);
