@@ -19,7 +19,14 @@ Table machine_table() {
                 {"false_alarm", "", 0, "", ""},
                 {"", "false_alarm", 12, "%12s", ""},
                 {"healthy_worst_deviation", "healthy_scatter", 16, "%16.3f", "%.3f"},
-                {"healthy_max_evidence", "healthy_evidence", 17, "%17.2f", "%.2f"}});
+                {"healthy_max_evidence", "healthy_evidence", 17, "%17.2f", "%.2f"},
+                {"closed_share", "closed", 8, "%8.2f", "%.2f"},
+                {"share_lag_correlation", "lag1_r", 8, "%8.2f", "%.2f"}});
+}
+
+// As --duties names them.
+const char* duties_name(ex::BlockageDuties duties) {
+  return duties == ex::BlockageDuties::kField ? "field" : "iid";
 }
 
 }  // namespace
@@ -27,12 +34,15 @@ Table machine_table() {
 int run_blockage_command(const ExperimentOptions& o) {
   const ex::FleetOptions fleet{o.seed, o.plants > 0 ? o.plants : 20, false};
   ex::BlockageOptions options;
+  options.duties = o.duties == "iid" ? ex::BlockageDuties::kIid : ex::BlockageDuties::kField;
+  if (o.blockage) options.blockage = *o.blockage;
   options.health.judge =
       o.health_judge == "band" ? control::NozzleJudge::kBand : control::NozzleJudge::kCusum;
   const ex::BlockageFleetResult r = ex::run_blockage_fleet(fleet, options);
   Report report;
   report.json()
       .add("judge", Json::string(o.health_judge))
+      .add("duties", Json::string(duties_name(options.duties)))
       .add("plants", Json::integer(fleet.plants))
       .add("seed", Json::unsigned_integer(o.seed))
       .add("blockage", Json::number(options.blockage, "%.2f"))
@@ -45,19 +55,18 @@ int run_blockage_command(const ExperimentOptions& o) {
       .add("healthy_max_evidence", spread_json(r.healthy_max_evidence));
   report.line(
       "per-nozzle health from the line meter (%s judge), %d drawn machines (seed %llu), "
-      "variable-rate "
-      "spraying at %.1f MPa / %.0f Hz, staggered, trim on: %.0f s baseline + %.0f min healthy, "
-      "then one nozzle %.0f %% blocked",
+      "variable-rate spraying (%s duties) at %.1f MPa / %.0f Hz, staggered, trim on: %.0f s "
+      "baseline + %.0f min healthy, then one nozzle %.0f %% blocked",
       o.health_judge.c_str(), fleet.plants, static_cast<unsigned long long>(o.seed),
-      options.pressure_mpa, options.frequency_hz, options.health.baseline_s,
-      options.healthy_s / 60.0, options.blockage * 100.0);
+      duties_name(options.duties), options.pressure_mpa, options.frequency_hz,
+      options.health.baseline_s, options.healthy_s / 60.0, options.blockage * 100.0);
   Table machines = machine_table();
   for (std::size_t i = 0; i < r.machines.size(); ++i) {
     const auto& m = r.machines[i];
     machines.row({static_cast<long long>(i + 1), static_cast<long long>(m.blocked_nozzle + 1),
                   static_cast<long long>(m.named_nozzle + 1), m.detect_s, m.false_alarm,
                   std::string(m.false_alarm ? "YES" : "no"), m.healthy_worst_deviation,
-                  m.healthy_max_evidence});
+                  m.healthy_max_evidence, m.closed_share, m.share_lag_correlation});
   }
   report.table(machines, "machines");
   std::string summary = format_text(

@@ -29,6 +29,8 @@ struct ExperimentOptions {
   std::string model;
   double decision_threshold = -1.0;    // < 0: the daemon's spray.decision_threshold default
   std::string health_judge = "cusum";  // blockage: NozzleHealth's judge (band | cusum)
+  std::string duties = "field";        // blockage: the requested duties (field | iid)
+  std::optional<double> blockage;      // blockage: its flow lost; unset: BlockageOptions
   std::string change_parts = "all";    // orthogonal --plants: which part of the change
   // step: the pressure loop's timing; unset: 5 / 0 / 0 ms for one machine, the daemon's
   // (10 / 2.5 / 1 ms) for --plants.

@@ -107,6 +107,14 @@ void add_experiment_commands(CLI::App& app) {
   cmd->add_option("--health-judge", options->health_judge,
                   "blockage: the nozzle health detector's judge (control/nozzle_health.hpp)")
       ->check(CLI::IsMember({"band", "cusum"}));
+  cmd->add_option("--duties", options->duties,
+                  "blockage: the nozzles' requested duties: field (a field's weed patches, "
+                  "closures, headlands and speed, sim/field/field_duty_process.hpp) or iid (each "
+                  "redrawn between 30 and 90 % every second)")
+      ->check(CLI::IsMember({"field", "iid"}));
+  cmd->add_option("--blockage", options->blockage,
+                  "blockage: the share of the blocked nozzle's flow lost (default 0.2)")
+      ->check(CLI::Range(0.01, 0.99));
   cmd->callback([options] {
     try {
       const int rc = run_experiment(*options);

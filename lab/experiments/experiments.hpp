@@ -15,6 +15,7 @@
 #include "lab/experiments/machines.hpp"
 #include "lab/experiments/metrics.hpp"
 #include "lab/experiments/vocabulary.hpp"
+#include "sim/field/field_duty_process.hpp"
 
 namespace weedspray::lab::experiments {
 
@@ -401,10 +402,16 @@ RippleFleetResult run_ripple_fleet(const FleetOptions& fleet, const RippleOption
 
 // ---------- blockage: per-nozzle health from the line meter (control/nozzle_health.hpp) ----------
 // Each machine is calibrated as made, then sprays variable-rate (every nozzle's requested flow
-// redrawn every redraw_s between 30 and 90 % of its calibrated full-open flow, staggered PWM,
-// online trim on) for baseline + healthy_s with no fault (any alarm = a false alarm), then one
-// drawn nozzle is blocked by `blockage` and the time until the detector names a nozzle is
-// measured (up to detect_limit_s x 3).
+// set every redraw_s as a share of its calibrated full-open flow, staggered PWM, online trim
+// on) for baseline + healthy_s with no fault (any alarm = a false alarm), then one drawn nozzle
+// is blocked by `blockage` and the time until the detector names a nozzle is measured (up to
+// detect_limit_s x 3). The shares (`duties`):
+//   kField: a field's demand (sim::FieldDutyProcess with `field`, seeded per machine) at its
+//     ground speed: correlated over seconds, shared across the boom, nozzles closed where there
+//     is little to spray, every nozzle off on the headlands;
+//   kIid: each share redrawn independently between 30 and 90 % every redraw_s, always open (the
+//     most separable duties a detector can get).
+enum class BlockageDuties { kField, kIid };
 struct BlockageOptions {
   double pressure_mpa = 0.2;
   double frequency_hz = 3.0;
@@ -412,6 +419,8 @@ struct BlockageOptions {
   double healthy_s = 600.0;
   double detect_limit_s = 10.0;
   double redraw_s = 1.0;
+  BlockageDuties duties = BlockageDuties::kField;
+  sim::FieldDutyOptions field{};
   NozzleHealthConfig health{};
 };
 struct BlockageMachine {
@@ -419,6 +428,11 @@ struct BlockageMachine {
   int named_nozzle = -1;     // -1: none named
   double detect_s = -1.0;    // from the blockage to the alarm; < 0: none in the record
   bool false_alarm = false;  // an alarm during the healthy part
+  // The shares requested during the healthy part: the fraction of nozzle-redraws closed (0),
+  // and the correlation of a nozzle's share with its share one redraw later (pooled over the
+  // nozzles; ~0 for independent redraws).
+  double closed_share = 0.0;
+  double share_lag_correlation = 0.0;
   // Largest |ratio - 1| of any nozzle during the healthy part (sampled every redraw): the
   // detector's scatter on this machine, what the alarm fraction must clear.
   double healthy_worst_deviation = 0.0;

@@ -205,6 +205,9 @@ TEST(FleetDose, OnEveryMachineTheTrimKeepsTheDoseLine) {
 TEST(FleetBlockage, ABlockedNozzleIsNamedAndAHealthyMinuteIsQuiet) {
   BlockageOptions options;
   options.healthy_s = 60.0;
+  // The detector on the duties that separate the nozzles best: on field-like ones this
+  // machine's blocked nozzle is not named within the limit.
+  options.duties = BlockageDuties::kIid;
   const BlockageFleetResult r = run_blockage_fleet({1, 1, false}, options);
   ASSERT_EQ(r.machines.size(), 1U);
   EXPECT_FALSE(r.machines[0].false_alarm);
@@ -218,6 +221,26 @@ TEST(FleetBlockage, ABlockedNozzleIsNamedAndAHealthyMinuteIsQuiet) {
   EXPECT_EQ(r.healthy_max_evidence.count, 1);
   EXPECT_EQ(r.machines[0].named_nozzle, r.machines[0].blocked_nozzle);
   EXPECT_EQ(r.named_within_limit, 1);
+}
+
+// The duties the experiment sprays: field-like ones (the default) stay close from one second to
+// the next and close nozzles (patches too thin to spray, the headland at 105-120 s); the
+// i.i.d. redraw does neither. Both runs stop at the healthy part's end (no detection measured).
+TEST(FleetBlockage, FieldDutiesAreCorrelatedAndCloseNozzlesIidDutiesNeither) {
+  BlockageOptions options;
+  EXPECT_EQ(options.duties, BlockageDuties::kField);
+  options.healthy_s = 60.0;
+  options.detect_limit_s = 0.0;
+  const BlockageMachine field = run_blockage_fleet({1, 1, false}, options).machines.at(0);
+  options.duties = BlockageDuties::kIid;
+  const BlockageMachine iid = run_blockage_fleet({1, 1, false}, options).machines.at(0);
+  std::printf("field: closed %.2f, lag-1 r %.2f; iid: closed %.2f, lag-1 r %.2f\n",
+              field.closed_share, field.share_lag_correlation, iid.closed_share,
+              iid.share_lag_correlation);
+  EXPECT_GT(field.closed_share, 0.15);
+  EXPECT_GT(field.share_lag_correlation, 0.6);
+  EXPECT_EQ(iid.closed_share, 0.0);
+  EXPECT_LT(std::abs(iid.share_lag_correlation), 0.2);
 }
 
 }  // namespace
