@@ -55,7 +55,7 @@ cmake --build "$tree" -j"$(nproc)" >"$tree.build.log" 2>&1 || {
   tail -n 50 "$tree.build.log" >&2
   die "building the package tree failed (log: $tree.build.log)"
 }
-rm -f "$tree"/weedspray_*.deb
+rm -f "$tree"/weedspray_*.deb "$tree"/weedspray-*_*.deb
 (cd "$tree" && cpack -G DEB) >"$tree.cpack.log" 2>&1 || {
   cat "$tree.cpack.log" >&2
   die "cpack -G DEB failed"

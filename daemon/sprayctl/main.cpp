@@ -44,8 +44,8 @@ int exec_export_map(const std::vector<std::string>& args) {
   }
   ::execvp("weedspray-export-map", argv_c.data());
   std::cerr << "sprayctl: cannot run weedspray-export-map: " << std::strerror(errno)
-            << " (it is built where GDAL is: not in the arm64 build; export on a PC from a copy "
-               "of the as-applied log folder)\n";
+            << " (it comes in the package weedspray-maps: apt install weedspray-maps; the arm64 "
+               "build has no GDAL: export on a PC from a copy of the as-applied log folder)\n";
   return 1;
 }
 
