@@ -99,6 +99,9 @@ for n in "${BOARDS[@]}"; do
   wait_board_prop "$n" DecisionThreshold 0.25 2
 done
 echo "ok: rate and threshold on every board $(elapsed_since "$t0") s after the machine's commands"
+wait_retained "weedspray/$MACHINE/b2/flow" '"target_l_per_ha":(180[,.]|179\.99)' 3
+wait_retained "weedspray/$MACHINE/b2/nozzles" '"decision_threshold":0.25' 3
+echo "ok: the new dose and threshold retained on the broker"
 publish "weedspray/$MACHINE/b1/cmd" '{"command":"rate","l_per_ha":100000,"id":"too_much"}'
 wait "$replies_pid" || fail "no three replies: $(cat "$T/replies.txt")"
 grep -q '"id":"r180".*"ok":true' "$T/replies.txt" || fail "replies: $(cat "$T/replies.txt")"
