@@ -1,7 +1,7 @@
 // weedspray-cab: the cab's page for a phone or tablet. Reads the machine's boards from the MQTT
 // broker ([fleet] of the configuration: broker, machine, credentials, TLS) and serves one page
-// ([cab]: where it listens) that shows them and publishes the guarded Start and Stop on the
-// machine's command topic. A program of its own, unprivileged, no D-Bus (docs/fleet.md).
+// ([cab]: where it listens) that shows them and publishes the guarded Start and Stop, and the
+// dose, on the machine's command topic. A program of its own, unprivileged, no D-Bus (docs/fleet.md).
 #include <poll.h>
 #include <signal.h>
 
@@ -44,8 +44,9 @@ void follow_broker(fleet::MqttLink& mqtt, cab::MachineView& view, const std::str
   }
 }
 
-// POST /api/command {"command": "start"|"stop", "confirmed": true}: the page's guarded buttons,
-// published for every board on weedspray/<machine>/cmd.
+// POST /api/command {"command": "start"|"stop"|"rate", "confirmed": true}, with "l_per_ha" for
+// rate: the page's guarded buttons and its dose, published for every board on
+// weedspray/<machine>/cmd (the daemons check the dose).
 void handle_command(const httplib::Request& request, httplib::Response& response,
                     fleet::MqttLink& mqtt, const std::string& command_topic) {
   static std::atomic<unsigned> sequence{0};
@@ -56,17 +57,23 @@ void handle_command(const httplib::Request& request, httplib::Response& response
                          "application/json");
   };
   if (!body.is_object() || !body.contains("command") || !body["command"].is_string()) {
-    return reply(400, false, "expected {\"command\": \"start\"|\"stop\", \"confirmed\": true}");
+    return reply(400, false,
+                 "expected {\"command\": \"start\"|\"stop\"|\"rate\", \"confirmed\": true}");
   }
   const std::string command = body["command"];
-  if (command != "start" && command != "stop") {
-    return reply(400, false, "the page sends start and stop only");
+  if (command != "start" && command != "stop" && command != "rate") {
+    return reply(400, false, "the page sends start, stop and rate only");
+  }
+  const bool rate = command == "rate";
+  if (rate && !(body.contains("l_per_ha") && body["l_per_ha"].is_number())) {
+    return reply(400, false, "rate needs the number \"l_per_ha\"");
   }
   if (body.value("confirmed", false) != true) {
     return reply(400, false, "not confirmed");
   }
   const std::string id = "cab-" + std::to_string(++sequence);
-  const nlohmann::json message{{"command", command}, {"id", id}};
+  nlohmann::json message{{"command", command}, {"id", id}};
+  if (rate) message["l_per_ha"] = body["l_per_ha"];
   if (!mqtt.publish(command_topic, message.dump(), false)) {
     return reply(503, false, "the broker is not connected");
   }

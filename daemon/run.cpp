@@ -241,7 +241,8 @@ class Daemon final {
   Status make_status(const PressureStatus& pressure, const ControlStatus& control) const {
     return build_status(
         {config_, backends_, *sprayer_, operation_.state(), operation_.setpoint_mpa(),
-         alarms_.alarms(), records_->totals(), loops_.latency_p99(),
+         operation_.decision_threshold(), operation_.nominal_flow_l_per_min(), alarms_.alarms(),
+         records_->totals(), loops_.latency_p99(),
          LoopHealth::total_overruns(*sprayer_, pressure, control), operation_.calibrations()},
         pressure, control);
   }

@@ -25,12 +25,14 @@ struct BoardSnapshot {
   double pressure_mpa = 0;         // Pressure
   double pressure_setpoint_mpa = 0;
   double flow_l_per_min = 0;
-  double tank_level_pct = 0;  // TankLevel
+  double target_rate_l_per_ha = 0;  // TargetRate: the dose at full weed cover
+  double tank_level_pct = 0;        // TankLevel
   double speed_m_per_s = 0;
   double distance_m = 0;
   std::string speed_source;             // SpeedSource
   std::vector<double> nozzle_duty_pct;  // NozzleDuty
   std::vector<double> zone_density;     // ZoneDensity
+  double decision_threshold = 0;        // DecisionThreshold
   std::vector<double> nozzle_health;    // NozzleHealth (empty: [nozzle_health] off)
   std::vector<AlarmEntry> alarms;       // AlarmDetails
   double volume_sprayed_l = 0;

@@ -101,6 +101,8 @@ const std::map<std::string_view, PropertyReader>& property_readers() {
       {"GnssFix", WS_READ(read_basic(m, "s", s.gnss_fix))},
       {"NozzleDuty", WS_READ(read_doubles(m, s.nozzle_duty_pct))},
       {"ZoneDensity", WS_READ(read_doubles(m, s.zone_density))},
+      {"DecisionThreshold", WS_READ(read_basic(m, "d", s.decision_threshold))},
+      {"TargetRate", WS_READ(read_basic(m, "d", s.target_rate_l_per_ha))},
       {"NozzleHealth", WS_READ(read_doubles(m, s.nozzle_health))},
       {"AlarmDetails", WS_READ(read_alarms(m, s.alarms))},
       {"VolumeSprayed", WS_READ(read_basic(m, "d", s.volume_sprayed_l))},

@@ -22,8 +22,8 @@ constexpr std::array<CommandKind, 7> kKinds = {{
     {"set_pressure", "SetPressureSetpoint", Level::kOperator, "mpa"},
     {"clear_alarms", "ClearAlarms", Level::kOperator, nullptr},
     {"reload_config", "ReloadConfig", Level::kAdmin, nullptr},
-    {"threshold", nullptr, Level::kOperator, "value"},
-    {"rate", nullptr, Level::kOperator, "l_per_ha"},
+    {"threshold", "SetDecisionThreshold", Level::kOperator, "value"},
+    {"rate", "SetTargetRate", Level::kOperator, "l_per_ha"},
 }};
 
 bool permits(std::string_view permission, Level level) {

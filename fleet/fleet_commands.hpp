@@ -16,8 +16,8 @@ namespace weedspray::fleet {
 enum class Refusal { kNone, kMalformed, kUnknown, kUnauthorised, kUnsupported, kFailed };
 [[nodiscard]] std::string_view refusal_name(Refusal refusal);
 
-// One D-Bus method call of org.weedspray.Sprayer1: its name and (for SetPressureSetpoint)
-// its one double argument.
+// One D-Bus method call of org.weedspray.Sprayer1: its name and (for SetPressureSetpoint,
+// SetDecisionThreshold, SetTargetRate) its one double argument.
 struct MethodCall {
   std::string method;
   std::optional<double> argument;

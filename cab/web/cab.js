@@ -1,6 +1,6 @@
 // The cab page: polls /api/machine (the broker's latest values of every board) and draws one
 // card per board, left to right along the boom; Start asks for a confirmation first, Stop
-// never waits. Plain JavaScript, no libraries.
+// never waits; the dose at full weed cover goes to every board. Plain JavaScript, no libraries.
 "use strict";
 
 const POLL_MS = 250;
@@ -39,6 +39,7 @@ function boardCard(name, board) {
     el("span", {}, "pressure ", el("b", {}, fixed(pressure.mpa * 10, 1)), " bar"),
     el("span", {}, "speed ", el("b", {}, fixed(speed.m_per_s * 3.6, 1)), " km/h"),
     el("span", {}, "rate ", el("b", {}, fixed(flow.l_per_ha, 0)), " L/ha"),
+    el("span", { class: "dose" }, "dose ", el("b", {}, fixed(flow.target_l_per_ha, 0)), " L/ha"),
     el("span", {}, "tank ", el("b", {}, fixed(tank.level_pct, 0)), " %")));
   for (const alarm of ((board.alarms || {}).alarms || [])) {
     card.append(el("div", { class: `alarm ${alarm.severity}` },
@@ -75,13 +76,13 @@ async function poll() {
   setTimeout(poll, POLL_MS);
 }
 
-async function send(command) {
+async function send(command, argument) {
   const message = document.getElementById("message");
   try {
     const response = await fetch("api/command", {
       method: "POST",
       headers: { "Content-Type": "application/json" },
-      body: JSON.stringify({ command, confirmed: true }),
+      body: JSON.stringify({ command, ...argument, confirmed: true }),
     });
     const reply = await response.json();
     message.textContent = reply.ok ? `${command} sent to every board` : `${command} refused: ${reply.message}`;
@@ -108,5 +109,9 @@ document.getElementById("cancel").addEventListener("click", hideConfirm);
 document.getElementById("stop").addEventListener("click", () => {
   hideConfirm();
   send("stop");
+});
+document.getElementById("dose-form").addEventListener("submit", (event) => {
+  event.preventDefault();
+  send("rate", { l_per_ha: Number(document.getElementById("dose").value) });
 });
 poll();

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "daemon/config/config_schema.hpp"
+#include "daemon/config/target_rate.hpp"
 #include "daemon/supervision/alarm_details.hpp"
 
 namespace weedspray::daemon {
@@ -21,6 +23,25 @@ CommandResult Commands::set_pressure_setpoint(double mpa) {
   }
   to_.operation.set_setpoint_mpa(mpa);
   spdlog::info("pressure set-point {:.3f} MPa", mpa);
+  to_.operation.publish_params();
+  return {};
+}
+
+CommandResult Commands::set_decision_threshold(double threshold) {
+  const std::string refusal = outside_key_range("spray.decision_threshold", threshold);
+  if (!refusal.empty()) return {kErrorInvalidArgument, "decision threshold " + refusal};
+  to_.operation.set_decision_threshold(threshold);
+  spdlog::info("decision threshold {:.3f} (until the configuration is reloaded)", threshold);
+  to_.operation.publish_params();
+  return {};
+}
+
+CommandResult Commands::set_target_rate(double l_per_ha) {
+  const RateFlow rate = flow_for_target_rate(to_.config, l_per_ha);
+  if (!rate.refusal.empty()) return {kErrorInvalidArgument, rate.refusal};
+  to_.operation.set_nominal_flow_l_per_min(rate.flow_l_per_min);
+  spdlog::info("dose {:.1f} L/ha: {:.3f} L/min per nozzle (until the configuration is reloaded)",
+               l_per_ha, rate.flow_l_per_min);
   to_.operation.publish_params();
   return {};
 }

@@ -42,6 +42,8 @@ class Commands final : public CommandHandler {
   CommandResult start() override { return to_.operation.start(); }
   CommandResult stop() override { return to_.operation.stop(); }
   CommandResult set_pressure_setpoint(double mpa) override;
+  CommandResult set_decision_threshold(double threshold) override;
+  CommandResult set_target_rate(double l_per_ha) override;
   CommandResult reload_config(ReloadReply reply) override;
   CommandResult clear_alarms() override;
   CommandResult inject_sim_fault(const std::string& name) override;

@@ -51,6 +51,7 @@ std::vector<const char*> changed_properties(const Status& a, const Status& b) {
   check(a.state != b.state, "State");
   check(a.pressure_mpa != b.pressure_mpa, "Pressure");
   check(a.pressure_setpoint_mpa != b.pressure_setpoint_mpa, "PressureSetpoint");
+  check(a.decision_threshold != b.decision_threshold, "DecisionThreshold");
   check(a.flow_l_per_min != b.flow_l_per_min, "Flow");
   check(a.tank_level_pct != b.tank_level_pct, "TankLevel");
   check(a.speed_m_per_s != b.speed_m_per_s, "Speed");
@@ -110,6 +111,7 @@ const sd_bus_vtable kVtable[] = {
     WS_PROPERTY("State", "s"),
     WS_PROPERTY("Pressure", "d"),
     WS_PROPERTY("PressureSetpoint", "d"),
+    WS_PROPERTY("DecisionThreshold", "d"),
     WS_PROPERTY("Flow", "d"),
     WS_PROPERTY("TankLevel", "d"),
     WS_PROPERTY("Speed", "d"),
@@ -152,6 +154,8 @@ const sd_bus_vtable kVtable[] = {
     WS_METHOD("Stop", "", "", "", ""),
     // Arguments named, so the interface's introspection (and the shipped XML) says what each is.
     WS_METHOD("SetPressureSetpoint", "d", SD_BUS_PARAM(mpa), "", ""),
+    WS_METHOD("SetDecisionThreshold", "d", SD_BUS_PARAM(threshold), "", ""),
+    WS_METHOD("SetTargetRate", "d", SD_BUS_PARAM(l_per_ha), "", ""),
     WS_METHOD("ReloadConfig", "", "", "", ""),
     WS_METHOD("ClearAlarms", "", "", "", ""),
     WS_METHOD("InjectSimFault", "s", SD_BUS_PARAM(fault), "", ""),
@@ -236,6 +240,7 @@ int DbusService::get_property(sd_bus*, const char*, const char*, const char* pro
   if (p == "State") return sd_bus_message_append(reply, "s", s.state.c_str());
   if (p == "Pressure") return sd_bus_message_append(reply, "d", s.pressure_mpa);
   if (p == "PressureSetpoint") return sd_bus_message_append(reply, "d", s.pressure_setpoint_mpa);
+  if (p == "DecisionThreshold") return sd_bus_message_append(reply, "d", s.decision_threshold);
   if (p == "Flow") return sd_bus_message_append(reply, "d", s.flow_l_per_min);
   if (p == "TankLevel") return sd_bus_message_append(reply, "d", s.tank_level_pct);
   if (p == "Speed") return sd_bus_message_append(reply, "d", s.speed_m_per_s);
@@ -369,11 +374,14 @@ int dispatch(sd_bus_message* message, CommandHandler& handler, sd_bus_error* err
     result = handler.start();
   } else if (member == "Stop") {
     result = handler.stop();
-  } else if (member == "SetPressureSetpoint") {
-    double mpa = 0;
-    const int r = sd_bus_message_read(message, "d", &mpa);
+  } else if (member == "SetPressureSetpoint" || member == "SetDecisionThreshold" ||
+             member == "SetTargetRate") {
+    double value = 0;
+    const int r = sd_bus_message_read(message, "d", &value);
     if (r < 0) return r;
-    result = handler.set_pressure_setpoint(mpa);
+    result = member == "SetPressureSetpoint"    ? handler.set_pressure_setpoint(value)
+             : member == "SetDecisionThreshold" ? handler.set_decision_threshold(value)
+                                                : handler.set_target_rate(value);
   } else if (member == "ReloadConfig") {
     result = handler.reload_config(deferred_reload_reply(message));
     if (result.ok()) return 1;  // the handler replies once the reload is applied or refused

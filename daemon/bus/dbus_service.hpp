@@ -1,6 +1,7 @@
 // The D-Bus service org.weedspray.Sprayer1 (sd-bus, one vtable), attached to the main
 // thread's sd-event loop, so every callback runs on the main thread without locks.
-//   properties: State s, Pressure d, PressureSetpoint d (MPa), Flow d (L/min), TankLevel d (%),
+//   properties: State s, Pressure d, PressureSetpoint d (MPa), DecisionThreshold d, Flow d
+//     (L/min), TankLevel d (%),
 //     Speed d (m/s), Distance d (m), NozzleDuty ad (%), ZoneDensity ad, Alarms as,
 //     VolumeSprayed d (L), AreaCovered d (m^2), SavingsPercent d, ApplicationRate d and
 //     TargetRate d (L/ha), FrameRate d (Hz),
@@ -10,7 +11,8 @@
 //     MeterCalibration (sddd), NozzleCalibration a(sddd), NozzleHealth ad, FlowTrim d,
 //     FlowTrimActive b, MeteredOverCalibrated d, RawInputs a(sds) (no change signal)
 //     (docs/dbus.md)
-//   methods: Start(), Stop(), SetPressureSetpoint(d), ReloadConfig(), ClearAlarms(),
+//   methods: Start(), Stop(), SetPressureSetpoint(d), SetDecisionThreshold(d),
+//     SetTargetRate(d L/ha), ReloadConfig(), ClearAlarms(),
 //     InjectSimFault(s) (simulation only), Snapshot(u camera) -> ay PNG (live view, at most
 //     2 a second; the reply comes when the camera's next frame is processed),
 //     CalibrateWheel(d metres) -> t request (wheel pulses per metre from GNSS over a straight

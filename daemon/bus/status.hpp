@@ -33,6 +33,7 @@ struct Status {
   std::string state = "Starting";
   double pressure_mpa = 0;
   double pressure_setpoint_mpa = 0;
+  double decision_threshold = 0;  // the zone density below which the rate law does not spray
   double flow_l_per_min = 0;
   double tank_level_pct = 0;
   double speed_m_per_s = 0;
@@ -45,7 +46,8 @@ struct Status {
   double area_covered_m2 = 0;
   double savings_pct = 0;  // liquid saved against uniform spraying at the nominal dose
   // The metered flow spread over the boom's width at the current speed (L/ha; NaN below
-  // kRateMinSpeedMPerS, where it means nothing), and the configured dose at full weed cover.
+  // kRateMinSpeedMPerS, where it means nothing), and the dose at full weed cover in use
+  // (configured, or set live by SetTargetRate).
   static constexpr double kRateMinSpeedMPerS = 0.1;
   double application_rate_l_per_ha = kNaN;
   double target_rate_l_per_ha = 0;
@@ -142,6 +144,11 @@ class CommandHandler {
   virtual CommandResult start() = 0;
   virtual CommandResult stop() = 0;
   virtual CommandResult set_pressure_setpoint(double mpa) = 0;
+  // The rate law's decision threshold (spray.decision_threshold's range), and the dose at full
+  // weed cover in L/ha (its nozzle flow within spray.nominal_flow_l_per_min's range): both
+  // live until the configuration is reloaded, as the set-point is.
+  virtual CommandResult set_decision_threshold(double threshold) = 0;
+  virtual CommandResult set_target_rate(double l_per_ha) = 0;
   // Re-reads the configuration: the files are parsed and the model probed on a thread of
   // their own, so the main loop goes on meanwhile. A refusal is returned at once (and `reply`
   // never called); once accepted, `reply` is called exactly once, later, from the main thread,

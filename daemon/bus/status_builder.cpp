@@ -53,6 +53,7 @@ Status build_status(const StatusSources& from, const PressureStatus& pressure,
   s.mode = from.backends.mode;
   s.pressure_mpa = pressure.pressure_mpa;
   s.pressure_setpoint_mpa = from.setpoint_mpa;
+  s.decision_threshold = from.decision_threshold;
   s.flow_l_per_min = control.flow_l_per_min;
   s.tank_level_pct = sprayer.tank().level_pct;
   s.speed_m_per_s = control.speed_m_per_s;
@@ -82,9 +83,9 @@ Status build_status(const StatusSources& from, const PressureStatus& pressure,
     s.application_rate_l_per_ha =
         rate_for_nozzle_flow(control.flow_l_per_min, boom_width_m, control.speed_m_per_s);
   }
-  s.target_rate_l_per_ha = rate_for_nozzle_flow(from.config.spray.nominal_flow_l_per_min,
-                                                from.config.boom.nozzle_width_m,
-                                                from.config.spray.nominal_speed_m_per_s);
+  s.target_rate_l_per_ha =
+      rate_for_nozzle_flow(from.nominal_flow_l_per_min, from.config.boom.nozzle_width_m,
+                           from.config.spray.nominal_speed_m_per_s);
   for (std::size_t i = 0; i < sprayer.camera_count(); ++i) {
     s.frame_rate_hz += sprayer.camera(i).frame_rate_hz;
   }

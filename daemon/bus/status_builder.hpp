@@ -22,6 +22,9 @@ struct StatusSources {
   const Sprayer& sprayer;
   SprayerState state;
   double setpoint_mpa = 0;
+  // The rate law's live settings (Operation): threshold, and nozzle flow at full weed cover.
+  double decision_threshold = 0;
+  double nominal_flow_l_per_min = 0;
   const AlarmEvaluator& alarms;
   Totals totals;
   double vision_latency_p99_ms = 0;

@@ -4,6 +4,8 @@
 #include <array>
 
 #include <climits>
+#include <sstream>
+#include <stdexcept>
 
 // GCC 12 reports a false -Wmaybe-uninitialized inside std::variant<..., std::string> when the
 // key table is built (GCC bug 107138 and relatives); the table is plain constant data.
@@ -679,6 +681,24 @@ const std::vector<KeySpec<CameraSection>>& camera_keys() {
   };
   // clang-format on
   return keys;
+}
+
+const KeySpec<Config>& config_key(std::string_view full_name) {
+  const auto& keys = config_keys();
+  const auto found = std::find_if(keys.begin(), keys.end(),
+                                  [&](const auto& spec) { return spec.full_name() == full_name; });
+  if (found == keys.end())
+    throw std::out_of_range("no configuration key " + std::string(full_name));
+  return *found;
+}
+
+std::string outside_key_range(std::string_view full_name, double value) {
+  const auto& spec = config_key(full_name);
+  if (value >= spec.min && value <= spec.max) return {};  // a NaN is outside
+  std::ostringstream message;
+  message << value << " outside " << full_name << "'s range " << spec.min << ".." << spec.max;
+  if (!spec.unit.empty()) message << " " << spec.unit;
+  return message.str();
 }
 
 bool overrides_model_spec(std::string_view full_name) {

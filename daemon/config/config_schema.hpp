@@ -54,6 +54,10 @@ struct KeySpec {
 
 // Keys of the plain sections ([daemon], [boom], [pressure] ...).
 const std::vector<KeySpec<Config>>& config_keys();
+// The plain key `full_name` ("spray.decision_threshold"); std::out_of_range when none is.
+const KeySpec<Config>& config_key(std::string_view full_name);
+// "" when `value` lies in that key's range, else why not: the value, the key and its range.
+std::string outside_key_range(std::string_view full_name, double value);
 // Keys of each [[camera]] entry.
 const std::vector<KeySpec<CameraSection>>& camera_keys();
 

@@ -14,6 +14,14 @@ double nozzle_flow_for_rate(double rate_l_per_ha, double width_m, double speed_m
 // The rate that `flow_l_per_min` per nozzle gives at `speed_m_per_s` over `width_m` (L/ha).
 double rate_for_nozzle_flow(double flow_l_per_min, double width_m, double speed_m_per_s) noexcept;
 
+// The nozzle flow a dose of `rate_l_per_ha` needs at `config`'s nominal speed and nozzle width,
+// or why it cannot be had: a flow outside the spray.nominal_flow_l_per_min key's range.
+struct RateFlow {
+  double flow_l_per_min = 0;
+  std::string refusal;  // "" = within the nozzles' range
+};
+RateFlow flow_for_target_rate(const Config& config, double rate_l_per_ha);
+
 // With spray.target_rate_l_per_ha > 0, sets spray.nominal_flow_l_per_min from it. Returns ""
 // when done (or nothing to do), else why not: nominal_flow_l_per_min set in a file to another
 // flow, or a flow outside that key's range.

@@ -1,9 +1,10 @@
 // sprayctl: a small command-line client of weedsprayd over D-Bus (sd-bus).
-//   sprayctl [--user] [--json] status|monitor|top|start|stop|set-pressure
-//   MPA|alarms|clear-alarms|reload|snapshot [--camera N] OUT.png|calibrate-wheel [--distance M]
-//   sprayctl calibrate meter --seconds S | --volume L    catch test, then the collected volume
-//   sprayctl calibrate nozzles                            each nozzle's line over a duty sweep
-//   sprayctl test valve N [--duty P] [--seconds S] | test pump [--seconds S] | inputs
+//   sprayctl [--user] [--json] status|monitor|top|start|stop|set-pressure MPA|set-threshold
+//   VALUE|set-rate L_PER_HA|alarms|clear-alarms|reload|snapshot [--camera N]
+//   OUT.png|calibrate-wheel [--distance M] sprayctl calibrate meter --seconds S | --volume L catch
+//   test, then the collected volume sprayctl calibrate nozzles                            each
+//   nozzle's line over a duty sweep sprayctl test valve N [--duty P] [--seconds S] | test pump
+//   [--seconds S] | inputs
 //                                                         commissioning
 //   sprayctl export-map ...   runs weedspray-export-map (no bus; GDAL stays out of sprayctl)
 // Exit status: 0 done, 1 refused by the daemon or failed, 2 usage, 3 weedsprayd not reachable
@@ -79,6 +80,17 @@ int main(int argc, char** argv) {
   auto* stop = app.add_subcommand("stop", "stop spraying (valves closed, pump held)");
   auto* set_pressure = app.add_subcommand("set-pressure", "change the pressure set-point");
   set_pressure->add_option("MPA", pressure_mpa, "set-point in MPa")->required();
+  auto* set_threshold = app.add_subcommand(
+      "set-threshold",
+      "change the decision threshold: the zone density below which nothing is sprayed "
+      "(until the configuration is reloaded)");
+  double threshold = 0;
+  set_threshold->add_option("VALUE", threshold, "threshold, 0..1")->required();
+  auto* set_rate = app.add_subcommand(
+      "set-rate",
+      "change the dose at full weed cover, in L/ha (until the configuration is reloaded)");
+  double rate_l_per_ha = 0;
+  set_rate->add_option("L_PER_HA", rate_l_per_ha, "dose in L/ha")->required();
   auto* alarms = app.add_subcommand("alarms", "list latched alarms");
   auto* clear_alarms = app.add_subcommand("clear-alarms", "clear latched alarms (leaves Fault)");
   auto* reload = app.add_subcommand("reload", "re-read the configuration");
@@ -193,6 +205,10 @@ int main(int argc, char** argv) {
       client.call("Stop");
     } else if (*set_pressure) {
       client.call("SetPressureSetpoint", "d", pressure_mpa);
+    } else if (*set_threshold) {
+      client.call("SetDecisionThreshold", "d", threshold);
+    } else if (*set_rate) {
+      client.call("SetTargetRate", "d", rate_l_per_ha);
     } else if (*alarms) {
       const Value alarms_value = client.get("Alarms");
       std::cout << (json ? Value{{"Alarms", alarms_value},

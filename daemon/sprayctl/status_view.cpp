@@ -77,7 +77,8 @@ void print_status(std::ostream& out, const Properties& p, bool json,
       << "Speed:         " << get("Speed") << " m/s (" << get("SpeedSource") << "), distance "
       << get("Distance") << " m\n"
       << "Nozzle duty:   " << get("NozzleDuty") << " %\n"
-      << "Zone density:  " << get("ZoneDensity") << "\n"
+      << "Zone density:  " << get("ZoneDensity") << " (sprayed from " << get("DecisionThreshold")
+      << ")\n"
       << "Nozzle health: " << get("NozzleHealth") << " (flow / baseline; none: off)\n"
       << "Flow trim:     x" << get("FlowTrim") << " on the nozzles' flows ("
       << (is_true("FlowTrimActive") ? "following the meter" : "held")

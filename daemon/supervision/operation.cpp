@@ -34,6 +34,8 @@ CalibrationContext Operation::calibration_context() const {
 void Operation::reload_config() {
   if (calibrations_) calibrations_->set_config(config_);
   setpoint_mpa_ = config_.pressure.setpoint_mpa;
+  decision_threshold_ = config_.spray.decision_threshold;
+  nominal_flow_l_per_min_ = config_.spray.nominal_flow_l_per_min;
 }
 
 Transition Operation::transition(StateEvent event, const char* cause) {
@@ -109,6 +111,8 @@ void Operation::update_calibration() {
 void Operation::publish_params() {
   LiveParams params = live_params_from(config_);
   params.setpoint_mpa = setpoint_mpa_;
+  params.law.decision_threshold = decision_threshold_;
+  params.law.nominal_flow_l_per_min = nominal_flow_l_per_min_;
   // A calibration (in Idle) runs the pump for its own valves.
   params.pump_enabled = state_.pump_enabled(calibrating());
   params.valves_enabled = state_.valves_enabled();

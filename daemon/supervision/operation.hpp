@@ -1,6 +1,6 @@
 // The sprayer's operating state (main thread): the state machine, the pressure set-point, the
-// calibrations, and the live parameters they make for the loops, published on every change
-// (the status follows at once through `published`).
+// rate law's decision threshold and nominal flow, the calibrations, and the live parameters they
+// make for the loops, published on every change (the status follows at once through `published`).
 #pragma once
 
 #include <cstdint>
@@ -20,7 +20,11 @@ class Operation {
  public:
   // `config`: the running configuration, kept current by reloads; `backends` give the clock.
   Operation(const Config& config, const Backends& backends)
-      : config_(config), backends_(backends), setpoint_mpa_(config.pressure.setpoint_mpa) {}
+      : config_(config),
+        backends_(backends),
+        setpoint_mpa_(config.pressure.setpoint_mpa),
+        decision_threshold_(config.spray.decision_threshold),
+        nominal_flow_l_per_min_(config.spray.nominal_flow_l_per_min) {}
 
   // Loads the calibrations; `delivered_litres`: the world's true volume (catch tests), if any.
   void load_calibrations(std::function<double()> delivered_litres);
@@ -38,10 +42,17 @@ class Operation {
 
   double setpoint_mpa() const noexcept { return setpoint_mpa_; }
   void set_setpoint_mpa(double mpa) noexcept { setpoint_mpa_ = mpa; }
+  // The rate law's live settings: the density below which a zone is not sprayed, and the
+  // nozzle flow at full weed cover and the nominal speed (the dose).
+  double decision_threshold() const noexcept { return decision_threshold_; }
+  void set_decision_threshold(double threshold) noexcept { decision_threshold_ = threshold; }
+  double nominal_flow_l_per_min() const noexcept { return nominal_flow_l_per_min_; }
+  void set_nominal_flow_l_per_min(double flow) noexcept { nominal_flow_l_per_min_ = flow; }
   // Bumped by ClearAlarms: the loops and the nozzle health detector restart their trips.
   std::uint64_t trip_reset() const noexcept { return trip_reset_; }
   void reset_trips() noexcept { ++trip_reset_; }
-  // The configuration was reloaded: the calibrations' and the set-point's part of it.
+  // The configuration was reloaded: the calibrations' part of it, and the set-point, the
+  // threshold and the dose back to the configured ones (a live change lasts until a reload).
   void reload_config();
 
   // A state change, logged and told to systemd; a calibration ends outside Idle.
@@ -72,6 +83,8 @@ class Operation {
   StateMachine state_;
   std::optional<Calibrations> calibrations_;
   double setpoint_mpa_;
+  double decision_threshold_;
+  double nominal_flow_l_per_min_;
   std::uint64_t trip_reset_ = 0;
   bool start_when_ready_ = false;  // Start arrived while Starting
   std::uint64_t key_changes_ = 0;

@@ -25,6 +25,16 @@ class Handler final : public weedspray::daemon::CommandHandler {
       return {weedspray::daemon::kErrorInvalidArgument, "out of range"};
     return {};
   }
+  CommandResult set_decision_threshold(double threshold) override {
+    if (!(threshold >= 0.0 && threshold <= 1.0))
+      return {weedspray::daemon::kErrorInvalidArgument, "out of range"};
+    return {};
+  }
+  CommandResult set_target_rate(double l_per_ha) override {
+    if (!(l_per_ha > 0.0 && l_per_ha <= 5000.0))
+      return {weedspray::daemon::kErrorInvalidArgument, "out of range"};
+    return {};
+  }
   CommandResult reload_config(ReloadReply reply) override {
     reply({});
     return {};

@@ -78,6 +78,7 @@ run_cases() {
   expect "sprayctl calibrate meter --" --help --seconds --volume
   expect "sprayctl status --" --help --json
   expect "sprayctl set-pressure --" --help
+  expect "sprayctl set-" set-pressure set-rate set-threshold
   expect "sprayctl export-map --format " geojson gpkg shp
   expect "sprayctl export-map --dir " state
   expect "sprayctl snapshot --camera 1 sh" shot.png

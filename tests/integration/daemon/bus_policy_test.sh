@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The D-Bus policy file on a private bus that loads it (like the system bus does), its three
 # permissions: anyone (here: nobody, in no group) may read properties and introspect, but every
-# method call is denied; an operator (group weedspray) may start, stop, set the pressure and
-# clear alarms, not reload or calibrate; an engineer (group weedspray-admin) and root may call
+# method call is denied; an operator (group weedspray) may start, stop, set the pressure, the
+# decision threshold and the dose, and clear alarms, not reload or calibrate; an engineer (group weedspray-admin) and root may call
 # every method. The policy's two groups are mapped to groups every Debian has (users, staff),
 # so that the test needs no group of its own on the machine. Also: a malformed policy is
 # rejected by dbus-daemon, so the file is known to parse.
@@ -105,8 +105,8 @@ as_nobody busctl --user introspect org.weedspray.Sprayer1 /org/weedspray/Sprayer
 echo "ok: reading allowed to everyone"
 
 # Methods: denied to nobody, allowed to root.
-for cmd in start stop clear-alarms reload "set-pressure 0.3" "calibrate nozzles" \
-  "calibrate meter --seconds 5"; do
+for cmd in start stop clear-alarms reload "set-pressure 0.3" "set-threshold 0.2" "set-rate 150" \
+  "calibrate nozzles" "calibrate meter --seconds 5"; do
   # shellcheck disable=SC2086
   denied as_nobody $cmd
 done
@@ -116,11 +116,13 @@ if as_nobody busctl --user set-property org.weedspray.Sprayer1 /org/weedspray/Sp
 fi
 echo "ok: methods denied to other users"
 
-# An operator operates: start, set the pressure, clear alarms, stop; reloading and calibrating
-# are refused.
+# An operator operates: start, set the pressure, the threshold and the dose, clear alarms, stop;
+# reloading and calibrating are refused.
 as_operator "$BUILD/daemon/sprayctl" --user start 2>"$T/err.txt" || fail "operator: start: $(cat "$T/err.txt")"
 [ "$(state)" = 's "Spraying"' ] || fail "the operator's Start had no effect: $(state)"
 as_operator "$BUILD/daemon/sprayctl" --user set-pressure 0.3 || fail "operator: set-pressure"
+as_operator "$BUILD/daemon/sprayctl" --user set-threshold 0.2 || fail "operator: set-threshold"
+as_operator "$BUILD/daemon/sprayctl" --user set-rate 150 || fail "operator: set-rate"
 as_operator "$BUILD/daemon/sprayctl" --user clear-alarms || fail "operator: clear-alarms"
 as_operator "$BUILD/daemon/sprayctl" --user stop || fail "operator: stop"
 [ "$(state)" = 's "Idle"' ] || fail "the operator's Stop had no effect: $(state)"

@@ -3,7 +3,7 @@
 # project's version; a bare call and usage errors print usage and exit 2, without a bus; with
 # no session bus, and on a PRIVATE session bus without weedsprayd, it says weedsprayd is not
 # running and exits 3; against weedsprayd --sim a request done exits 0 and one the daemon
-# refuses exits 1 with the daemon's reason.
+# refuses exits 1 with the daemon's reason; set-rate and set-threshold show in the status.
 # usage: sprayctl_cli_test.sh BUILD_DIR VERSION
 set -euo pipefail
 BUILD=$(realpath "$1")
@@ -81,6 +81,30 @@ expect 1 "TestValve refused: nozzle 9 does not exist" --user test valve 9
 expect 1 "a valve test lasts 1\.\.60 s" --user test valve 0 --seconds 90
 expect 0 "dose at full weed cover 150\.0 L/ha" --user status
 echo "ok: sprayctl inputs, test valve, test pump"
+
+# The dose and the decision threshold set live: the status shows them at once; a dose no nozzle
+# can give and a threshold outside 0..1 are refused with the figures.
+"$SPRAYCTL" --user set-rate 180 || fail "set-rate 180"
+"$SPRAYCTL" --user set-threshold 0.3 || fail "set-threshold 0.3"
+"$SPRAYCTL" --user --json status >"$T/status.json" || fail "status --json"
+python3 - "$T/status.json" <<'PY' || fail "after set-rate/set-threshold: $(cat "$T/status.json")"
+import json, sys
+j = json.load(open(sys.argv[1]))
+assert abs(j["TargetRate"] - 180.0) < 1e-6 and j["units"]["TargetRate"] == "L/ha", j["TargetRate"]
+assert abs(j["DecisionThreshold"] - 0.3) < 1e-12, j["DecisionThreshold"]
+PY
+expect 1 "InvalidArgument: 10000 L/ha .* needs 30 L/min per nozzle, outside the nozzles' 0\.01\.\.20 L/min" \
+  --user set-rate 10000
+expect 1 "InvalidArgument: decision threshold 1\.5 outside spray\.decision_threshold's range 0\.\.1" \
+  --user set-threshold 1.5
+expect 2 "L_PER_HA is required" set-rate
+expect 0 "dose at full weed cover 180\.0 L/ha" --user status
+grep -q "(sprayed from 0\.300)" "$T/out.txt" || fail "status: no threshold: $(cat "$T/out.txt")"
+# As the pressure set-point, they last until the configuration is reloaded.
+"$SPRAYCTL" --user reload || fail "reload"
+expect 0 "dose at full weed cover 150\.0 L/ha" --user status
+grep -q "(sprayed from 0\.001)" "$T/out.txt" || fail "reload kept the threshold: $(cat "$T/out.txt")"
+echo "ok: sprayctl set-rate, set-threshold"
 
 # The live view: two frames a fifth of a second apart, each with every nozzle's bar.
 "$SPRAYCTL" --user start || fail "start"

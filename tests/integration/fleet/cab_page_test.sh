@@ -2,7 +2,8 @@
 # The cab page in Debian's headless Chromium, driven over the DevTools protocol (cdp.py): three
 # weedsprayd --sim boards with their fleet bridges on a loopback mosquitto, weedspray-cab serving
 # the page. The page shows every board; Start (then its confirmation) on the page -> every board
-# Spraying within 1 s (over D-Bus); a board's bridge killed -> the page shows it lost within 3 s;
+# Spraying within 1 s (over D-Bus); a dose set on the page -> every board's TargetRate, and the
+# page shows it on every card; a board's bridge killed -> the page shows it lost within 3 s;
 # Stop on the page -> every board left Idle with its valves closed.
 # usage: cab_page_test.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
@@ -74,6 +75,19 @@ wait_page '^b1:Spraying b2:Spraying b3:Spraying$' 3
 # The nozzles are drawn as bars with the board's duties.
 bars=$(page '[...document.querySelectorAll("[data-board=b1] .bar")].length')
 [ "$bars" = 3 ] || fail "board 1 shows $bars nozzle bars, expected 3"
+
+# The dose: typed on the page, set on every board (over D-Bus), shown back on every card.
+page 'document.getElementById("dose").value = "120"; document.getElementById("set-dose").click()' \
+  >/dev/null
+for n in "${BOARDS[@]}"; do wait_board_prop "$n" TargetRate 120 3; done
+for _ in $(seq 1 30); do
+  doses=$(page '[...document.querySelectorAll(".board .dose b")].map(b => b.textContent).join(" ")' |
+    tr -d '"')
+  [ "$doses" = "120 120 120" ] && break
+  sleep 0.1
+done
+[ "$doses" = "120 120 120" ] || fail "the cards show the doses '$doses', expected 120 each"
+echo "ok: a dose set on the page reached every board and shows on every card"
 
 # A board lost: its bridge killed.
 kill -KILL "${BRIDGE_PID[2]}"

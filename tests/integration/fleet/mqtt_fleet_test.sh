@@ -3,10 +3,12 @@
 # weedspray-fleet bridge each (each board on a private session bus of its own): their state
 # appears retained on the broker; "start" on the machine's command topic makes every board
 # spray within 1 s (State and duties over D-Bus); a malformed and an unauthorised command are
-# refused with a reply and counted; "stop" closes every valve; a killed bridge and a killed
-# daemon each turn their board's online to false, and a board set to stop when another is lost
-# stops while one set to continue sprays on; a board whose broker is lost stops, and reconnects
-# once it is back; a bridge that stops says goodbye the same way.
+# refused with a reply and counted; "rate" and "threshold" reach every board's D-Bus properties,
+# and a dose the daemon refuses comes back in the reply, counted as failed; "stop" closes every
+# valve; a killed bridge and a killed daemon each turn their board's online to false, and a
+# board set to stop when another is lost stops while one set to continue sprays on; a board
+# whose broker is lost stops, and reconnects once it is back; a bridge that stops says goodbye
+# the same way.
 # usage: mqtt_fleet_test.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
 BUILD=$(realpath "$1")
@@ -80,6 +82,43 @@ assert (c["received"], c["done"], c["malformed"], c["unauthorised"], c["refused"
 PYEOF
 [ "$(board_prop 1 State)" = '"Spraying"' ] || fail "board 1 stopped on a refused command"
 echo "ok: malformed and unauthorised commands refused and counted"
+
+# The rate law's settings from the machine's topic: every board's dose and threshold change over
+# D-Bus; a dose no nozzle can give is refused by the daemon, its reason in the reply, counted as
+# failed, and the board sprays on with the dose it had.
+mosquitto_sub -h 127.0.0.1 -p "$PORT" -t "weedspray/$MACHINE/b1/reply" -C 3 -W 10 \
+  >"$T/replies.txt" &
+PIDS+=($!)
+replies_pid=$!
+sleep 0.5
+t0=$(now)
+publish "weedspray/$MACHINE/cmd" '{"command":"rate","l_per_ha":180,"id":"r180"}'
+publish "weedspray/$MACHINE/cmd" '{"command":"threshold","value":0.25,"id":"t25"}'
+for n in "${BOARDS[@]}"; do
+  wait_board_prop "$n" TargetRate 180 2
+  wait_board_prop "$n" DecisionThreshold 0.25 2
+done
+echo "ok: rate and threshold on every board $(elapsed_since "$t0") s after the machine's commands"
+wait_retained "weedspray/$MACHINE/b2/flow" '"target_l_per_ha":(180[,.]|179\.99)' 3
+wait_retained "weedspray/$MACHINE/b2/nozzles" '"decision_threshold":0.25' 3
+echo "ok: the new dose and threshold retained on the broker"
+publish "weedspray/$MACHINE/b1/cmd" '{"command":"rate","l_per_ha":100000,"id":"too_much"}'
+wait "$replies_pid" || fail "no three replies: $(cat "$T/replies.txt")"
+grep -q '"id":"r180".*"ok":true' "$T/replies.txt" || fail "replies: $(cat "$T/replies.txt")"
+grep -q '"id":"t25".*"ok":true' "$T/replies.txt" || fail "replies: $(cat "$T/replies.txt")"
+grep -q '"id":"too_much".*"ok":false.*"reason":"failed"' "$T/replies.txt" ||
+  fail "replies: $(cat "$T/replies.txt")"
+grep -q "InvalidArgument: 100000 L/ha .*outside the nozzles'" "$T/replies.txt" ||
+  fail "the daemon's reason not in the reply: $(cat "$T/replies.txt")"
+counters=$(retained "weedspray/$MACHINE/b1/commands")
+$PY - "$counters" <<'PYEOF' || fail "counters: $counters"
+import json, sys
+c = json.loads(sys.argv[1])
+assert (c["received"], c["done"], c["failed"], c["refused"]) == (6, 3, 1, 3), c
+PYEOF
+[ "$(board_prop 1 TargetRate)" = 180 ] || fail "board 1 dose $(board_prop 1 TargetRate) after a refused rate"
+[ "$(board_prop 1 State)" = '"Spraying"' ] || fail "board 1 stopped on a refused rate"
+echo "ok: a dose no nozzle can give refused by the daemon, in the reply and counted"
 
 # Stop on the machine's topic closes every board's valves.
 publish "weedspray/$MACHINE/cmd" '{"command":"stop"}'

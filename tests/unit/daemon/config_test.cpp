@@ -378,15 +378,8 @@ TEST(ConfigDose, ATargetRateThatDisagreesWithTheFlowOrNoNozzleCanGiveIsRefused) 
 // The pressure sensor's trip limits cannot be configured so that a cut wire reads as a
 // pressure, a short as a valid reading, or an over-pressure trip lies beyond what the sensor
 // can read.
-const KeySpec<Config>& key_spec(std::string_view full_name) {
-  for (const auto& spec : config_keys()) {
-    if (spec.full_name() == full_name) return spec;
-  }
-  throw std::logic_error("no key " + std::string(full_name));
-}
-
 TEST(ConfigTripLimits, ACutWireIsAlwaysASensorFault) {
-  const auto& low = key_spec("alarms.sensor_fault_low_ma");
+  const auto& low = config_key("alarms.sensor_fault_low_ma");
   // A cut wire reads 0 mA; leakage and ADC offset leave it within about 1 mA. At the most
   // permissive limit allowed the conversion still calls both an open circuit.
   io::CurrentLoopSensorConfig sensor;
@@ -412,7 +405,7 @@ TEST(ConfigTripLimits, ACutWireIsAlwaysASensorFault) {
 }
 
 TEST(ConfigTripLimits, AShortedSensorIsAlwaysAFault) {
-  const auto& high = key_spec("alarms.sensor_fault_high_ma");
+  const auto& high = config_key("alarms.sensor_fault_high_ma");
   EXPECT_GE(high.min, 20.5);  // the top of the measuring range stays valid
   // A shorted loop (the simulator's 24 mA) is above every allowed limit.
   io::CurrentLoopSensorConfig sensor;

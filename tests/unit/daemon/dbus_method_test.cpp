@@ -22,6 +22,14 @@ class RecordingHandler final : public CommandHandler {
     setpoint = mpa;
     return mpa > 0 ? CommandResult{} : CommandResult{kErrorInvalidArgument, "not positive"};
   }
+  CommandResult set_decision_threshold(double value) override {
+    threshold = value;
+    return {};
+  }
+  CommandResult set_target_rate(double l_per_ha) override {
+    rate_l_per_ha = l_per_ha;
+    return l_per_ha > 0 ? CommandResult{} : CommandResult{kErrorInvalidArgument, "no dose"};
+  }
   CommandResult reload_config(ReloadReply) override { throw 42; }  // not even a std::exception
   CommandResult clear_alarms() override { return {}; }
   CommandResult inject_sim_fault(const std::string& name) override {
@@ -70,6 +78,8 @@ class RecordingHandler final : public CommandHandler {
   int starts = 0;
   bool throw_on_start = false;
   double setpoint = -1;
+  double threshold = -1;
+  double rate_l_per_ha = -1;
   std::string fault;
 };
 
@@ -103,6 +113,20 @@ TEST_F(DbusMethodTest, CallsTheHandlerWithItsArgument) {
   EXPECT_DOUBLE_EQ(handler_.setpoint, 0.35);
   call("InjectSimFault", "s", "sensor_open");
   EXPECT_EQ(handler_.fault, "sensor_open");
+}
+
+TEST_F(DbusMethodTest, TheRateLawsSettingsReachTheirOwnCommands) {
+  EXPECT_GE(call("SetDecisionThreshold", "d", 0.2), 0);
+  EXPECT_DOUBLE_EQ(handler_.threshold, 0.2);
+  EXPECT_GE(call("SetTargetRate", "d", 150.0), 0);
+  EXPECT_DOUBLE_EQ(handler_.rate_l_per_ha, 150.0);
+  EXPECT_DOUBLE_EQ(handler_.threshold, 0.2) << "SetTargetRate reached the threshold";
+  EXPECT_DOUBLE_EQ(handler_.setpoint, -1) << "a rate law setting reached the set-point";
+  EXPECT_LT(call("SetTargetRate", "d", 0.0), 0);
+  EXPECT_EQ(error_name(), kErrorInvalidArgument);
+  EXPECT_EQ(error_message(), "no dose");
+  EXPECT_LT(call("SetDecisionThreshold", "s", "0.3"), 0);
+  EXPECT_DOUBLE_EQ(handler_.threshold, 0.2) << "the handler ran on an argument it never got";
 }
 
 TEST_F(DbusMethodTest, TheCalibrationMethodsReachTheirCommands) {

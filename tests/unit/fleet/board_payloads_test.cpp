@@ -19,6 +19,8 @@ TEST(FleetPayloads, EveryTopicCarriesItsValues) {
   s.nozzle_duty_pct = {10, 0, 90};
   s.pressure_mpa = 0.31;
   s.flow_l_per_min = 3.6;
+  s.target_rate_l_per_ha = 150;
+  s.decision_threshold = 0.25;
   s.speed_m_per_s = 1.0;
   s.tank_level_pct = 55;
   s.alarms = {{"tank_low", "warning", true, "refill the tank"}};
@@ -29,6 +31,8 @@ TEST(FleetPayloads, EveryTopicCarriesItsValues) {
   EXPECT_DOUBLE_EQ(payloads.at("nozzles")["duty_pct"][2].get<double>(), 90.0);
   EXPECT_DOUBLE_EQ(payloads.at("pressure")["mpa"].get<double>(), 0.31);
   EXPECT_NEAR(payloads.at("flow")["l_per_ha"].get<double>(), 3.6 / (1.0 * 60 * 1.5) * 1e4, 1e-9);
+  EXPECT_DOUBLE_EQ(payloads.at("flow")["target_l_per_ha"].get<double>(), 150.0);
+  EXPECT_DOUBLE_EQ(payloads.at("nozzles")["decision_threshold"].get<double>(), 0.25);
   EXPECT_DOUBLE_EQ(payloads.at("tank")["level_pct"].get<double>(), 55.0);
   EXPECT_EQ(payloads.at("alarms")["alarms"][0]["remedy"], "refill the tank");
   EXPECT_DOUBLE_EQ(payloads.at("info")["first_nozzle_offset_m"].get<double>(), 12.0);

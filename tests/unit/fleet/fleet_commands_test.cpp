@@ -47,9 +47,22 @@ TEST(FleetCommands, PermissionMirrorsTheBusGroups) {
   EXPECT_EQ(parse_command(R"({"command":"start"})", "admin").refusal, Refusal::kNone);
 }
 
-TEST(FleetCommands, KindsWithoutADaemonMethodSaySo) {
-  const auto command = parse_command(R"({"command":"threshold","value":0.2})", "operator");
-  EXPECT_EQ(command.refusal, Refusal::kUnsupported);
+TEST(FleetCommands, TheRateLawsSettingsAreOperatorCommandsWithTheirNumber) {
+  const auto threshold = parse_command(R"({"command":"threshold","value":0.2})", "operator");
+  EXPECT_EQ(threshold.refusal, Refusal::kNone);
+  EXPECT_EQ(threshold.call.method, "SetDecisionThreshold");
+  EXPECT_DOUBLE_EQ(threshold.call.argument.value(), 0.2);
+  const auto rate = parse_command(R"({"command":"rate","l_per_ha":150})", "operator");
+  EXPECT_EQ(rate.refusal, Refusal::kNone);
+  EXPECT_EQ(rate.call.method, "SetTargetRate");
+  EXPECT_DOUBLE_EQ(rate.call.argument.value(), 150.0);
+  // The range is the daemon's to check: the bridge wants a number under the kind's own name.
+  EXPECT_EQ(parse_command(R"({"command":"rate","value":150})", "operator").refusal,
+            Refusal::kMalformed);
+  EXPECT_EQ(parse_command(R"({"command":"threshold","value":"high"})", "operator").refusal,
+            Refusal::kMalformed);
+  EXPECT_EQ(parse_command(R"({"command":"rate","l_per_ha":150})", "none").refusal,
+            Refusal::kUnauthorised);
 }
 
 TEST(FleetCommands, ReplyEchoesIdAndReason) {
