@@ -231,10 +231,6 @@ class Daemon final {
       if (dbus_) dbus_->update(status);
       world_->status_published(status, t);
     }
-    if (t - last_persist_s_ >= 60.0) {
-      last_persist_s_ = t;
-      records_->persist();
-    }
     if (options_.run_seconds > 0 && t >= options_.run_seconds) sd_event_exit(event_, 0);
   }
 
@@ -273,7 +269,6 @@ class Daemon final {
   Nanos start_time_{};
   bool previous_run_unfinished_ = false;
   double last_status_s_ = -1e9;
-  double last_persist_s_ = 0;
   int exit_code_ = 0;
   ExitWatch exit_watch_;
 };

@@ -39,10 +39,12 @@ void RunRecords::open_log(const Config& config) {
   persist();
 }
 
-void RunRecords::start_writer(Sprayer& sprayer, std::uint64_t floor_bytes) {
+void RunRecords::start_writer(Sprayer& sprayer, std::uint64_t floor_bytes,
+                              std::chrono::milliseconds save_every) {
   sprayer_ = &sprayer;
-  writer_ =
-      std::jthread([this, floor_bytes](std::stop_token stop) { write_log(stop, floor_bytes); });
+  writer_ = std::jthread([this, floor_bytes, save_every](std::stop_token stop) {
+    write_log(stop, floor_bytes, save_every);
+  });
 }
 
 Totals RunRecords::totals() const {
@@ -95,9 +97,12 @@ void RunRecords::persist() noexcept {
 
 // As-applied writer (normal priority): drains the control loop's queue; once a second writes
 // the lines held while writes failed, fdatasyncs (a crash loses at most the last second) and
-// judges the free space (records_disk_full, raised and cleared by the main loop).
-void RunRecords::write_log(std::stop_token stop, std::uint64_t floor_bytes) {
+// judges the free space (records_disk_full, raised and cleared by the main loop); every
+// `save_every` then saves the totals (persist() fsyncs them).
+void RunRecords::write_log(std::stop_token stop, std::uint64_t floor_bytes,
+                           std::chrono::milliseconds save_every) {
   auto last_flush = std::chrono::steady_clock::now();
+  auto last_save = last_flush;
   bool reported = false;
   AsAppliedHealth seen;
   const auto drain = [&] {
@@ -123,9 +128,14 @@ void RunRecords::write_log(std::stop_token stop, std::uint64_t floor_bytes) {
   };
   while (!stop.stop_requested()) {
     guarded(drain);
-    if (std::chrono::steady_clock::now() - last_flush >= 1s) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_flush >= std::min<std::chrono::milliseconds>(1s, save_every)) {
       guarded(flush);
       last_flush = std::chrono::steady_clock::now();
+    }
+    if (now - last_save >= save_every) {
+      persist();
+      last_save = now;
     }
     std::this_thread::sleep_for(100ms);
   }

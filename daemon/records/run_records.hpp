@@ -3,6 +3,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -31,14 +32,19 @@ class RunRecords {
   // first mark (a crash in the first minute is then matched).
   void open_log(const Config& config);
   // The writer thread, draining `sprayer`'s records until stop_writer(); `sprayer` also gives
-  // this run's totals from then on.
-  void start_writer(Sprayer& sprayer, std::uint64_t floor_bytes);
+  // this run's totals from then on. The writer saves the totals every `save_every`, after the
+  // log's flush: their fsync never holds up the main loop, and the mark they save names
+  // records already on disk.
+  void start_writer(Sprayer& sprayer, std::uint64_t floor_bytes,
+                    std::chrono::milliseconds save_every = kSaveEvery);
+  static constexpr std::chrono::milliseconds kSaveEvery{60'000};
   // Joins the writer after it drained the queue and flushed.
   void stop_writer() noexcept { writer_ = {}; }
 
   // The saved totals plus this run's so far.
   Totals totals() const;
-  // Saves the totals with the log's mark; an error is logged.
+  // Saves the totals with the log's mark; an error is logged. The writer does it while it runs;
+  // before start_writer() and after stop_writer() the caller may.
   void persist() noexcept;
   // The free space or a failing write puts the records at risk (records_disk_full).
   bool at_risk() const noexcept { return at_risk_.load(); }
@@ -46,7 +52,8 @@ class RunRecords {
 
  private:
   void reconcile_with_log() noexcept;
-  void write_log(std::stop_token stop, std::uint64_t floor_bytes);
+  void write_log(std::stop_token stop, std::uint64_t floor_bytes,
+                 std::chrono::milliseconds save_every);
   void report_health(const AsAppliedHealth& seen, const AsAppliedHealth& now,
                      std::optional<std::uint64_t> available) const;
 
