@@ -1,4 +1,5 @@
-// weedspray-export-map: the as-applied log -> a map a farm's GIS opens (QGIS: drag the file in).
+// weedspray-export-map: the as-applied log -> a map a farm's GIS opens (QGIS: drag the file in);
+// several boards' logs (one --dir each) -> one map of the whole machine.
 // Its own program, not part of sprayctl, because GDAL loads ~200 shared libraries: `sprayctl
 // status` stays quick, and `sprayctl export-map` runs this one.
 #include <CLI/CLI.hpp>
@@ -6,6 +7,8 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include "daemon/config/config.hpp"
 #include "daemon/maps/map_export.hpp"
@@ -31,7 +34,7 @@ int main(int argc, char** argv) {
       "  sprayed       per-nozzle sprayed polygons, one per stretch (ends when the nozzle\n"
       "                closes, the fix is lost, or at --max-stretch-m): nozzle, utc_start,\n"
       "                utc_end, rate_l_ha, volume_l, area_m2, duty_pct, weed_dens, crop_dens,\n"
-      "                speed_m_s\n"
+      "                speed_m_s; with several --dir also board (the folder's name)\n"
       "  weed_density  a grid of --cell-m squares: mean weed_dens and crop_dens of every\n"
       "                nozzle patch in the cell (sprayed or not), samples\n"
       "OUT: gpkg: one GeoPackage file with both layers; geojson: a folder holding\n"
@@ -39,13 +42,17 @@ int main(int argc, char** argv) {
       "weed_density.shp (with .shx .dbf .prj).",
       "weedspray-export-map"};
   maps::ExportOptions options;
-  std::string format, from, to, dir;
+  std::string format, from, to;
+  std::vector<std::string> dirs;
   std::string config_path = kDefaultConfigPath;
   std::string out;
   app.add_option("--format", format, "geojson, gpkg or shp")->required();
   app.add_option("--from", from, "first record's UTC time (ISO 8601, e.g. 2026-06-24T14:30Z)");
   app.add_option("--to", to, "last record's UTC time (ISO 8601)");
-  app.add_option("--dir", dir, "as-applied log folder (default: the configuration's)");
+  app.add_option("--dir", dirs,
+                 "as-applied log folder (default: the configuration's); once per board of the "
+                 "machine (copies of each board's log folder) for one map of them all")
+      ->allow_extra_args(false);
   app.add_option("--config", config_path, "configuration whose log folder is read")
       ->capture_default_str();
   app.add_option("--cell-m", options.cell_m, "weed_density grid cell size, metres")
@@ -64,22 +71,26 @@ int main(int argc, char** argv) {
     if (!from.empty()) options.from_utc_ns = utc_argument("--from", from);
     if (!to.empty()) options.to_utc_ns = utc_argument("--to", to);
     options.out = out;
-    options.log_dir = dir.empty() ? load_config_without_vision(config_path).as_applied_dir()
-                                  : std::filesystem::path(dir);
+    if (dirs.empty()) {
+      options.log_dirs = {load_config_without_vision(config_path).as_applied_dir()};
+    } else {
+      options.log_dirs.assign(dirs.begin(), dirs.end());
+    }
     const auto start = std::chrono::steady_clock::now();
     const maps::ExportSummary s = maps::export_map(options);
     const double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::printf(
         "%s: %llu sprayed polygons (%.1f L on %.1f m2), %llu weed_density cells; %llu "
-        "records (%llu with a position) from %zu files in %.2f s\n",
+        "records (%llu with a position) from %zu files%s in %.2f s\n",
         out.c_str(), static_cast<unsigned long long>(s.stretches), s.volume_l, s.area_m2,
         static_cast<unsigned long long>(s.cells), static_cast<unsigned long long>(s.records),
-        static_cast<unsigned long long>(s.records_with_position), s.files, seconds);
-    if (s.records_with_position == 0)
+        static_cast<unsigned long long>(s.records_with_position), s.files,
+        dirs.size() > 1 ? (" of " + std::to_string(dirs.size()) + " boards").c_str() : "", seconds);
+    for (const std::filesystem::path& dir : s.dirs_without_position)
       std::fprintf(stderr,
                    "weedspray-export-map: no record with a position in %s%s (no GNSS fix?)\n",
-                   options.log_dir.c_str(), from.empty() && to.empty() ? "" : " in the window");
+                   dir.c_str(), from.empty() && to.empty() ? "" : " in the window");
   } catch (const std::exception& error) {
     std::cerr << "weedspray-export-map: " << error.what() << "\n";
     return 1;

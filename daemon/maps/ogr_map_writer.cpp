@@ -86,6 +86,7 @@ struct OgrMapWriter::Impl {
   std::vector<Dataset> datasets;  // one (GPKG, Shapefile folder) or one per layer (GeoJSON)
   Layer sprayed, density;
   bool in_transaction = false;
+  bool board_field = false;
   std::vector<LatLon> ring;  // reused for each polygon
 
   GDALDriver* driver(const char* name) {
@@ -105,11 +106,12 @@ struct OgrMapWriter::Impl {
   }
 };
 
-OgrMapWriter::OgrMapWriter(MapFormat format, const fs::path& out, bool overwrite)
+OgrMapWriter::OgrMapWriter(MapFormat format, const fs::path& out, bool overwrite, bool board_field)
     : impl_(std::make_unique<Impl>()) {
   GDALAllRegister();
   Impl& m = *impl_;
   m.format = format;
+  m.board_field = board_field;
   m.wgs84.importFromEPSG(4326);
   // x = longitude, y = latitude, as GeoJSON and every GIS expect on disk.
   m.wgs84.SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
@@ -180,6 +182,7 @@ OgrMapWriter::OgrMapWriter(MapFormat format, const fs::path& out, bool overwrite
                                                                    {"speed_m_s", OFTReal}}) {
     add_field(m.sprayed.layer, name, type, m.sprayed.file);
   }
+  if (board_field) add_field(m.sprayed.layer, "board", OFTString, m.sprayed.file);
   add_field(m.density.layer, "weed_dens", OFTReal, m.density.file);
   add_field(m.density.layer, "crop_dens", OFTReal, m.density.file);
   add_field(m.density.layer, "samples", OFTInteger64, m.density.file);
@@ -190,7 +193,7 @@ OgrMapWriter::OgrMapWriter(MapFormat format, const fs::path& out, bool overwrite
 
 OgrMapWriter::~OgrMapWriter() = default;  // an unclosed export is rolled back / left partial
 
-void OgrMapWriter::add(const Stretch& s) {
+void OgrMapWriter::add(const Stretch& s, const std::string& board) {
   Impl& m = *impl_;
   OGRFeature& f = *m.sprayed.feature;
   f.SetField(0, static_cast<int>(s.nozzle));
@@ -203,6 +206,7 @@ void OgrMapWriter::add(const Stretch& s) {
   f.SetField(7, s.mean(s.weed_density_s));
   f.SetField(8, s.mean(s.crop_density_s));
   f.SetField(9, s.mean(s.speed_m));
+  if (m.board_field) f.SetField(10, board.c_str());
   m.ring.assign(s.left.begin(), s.left.end());
   m.ring.insert(m.ring.end(), s.right.rbegin(), s.right.rend());
   m.sprayed.write(polygon(m.ring));

@@ -4,7 +4,8 @@
 // GeoPackage: OUT is one file holding both layers, written in one transaction. GeoJSON and
 // Shapefile hold one layer per file: OUT is a folder with sprayed.geojson and
 // weed_density.geojson, or sprayed.shp and weed_density.shp (+ .shx .dbf .prj).
-// Field names fit the Shapefile's 10 characters, so every format has the same fields.
+// Field names fit the Shapefile's 10 characters, so every format has the same fields. A map of
+// several boards' logs has one more field on `sprayed`, last: `board`.
 #pragma once
 
 #include <filesystem>
@@ -24,12 +25,15 @@ MapFormat parse_map_format(const std::string& name);
 class OgrMapWriter {
  public:
   // Throws std::runtime_error naming OUT when it exists (and !overwrite) or cannot be created.
-  OgrMapWriter(MapFormat format, const std::filesystem::path& out, bool overwrite);
+  // `board_field`: the sprayed layer has the field `board`.
+  OgrMapWriter(MapFormat format, const std::filesystem::path& out, bool overwrite,
+               bool board_field = false);
   ~OgrMapWriter();
   OgrMapWriter(const OgrMapWriter&) = delete;
   OgrMapWriter& operator=(const OgrMapWriter&) = delete;
 
-  void add(const Stretch& stretch);
+  // `board` goes into the field `board` where the layer has it.
+  void add(const Stretch& stretch, const std::string& board = {});
   void add(const DensityCell& cell);
   // Commits and closes every file; throws std::runtime_error naming the file on failure.
   void close();

@@ -110,9 +110,6 @@ AsAppliedSummary read_as_applied_file(const std::filesystem::path& file) {
   return read_file_after(file, 0);
 }
 
-namespace {
-
-// Every as-applied-*.csv in `dir`, in name (= creation) order.
 std::vector<std::filesystem::path> as_applied_files(const std::filesystem::path& dir) {
   std::vector<std::filesystem::path> files;
   std::error_code ec;
@@ -124,8 +121,6 @@ std::vector<std::filesystem::path> as_applied_files(const std::filesystem::path&
   std::sort(files.begin(), files.end());
   return files;
 }
-
-}  // namespace
 
 AsAppliedSummary read_as_applied_dir(const std::filesystem::path& dir) {
   AsAppliedSummary summary;

@@ -24,6 +24,9 @@ struct AsAppliedSummary {
   std::uint64_t last_seq = 0;
 };
 
+// Every as-applied-*.csv in `dir`, in name (= creation) order. Throws std::runtime_error naming
+// the folder when it cannot be listed.
+std::vector<std::filesystem::path> as_applied_files(const std::filesystem::path& dir);
 // One file. Throws std::runtime_error naming the file when it cannot be read or its header is
 // not an as-applied header.
 AsAppliedSummary read_as_applied_file(const std::filesystem::path& file);

@@ -163,7 +163,7 @@ int main(int argc, char** argv) {
   auto* export_map = app.add_subcommand(
       "export-map",
       "the as-applied log as a map a GIS opens: export-map [--from T] [--to T] --format "
-      "geojson|gpkg|shp [--dir LOGDIR] [--config FILE] OUT (runs weedspray-export-map; "
+      "geojson|gpkg|shp [--dir LOGDIR]... [--config FILE] OUT (runs weedspray-export-map; "
       "`sprayctl export-map --help` lists its options)");
   // Every argument after export-map, --help included, is the exporter's.
   export_map->prefix_command();
