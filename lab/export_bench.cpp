@@ -172,7 +172,7 @@ int main(int argc, char** argv) {
     const fs::path out = fs::path(work) / (std::string("map.") + format);
     for (int k = 0; k < repeat; ++k) {
       maps::ExportOptions o;
-      o.log_dir = dir;
+      o.log_dirs = {dir};
       o.out = out;
       o.format = maps::parse_map_format(format);
       o.overwrite = true;
