@@ -86,12 +86,6 @@ std::filesystem::path Config::as_applied_dir() const {
 
 namespace {
 
-std::string format_number(double value) {
-  std::ostringstream out;
-  out << value;
-  return out.str();
-}
-
 std::string_view node_type_name(const toml::node& node) {
   switch (node.type()) {
     case toml::node_type::table:

@@ -25,13 +25,13 @@ void fail_at_key(const Config& config, const std::string& key, const std::string
   throw ConfigError(source->second.file, source->second.line, key, message);
 }
 
-namespace {
-
 std::string format_number(double value) {
   std::ostringstream out;
   out << value;
   return out.str();
 }
+
+namespace {
 
 // The rules, each judging the whole configuration; fail() throws at the key to blame.
 class Rules {

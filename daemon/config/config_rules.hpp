@@ -14,6 +14,9 @@ namespace weedspray::daemon {
 [[noreturn]] void fail_at_key(const Config& config, const std::string& key,
                               const std::string& message, const std::string& located_by = "");
 
+// A number as the configuration's messages print it (the shortest of %g's form).
+std::string format_number(double value);
+
 // Throws the first broken rule as a ConfigError.
 void check_config_rules(const Config& config);
 
