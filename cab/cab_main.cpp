@@ -1,7 +1,8 @@
 // weedspray-cab: the cab's page for a phone or tablet. Reads the machine's boards from the MQTT
 // broker ([fleet] of the configuration: broker, machine, credentials, TLS) and serves one page
 // ([cab]: where it listens) that shows them and publishes the guarded Start and Stop, and the
-// dose, on the machine's command topic. A program of its own, unprivileged, no D-Bus (docs/fleet.md).
+// dose, on the machine's command topic. A program of its own, unprivileged, no D-Bus
+// (docs/fleet.md).
 #include <poll.h>
 #include <signal.h>
 

@@ -40,7 +40,7 @@ done
 for n in "${BOARDS[@]}"; do wait_board_state "$n" Idle 30; done
 for n in "${BOARDS[@]}"; do start_bridge "$n"; done
 
-"$BUILD/cab/weedspray-cab" --config "$T/b1/weedspray.toml" >"$T/cab.log" 2>&1 &
+"$BUILD/cab/weedspray-cab" --config "$T/b1/weedspray.toml" --web-dir "$SOURCE/cab/web" >"$T/cab.log" 2>&1 &
 PIDS+=($!)
 for _ in $(seq 1 50); do
   $PY -c 'import sys, urllib.request; urllib.request.urlopen(sys.argv[1], timeout=1)' \
