@@ -15,6 +15,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cab/machine_view.hpp"
+#include "cab/picture_store.hpp"
 #include "daemon/config/config.hpp"
 #include "fleet/broker_settings.hpp"
 
@@ -23,8 +24,8 @@ namespace {
 using namespace weedspray;
 
 // Folds the broker's messages into the view until `stop`.
-void follow_broker(fleet::MqttLink& mqtt, cab::MachineView& view, const std::string& online_topic,
-                   const std::atomic<bool>& stop) {
+void follow_broker(fleet::MqttLink& mqtt, cab::MachineView& view, cab::PictureStore& pictures,
+                   const std::string& online_topic, const std::atomic<bool>& stop) {
   while (!stop) {
     pollfd fd{mqtt.event_fd(), POLLIN, 0};
     if (poll(&fd, 1, 200) <= 0) continue;
@@ -38,7 +39,7 @@ void follow_broker(fleet::MqttLink& mqtt, cab::MachineView& view, const std::str
           view.set_broker_connected(false);
           break;
         case fleet::MqttEvent::Kind::kMessage:
-          view.apply(event.topic, event.payload);
+          if (!pictures.apply(event.topic, event.payload)) view.apply(event.topic, event.payload);
           break;
       }
     }
@@ -97,12 +98,13 @@ int run(const daemon::Config& config, const std::filesystem::path& web_dir) {
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);  // inherited by every thread made below
 
   cab::MachineView view(f.machine);
+  cab::PictureStore pictures(f.machine);
   const std::string machine_topic = "weedspray/" + f.machine;
   fleet::MqttLink mqtt(fleet::broker_settings(f, "weedspray-" + f.machine + "-cab",
                                               machine_topic + "/cab_online",
                                               {machine_topic + "/+/+"}));
   std::atomic<bool> stop{false};
-  std::thread broker_thread(follow_broker, std::ref(mqtt), std::ref(view),
+  std::thread broker_thread(follow_broker, std::ref(mqtt), std::ref(view), std::ref(pictures),
                             machine_topic + "/cab_online", std::cref(stop));
 
   httplib::Server server;
@@ -114,8 +116,24 @@ int run(const daemon::Config& config, const std::filesystem::path& web_dir) {
   }
   server.Get("/api/machine", [&](const httplib::Request&, httplib::Response& response) {
     response.set_header("Cache-Control", "no-store");
-    response.set_content(view.to_json().dump(), "application/json");
+    auto machine = view.to_json();
+    const auto latest = pictures.to_json();
+    for (auto it = latest.begin(); it != latest.end(); ++it) {
+      machine["boards"][it.key()]["picture"] = it.value();
+    }
+    response.set_content(machine.dump(), "application/json");
   });
+  // The board's latest live-view picture (404 until one came).
+  server.Get(R"(/api/board/([A-Za-z0-9_-]+)/picture\.png)",
+             [&](const httplib::Request& request, httplib::Response& response) {
+               response.set_header("Cache-Control", "no-store");
+               if (auto png = pictures.png(request.matches[1])) {
+                 response.set_content(std::move(*png), "image/png");
+               } else {
+                 response.status = 404;
+                 response.set_content("no picture from this board yet\n", "text/plain");
+               }
+             });
   const std::string command_topic = machine_topic + "/cmd";
   server.Post("/api/command", [&](const httplib::Request& request, httplib::Response& response) {
     handle_command(request, response, mqtt, command_topic);

@@ -137,6 +137,26 @@ int on_method_reply(sd_bus_message* message, void* userdata, sd_bus_error*) {
   return 0;
 }
 
+int on_picture_reply(sd_bus_message* message, void* userdata, sd_bus_error*) {
+  std::unique_ptr<DaemonClient::PictureReply> reply(
+      static_cast<DaemonClient::PictureReply*>(userdata));
+  if (const sd_bus_error* error = sd_bus_message_get_error(message)) {
+    std::string text = error->name != nullptr ? error->name : "error";
+    if (error->message != nullptr) text += std::string(": ") + error->message;
+    (*reply)("", text);
+    return 0;
+  }
+  const void* data = nullptr;
+  std::size_t size = 0;
+  const int r = sd_bus_message_read_array(message, 'y', &data, &size);
+  if (r < 0) {
+    (*reply)("", std::string("malformed Snapshot reply: ") + std::strerror(-r));
+  } else {
+    (*reply)(std::string(static_cast<const char*>(data), size), "");
+  }
+  return 0;
+}
+
 }  // namespace
 
 int read_properties(sd_bus_message* m, BoardSnapshot& snapshot) {
@@ -278,6 +298,17 @@ void DaemonClient::call(const MethodCall& call, Reply reply) {
     return;
   }
   (void)pending.release();  // on_method_reply owns it now
+}
+
+void DaemonClient::picture(std::uint32_t camera, PictureReply reply) {
+  auto pending = std::make_unique<PictureReply>(std::move(reply));
+  const int r = sd_bus_call_method_async(bus_, nullptr, kBusName, kObjectPath, kInterface,
+                                         "Snapshot", on_picture_reply, pending.get(), "u", camera);
+  if (r < 0) {
+    (*pending)("", std::string("cannot call Snapshot: ") + std::strerror(-r));
+    return;
+  }
+  (void)pending.release();  // on_picture_reply owns it now
 }
 
 }  // namespace weedspray::fleet

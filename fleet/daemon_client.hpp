@@ -3,6 +3,7 @@
 // (NameOwnerChanged), and calls its methods. On the main thread's sd-event loop.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <string>
 
@@ -39,6 +40,10 @@ class DaemonClient {
   using Reply = std::function<void(Refusal, const std::string& message)>;
   // Calls the method; `reply` is called once, later, on the event loop.
   void call(const MethodCall& call, Reply reply);
+  // The PNG bytes, or "" and the daemon's (or the bus's) error name and message.
+  using PictureReply = std::function<void(std::string png, const std::string& error)>;
+  // Calls Snapshot(camera); `reply` is called once, later, on the event loop.
+  void picture(std::uint32_t camera, PictureReply reply);
 
  private:
   static int on_properties_changed(sd_bus_message* message, void* userdata, sd_bus_error*);

@@ -13,6 +13,7 @@
 #include "daemon/config/config.hpp"
 #include "fleet/bridge.hpp"
 #include "fleet/broker_settings.hpp"
+#include "fleet/picture_publisher.hpp"
 
 namespace {
 
@@ -54,6 +55,7 @@ int run(const daemon::Config& config, bool user_bus) {
   sd_event_add_io(event, nullptr, mqtt.event_fd(), EPOLLIN, on_mqtt, &bridge);
   fleet::DaemonClient daemon(event, user_bus, bridge);
   bridge.attach(daemon);
+  const fleet::PicturePublisher pictures(event, f.picture_interval_s, daemon, mqtt, topics);
   std::fprintf(stderr, "weedspray-fleet: board %s of machine %s, broker %s:%d\n", f.board.c_str(),
                f.machine.c_str(), f.host.c_str(), f.port);
   int status = sd_event_loop(event);

@@ -1,11 +1,27 @@
 // The cab page: polls /api/machine (the broker's latest values of every board) and draws one
 // card per board, left to right along the boom; Start asks for a confirmation first, Stop
-// never waits; the dose at full weed cover goes to every board. Plain JavaScript, no libraries.
+// never waits; the dose at full weed cover goes to every board; each card shows the board's
+// latest live-view picture. Plain JavaScript, no libraries.
 "use strict";
 
 const POLL_MS = 250;
 const CONFIRM_MS = 5000;
 let confirmTimer = null;
+// One <img> per board, kept across redraws so a picture loads only when a new one came.
+const pictures = new Map();
+
+function pictureOf(name, picture) {
+  let img = pictures.get(name);
+  if (!img) {
+    img = el("img", { class: "picture", alt: `${name}: live view with the weed overlay` });
+    pictures.set(name, img);
+  }
+  if (img.dataset.seq !== String(picture.seq)) {
+    img.dataset.seq = String(picture.seq);
+    img.src = `api/board/${encodeURIComponent(name)}/picture.png?seq=${picture.seq}`;
+  }
+  return img;
+}
 
 function el(tag, attrs, ...children) {
   const node = document.createElement(tag);
@@ -31,6 +47,7 @@ function boardCard(name, board) {
     bars.append(el("div", { class: "bar", style: `height:${Math.max(0, Math.min(100, duty))}%` }));
   }
   card.append(bars);
+  if (board.picture) card.append(pictureOf(name, board.picture));
   const pressure = board.pressure || {};
   const speed = board.speed || {};
   const flow = board.flow || {};

@@ -326,6 +326,7 @@ struct FleetSection {
   std::string commands;        // none|operator|admin: the command kinds taken from the broker
   std::string on_board_lost;   // continue|stop: another board of the machine lost
   std::string on_broker_lost;  // continue|stop: this board's link to the broker lost
+  double picture_interval_s;   // camera 0's live-view picture published this often (0 = never)
 };
 
 // The cab page (weedspray-cab, a program of its own; the daemon ignores these keys): where it

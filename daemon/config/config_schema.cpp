@@ -642,6 +642,10 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "when this board's connection to the broker is lost (so the cab can no longer stop it), it "
      "stops spraying (stop) or sprays on (continue); it reconnects by itself either way",
      {"stop", "continue"}},
+    {WS_KEY(fleet, picture_interval_s), 5.0, 0, 3600, "s",
+     "how often the bridge publishes camera 0's live-view picture (the daemon's Snapshot: a PNG "
+     "with the weed overlay) on weedspray/<machine>/<board>/picture, retained, for the cab page; "
+     "0 = never"},
     // [cab]
     {WS_KEY(cab, listen_address), std::string("127.0.0.1"), 0, 0, "",
      "weedspray-cab serves the cab page on this address: the cab's network address (or "

@@ -4,7 +4,8 @@
 # the page. The page shows every board; Start (then its confirmation) on the page -> every board
 # Spraying within 1 s (over D-Bus); a dose set on the page -> every board's TargetRate, and the
 # page shows it on every card; a board's bridge killed -> the page shows it lost within 3 s;
-# Stop on the page -> every board left Idle with its valves closed.
+# Stop on the page -> every board left Idle with its valves closed; every card shows its
+# board's live-view picture, served by the cab as a PNG.
 # usage: cab_page_test.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
 BUILD=$(realpath "$1")
@@ -59,6 +60,36 @@ done
 
 wait_page '^b1:Idle b2:Idle b3:Idle$' 20
 echo "ok: the page shows the three boards Idle, in boom order"
+
+# Every board's live-view picture: served as a PNG (404 for a board without one), and shown on
+# its card as an <img> that loaded.
+for n in "${BOARDS[@]}"; do retained_picture "$n" "$T/picture$n.png" >/dev/null; done
+$PY - "http://127.0.0.1:$CAB_PORT" <<'PYEOF' || fail "the cab's pictures"
+import sys, time, urllib.error, urllib.request
+base = sys.argv[1]
+for n in (1, 2, 3):
+    for _ in range(50):
+        try:
+            reply = urllib.request.urlopen(f"{base}/api/board/b{n}/picture.png", timeout=2)
+            break
+        except urllib.error.HTTPError:
+            time.sleep(0.1)
+    assert reply.headers["Content-Type"] == "image/png", reply.headers
+    assert reply.headers["Cache-Control"] == "no-store", reply.headers
+    assert reply.read()[:8] == b"\x89PNG\r\n\x1a\n"
+try:
+    urllib.request.urlopen(f"{base}/api/board/nosuch/picture.png", timeout=2)
+    sys.exit("a picture for a board that sent none")
+except urllib.error.HTTPError as error:
+    assert error.code == 404, error.code
+PYEOF
+for _ in $(seq 1 50); do
+  loaded=$(page '[...document.querySelectorAll(".board img.picture")].filter(i => i.complete && i.naturalWidth > 0).length')
+  [ "$loaded" = 3 ] && break
+  sleep 0.1
+done
+[ "$loaded" = 3 ] || fail "the page shows $loaded loaded pictures, expected 3"
+echo "ok: every card shows its board's live-view picture ($(page 'document.querySelector(".board img.picture").naturalWidth') px wide)"
 
 # Start is guarded: the first tap only asks.
 page 'document.getElementById("start").click()' >/dev/null

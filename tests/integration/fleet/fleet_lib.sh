@@ -79,7 +79,7 @@ write_board_config() {  # write_board_config N [TOML LINE...]
   printf '%s\n' "[boom]" "nozzles = 3" "[sim]" 'speed_profile = "constant"' \
     "speed_max_m_per_s = 1.0" "[fleet]" "enabled = true" "port = $PORT" \
     "machine = \"$MACHINE\"" "board = \"b$n\"" "first_nozzle_offset_m = $((n * 3)).0" \
-    "$@" >"$T/b$n/weedspray.toml"
+    "picture_interval_s = 1" "$@" >"$T/b$n/weedspray.toml"
 }
 
 start_board() {  # start_board N: its daemon on a bus of its own, until Idle
@@ -149,6 +149,24 @@ wait_retained() {  # wait_retained TOPIC PAYLOAD_REGEX SECONDS
     sleep 0.2
   done
   fail "$1 is '$payload', expected /$2/ within $3 s"
+}
+
+retained_picture() {  # retained_picture N FILE: board N's retained picture, a PNG -> "W H"
+  local _
+  for _ in $(seq 1 10); do
+    mosquitto_sub -h 127.0.0.1 -p "$PORT" -t "weedspray/$MACHINE/b$1/picture" --retained-only \
+      -N -C 1 -W 1 >"$2" 2>/dev/null || true
+    [ -s "$2" ] && break
+  done
+  [ -s "$2" ] || fail "board $1: no picture retained within 10 s"
+  $PY - "$2" <<'PYEOF' || fail "board $1: the retained picture is not a PNG"
+import struct, sys
+png = open(sys.argv[1], "rb").read()
+assert png[:8] == b"\x89PNG\r\n\x1a\n" and png[12:16] == b"IHDR", png[:16]
+width, height = struct.unpack(">II", png[16:24])
+assert width > 0 and height > 0, (width, height)
+print(width, height)
+PYEOF
 }
 
 publish() {  # publish TOPIC PAYLOAD

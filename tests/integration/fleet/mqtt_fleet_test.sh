@@ -8,7 +8,7 @@
 # valve; a killed bridge and a killed daemon each turn their board's online to false, and a
 # board set to stop when another is lost stops while one set to continue sprays on; a board
 # whose broker is lost stops, and reconnects once it is back; a bridge that stops says goodbye
-# the same way.
+# the same way; every board's live-view picture is retained, a PNG.
 # usage: mqtt_fleet_test.sh BUILD_DIR SOURCE_DIR
 set -euo pipefail
 BUILD=$(realpath "$1")
@@ -42,6 +42,11 @@ PYEOF
   done
 done
 echo "ok: every board's state retained on the broker"
+# The live-view picture (picture_interval_s = 1): camera 0's PNG, retained, on every board.
+for n in "${BOARDS[@]}"; do
+  size=$(retained_picture "$n" "$T/picture$n.png")
+  echo "ok: board $n picture retained: $size px, $(stat -c %s "$T/picture$n.png") bytes"
+done
 
 # Start on the machine's topic: every board sprays within 1 s.
 t0=$(now)

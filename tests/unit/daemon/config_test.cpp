@@ -597,6 +597,19 @@ TEST(ConfigSchema, FleetNamesAreTopicLevels) {
   }
 }
 
+TEST(ConfigSchema, FleetPictureIntervalRange) {
+  EXPECT_DOUBLE_EQ(parse("").fleet.picture_interval_s, 5.0);
+  EXPECT_DOUBLE_EQ(parse("[fleet]\npicture_interval_s = 0\n").fleet.picture_interval_s, 0.0);
+  EXPECT_DOUBLE_EQ(parse("[fleet]\npicture_interval_s = 0.5\n").fleet.picture_interval_s, 0.5);
+  for (const char* bad : {"-1", "3601"}) {
+    SCOPED_TRACE(bad);
+    const auto error =
+        parse_error({{"main.toml", std::string("[fleet]\npicture_interval_s = ") + bad + "\n"}});
+    EXPECT_EQ(error.key(), "fleet.picture_interval_s");
+    EXPECT_EQ(error.line(), 2);
+  }
+}
+
 class ConfigFiles : public ::testing::Test {
  protected:
   void SetUp() override {
