@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-cab: the cab's page for a phone or tablet. Reads the machine's boards from the MQTT
 // broker ([fleet] of the configuration: broker, machine, credentials, TLS) and serves one page
 // ([cab]: where it listens) that shows them and publishes the guarded Start and Stop, and the

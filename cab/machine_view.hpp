@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What the cab knows of its machine: the latest payload of every board's topic under
 // weedspray/<machine>/, folded from the broker's messages into one JSON document for the page.
 // Thread-safe: the MQTT side writes, the HTTP side reads.

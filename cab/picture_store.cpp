@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "cab/picture_store.hpp"
 
 namespace weedspray::cab {

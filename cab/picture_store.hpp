@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The latest live-view picture of every board (a PNG on weedspray/<machine>/<board>/picture),
 // kept for the page, each with a number that grows with every new one so the page knows when to
 // fetch it again. Thread-safe: the MQTT side writes, the HTTP side reads.

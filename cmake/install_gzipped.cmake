@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # weedspray_install_gzipped(TARGET SOURCE DESTINATION [RENAME NAME] [COMPONENT NAME])
 #   Installs SOURCE compressed as Debian policy wants man pages and changelogs: gzip -9 without
 #   the name and time stamp (-n), so a rebuild makes the same bytes. TARGET (a custom target

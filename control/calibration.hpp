@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Calibration helpers (SPEC §2-§4): plain structs the config/daemon can persist.
 // (1) Flow meter pulses per litre from a catch test: the user runs the line, collects the
 //     liquid and weighs/measures it; pulses counted by the meter over the same time.

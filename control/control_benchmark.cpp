@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-control-bench: per-call cost of the control algorithms on the real-time paths
 // (Google Benchmark prints the figures). Run: build/<dir>/control/weedspray-control-bench
 #include <benchmark/benchmark.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Flow trim (SPEC §3/§4) and calibration drift: what the line flow meter says about the
 // calibrated nozzle lines. Both read windows of the meter's volume against what the lines
 // promise at the duties actually commanded (after the trim; FlowTrimWindows) and keep the

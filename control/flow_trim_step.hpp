@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The flow trim's share of one control-loop cycle, pure: the duties the spray-rate law chose in,
 // the trimmed duties out, with the meter read against what the lines promise at them. The
 // daemon's control loop calls it on real time; the lab's closed-loop rig calls the same step on

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fuzzy-adaptive PID (SPEC §4, UGV paper dong2024 §2.3): a PID whose gains are corrected
 // every cycle from the error e and its rate of change ec.
 //

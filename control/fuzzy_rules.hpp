@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Rule tables of the fuzzy gain scheduler, copied verbatim from SPEC §4 (UGV paper, dong2024,
 // Tables 1-3). Rows: quantised error e, columns: quantised error change ec, both in the order
 // NB NM NS ZO PS PM PB. Each entry names the output term of dKp, dKi or dKd.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Per-nozzle health from the ONE line flow meter while spraying.
 //
 // With staggered PWM phases the nozzles are open in different parts of each period, so the

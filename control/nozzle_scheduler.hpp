@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Camera-to-nozzle scheduling by distance (SPEC §5).
 //
 // Geometry (pinhole camera, flat ground): the camera is mount_height_m above the ground, its

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Wheel odometry from a Hall sensor (SPEC §4/§5): distance and speed from a free-running pulse
 // counter and the kernel timestamp of the counter's last edge.
 // - Distance = accumulated pulses / pulses_per_metre; the counter may wrap (counter_bits wide):

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Cuts the valves' real open times and the line meter's pulses into PWM phase windows for
 // control::NozzleHealth, one control cycle at a time.
 //

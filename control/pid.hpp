@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // PID controller for the line-pressure loop (SPEC §4; LinuxCNC pid.c habits).
 //
 // - Derivative on the measurement (a set-point step does not kick the output), with an

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "control/pressure_controller.hpp"
 
 namespace weedspray::control {

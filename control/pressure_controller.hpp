@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The pressure-loop controller the daemon picks from config (SPEC §4): the conventional PID or
 // the fuzzy-adaptive PID, behind one small value type so the comparison in the UGV paper can be
 // rerun by changing one key. Pure; update() is allocation-free and noexcept.

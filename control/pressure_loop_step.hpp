@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One cycle of the pressure loop, pure: the pressure reading and the operator's wishes in, the
 // pump and return-valve commands and the valve hold out. The daemon's ws-pressure thread reads
 // the converters and calls it on real time; the lab's closed-loop rig calls the same step on

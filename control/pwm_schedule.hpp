@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Staggered-period PWM for up to 32 solenoid valves (SPEC §3, UGV paper dong2024 §3.2).
 //
 // Every valve runs a period T = 1/frequency (1..20 Hz, rounded to whole nanoseconds). In the

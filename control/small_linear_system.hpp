@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Solves the small dense systems of the per-nozzle fits (nozzle health, the lab's phase-window
 // fit): at most 8 unknowns, on fixed-size arrays, so it can run on the real-time path without
 // allocation. Hand-written because of that: Eigen is not a dependency of the control library.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Spray-rate law: weed density -> nozzle flow -> valve duty (SPEC §2).
 //
 // Wheat paper (he2024), flows in L/min (the paper's "mL/min" only works in L/min):

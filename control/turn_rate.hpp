@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Turn compensation: on a curve each nozzle moves over the ground at its own speed.
 // A rigid boom turning at yaw rate w (rad/s, CLOCKWISE positive seen from above, as a course
 // over ground grows) about a centre on the curve's inside: a nozzle y metres RIGHT of the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Wheel-sensor calibration from GNSS over a straight run: drive straight at a
 // steady speed; the receiver measures the distance, the wheel sensor counts its pulses, and
 // pulses / distance is the wheel's pulses_per_metre as it rolls on this soil (slip included).

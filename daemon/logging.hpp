@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // spdlog set-up: the journal when started by systemd (JOURNAL_STREAM / INVOCATION_ID set),
 // the console otherwise. Only the main thread and workers log; real-time loops never do.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedsprayd: command line, then either a configuration check or the daemon itself.
 #include <CLI/CLI.hpp>
 #include <iostream>

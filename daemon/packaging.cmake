@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # CPack: the Debian packages of the install tree (owner: daemon engineer), one per component:
 #   weedspray        the sprayer: weedsprayd, sprayctl, the units, bus policy, models, config
 #   weedspray-maps   weedspray-export-map (GDAL and its ~100 libraries stay off the sprayer;

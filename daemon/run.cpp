@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The daemon's main thread, as its lifecycle. run_daemon() sets up the process (configuration,
 // logging, signals, memory, the safe writers outside it); Daemon::run() starts each part in
 // order, runs the sd-event loop (D-Bus, SIGTERM/SIGINT: safe exit, SIGHUP: reload, the 20 Hz

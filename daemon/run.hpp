@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The daemon proper: backends, threads, D-Bus, until a signal. Returns the exit status.
 #pragma once
 

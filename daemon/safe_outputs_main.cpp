@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-safe-outputs: writes every configured output's safe value and exits; the unit's
 // ExecStopPost after every exit of weedsprayd, kill -9 included (daemon/CMakeLists.txt says why
 // it is not weedsprayd --safe-outputs, which does the same). With --when-closed it is the exit

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/test_crash_hook.hpp"
 
 #include <sys/mman.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test-only faults for the hardware-in-the-loop scenario (tests/vm-systemd): an abort, a
 // segmentation fault and a hung main loop, each raised inside the running daemon so the test
 // can show the fail-safe paths (io/emergency_outputs.hpp, the systemd watchdog) put the outputs

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What the bridge knows of its board: the daemon's D-Bus properties it publishes, and the
 // board's fixed description from the configuration. Turned into one JSON payload per topic.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The fleet bridge proper: publishes the board's snapshot on its topics when it changes, marks
 // the board online or lost, and carries the broker's commands to the daemon, replying and
 // counting each. Main thread only.

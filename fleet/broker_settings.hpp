@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The broker connection of [fleet] (host, port, keep-alive, credentials, TLS) as the MQTT
 // link's settings, shared by the bridge and the cab page.
 #pragma once

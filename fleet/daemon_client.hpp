@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The bridge's side of weedsprayd's D-Bus service (daemon/bus/dbus_names.hpp): follows the
 // properties (GetAll, then PropertiesChanged), notices the daemon coming and going
 // (NameOwnerChanged), and calls its methods. On the main thread's sd-event loop.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The commands taken from the broker: parsed from their JSON, checked against the bridge's
 // permission (fleet.commands, the D-Bus groups' split) and turned into the daemon's D-Bus
 // method call, whose own checks (ranges, state) then apply. docs/fleet.md lists them.

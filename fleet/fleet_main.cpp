@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-fleet: joins this board to its machine over an MQTT broker ([fleet] of the
 // daemon's configuration file; docs/fleet.md). An unprivileged program beside weedsprayd: it
 // reads the daemon only over D-Bus and steers it only through the daemon's D-Bus methods.

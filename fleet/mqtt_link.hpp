@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The bridge's connection to the MQTT broker (libmosquitto, MQTT 5): its own network thread
 // (mosquitto_loop_start) reconnects by itself; what arrives (a connection made, a message) is
 // queued and an eventfd wakes the main thread's sd-event loop, which takes it with take().

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The board's live-view picture on the broker: every interval, camera 0's latest frame with the
 // weed overlay (the daemon's Snapshot, a PNG) published retained on weedspray/<m>/<b>/picture.
 // Asynchronous on the main sd-event loop: a Snapshot still on its way skips the round, so a slow

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The MQTT topics of one board of a machine (docs/fleet.md): weedspray/<machine>/<board>/...
 // for what it publishes, weedspray/<machine>/cmd and weedspray/<machine>/<board>/cmd for the
 // commands it takes.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Analog input (pressure sensor via I/V resistor and ADC) and analog output (DAC driving the
 // proportional return valve through its amplifier). Volts at the converter pins; conversion to
 // physical quantities lives in io/signal_conversion.hpp.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The pressure converters' own thread. Reading the pressure ADC and writing the return-valve
 // DAC block: an ADS1115 behind IIO converts for 1-8 ms per read over I2C, a Modbus analog
 // module takes a 2-20 ms transaction and, when it stops answering, a whole response timeout.

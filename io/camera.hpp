@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A frame source: V4L2 on the board (hw::V4l2Camera), recorded images/video in simulation
 // (sim::ReplayCamera). Errors after start() are reported through next_frame()'s result and the
 // counters, never thrown.

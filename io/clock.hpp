@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The injected monotonic clock. Every loop sleeps to absolute deadlines on one of these, so the
 // same code runs on CLOCK_MONOTONIC (hw::MonotonicClock) or on simulated time (io/sim/).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A debounced digital input (the start/stop key). The backend watches the line on its own
 // thread and publishes the debounced state.
 #pragma once

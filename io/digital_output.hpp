@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A bank of digital outputs switched together: the nozzle valves, the pump relay, buzzer/LED.
 // Bit i of a mask is line i in LOGICAL terms (1 = energised/on); active-low wiring is the
 // backend's business.

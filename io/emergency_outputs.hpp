@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fail-safe writes for the exits that run no normal code: a fatal signal (the systemd
 // watchdog's SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL, or any other signal whose default action
 // ends the process) or std::terminate (an exception that escaped a thread or a C callback).

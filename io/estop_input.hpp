@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The emergency-stop input: a normally closed, monitored circuit. A closed circuit permits
 // running; an open one (a pressed button, a cut wire, a lost pull resistor's supply) is a stop.
 // The backend runs the reaction on the circuit's first opening edge, on its own thread, and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // GNSS position, speed and course (a receiver behind gpsd: NMEA over serial/USB, u-blox, RTK).
 // A receiver read blocks for up to its wait: only ever on a worker thread, which publishes each
 // fix into a LatestValue<Stamped<GnssFix>> (sample_time: when it arrived, on the daemon's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // How late a real-time loop wakes (or writes an edge) after its deadline, as a fixed-bucket
 // histogram: p50/p99/max per loop for the timing report without storing samples.
 // Hand-written because it is updated on the SCHED_FIFO threads: no allocation, no locks.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A latest-value slot: one writer publishes, any number of readers take the newest complete
 // value without locks. Hand-written because the RT path needs it allocation- and lock-free.
 //

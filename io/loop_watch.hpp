@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One real-time loop watching another's progress counter (cycles, wakes): stale when the
 // counter has not moved for `timeout`. The valve thread watches the pressure loop (a stalled
 // pressure loop must not leave the pump running against closed valves) and the pressure loop

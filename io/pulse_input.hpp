@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Pulse counters: the flow meter and the Hall wheel sensor. The backend counts edges on its own
 // thread; the real-time side reads a consistent snapshot without waiting.
 #pragma once

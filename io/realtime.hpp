@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Real-time threads: ALL thread priorities in one table, SCHED_FIFO when permitted (normal
 // priority plus a returned status otherwise, so an unprivileged run still works), mlockall, and
 // a periodic loop on absolute deadlines of the injected clock with an overrun counter.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The ONE place where electrical signals become physical quantities and back:
 //  - pressure sensor: 4-20 mA loop -> I/V resistor -> volts at the ADC -> pressure in MPa, with
 //    the fault rule (< 3.6 mA: broken wire, > 21 mA: short) - a fault is never a pressure;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Bounded single-producer single-consumer queue for commands into RT loops (e.g. D-Bus -> RT).
 // Hand-written because the RT side needs it allocation-free and wait-free; the storage is a
 // fixed array sized at compile time.

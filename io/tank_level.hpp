@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Tank level (ultrasonic sensor on RS-485 Modbus RTU). Reads block for up to the response
 // timeout: only ever on a worker thread, which publishes the result into a LatestValue.
 #pragma once

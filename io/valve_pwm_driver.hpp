@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The valve PWM driver: the highest-priority RT loop. It executes a stream of PWM edges (from
 // control's staggered PwmSchedule) on an output bank: sleep until the edge on the injected
 // clock, write the whole valve mask with one call. Duty commands arrive wait-free through a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A yaw-rate gyro (an IMU's angular rate about the vertical): turn compensation's yaw source
 // when the GNSS course is too slow or absent. A read may block on the sensor's bus (I2C/SPI):
 // only ever on a worker thread, which publishes each sample for the control loop.

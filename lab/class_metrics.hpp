@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Crop / weed / soil metrics of class maps against class-id masks: per-class IoU, MIoU and MPA
 // as the wheat paper defines them (over the whole confusion matrix of a set of images), and
 // the sprayer's zone trade-off (weedy zones sprayed, weed-free zones left dry).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Subcommand registration for weedspray-lab. Each room owns one registration function and
 // the source file(s) behind it; main.cpp only calls them.
 #pragma once

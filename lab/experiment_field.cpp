@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lab/experiment_field.hpp"
 
 #include <opencv2/core.hpp>

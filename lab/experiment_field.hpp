@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A field for the savings experiment from labelled crop/weed photos (class-id masks: 0 soil,
 // 1 crop, 2 weed): each image cut into the wheat paper's layout of 2 zone rows along travel x 4
 // nozzle columns, images laid one after another along a track.

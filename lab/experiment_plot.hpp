@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Minimal line/scatter plots drawn with OpenCV primitives (axes, ticks, labels, legend) for the
 // experiment figures. Lab-only: allocation and exceptions are fine here.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-export-bench: times `weedspray-export-map` on a synthetic day's log. Writes an
 // as-applied log with the daemon's own writer (AsAppliedLog): N hours, the daemon's record rate
 // (pwm.frequency_hz records a second), a boustrophedon field track with semicircular headland

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-lab hil-frames: the camera frames of the systemd guest's hardware-in-the-loop
 // scenario (tests/vm-systemd), made from the bundled labelled field photos.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lab/io_bench_pwm.hpp"
 
 #include <algorithm>

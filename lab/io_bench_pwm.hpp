@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // bench-pwm: edge timing of the real valve PWM thread on this machine.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-lab io subcommands: bench-pwm.
 #include <CLI/CLI.hpp>
 

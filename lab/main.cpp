@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-lab: reproduce the papers' tables and figures on this machine.
 #include <CLI/CLI.hpp>
 

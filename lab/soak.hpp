@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-lab soak: runs the sim daemon (weedsprayd --sim) on a private D-Bus session bus for
 // a while, injects faults at random through its sim-only InjectSimFault method (sensor open or
 // short, camera unplugged, tank sensor silent, refused valve/pump writes), reloads its

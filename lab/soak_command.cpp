@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-lab soak: the command line and the report (text or JSON) of lab/soak.hpp.
 #include <CLI/CLI.hpp>
 #include <cstdio>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // bench-vision: time per 1280x800 BGR frame of the default pipeline, against a straightforward
 // OpenCV-primitives version of the same pipeline (cv::transform, cv::threshold with Otsu,
 // cv::countNonZero per zone); with --pipeline, of a weed source (inter_row, dnn, hybrid, plants).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-lab vision subcommands: vision-eval (index x threshold, or the weed sources with
 // --classes / --weed-sources), segment, bench-vision.
 #include <cstdio>

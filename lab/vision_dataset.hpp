@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Loading the labelled field images (image folder + mask folder) for the vision commands.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // vision-eval: every index x threshold combination against hand-labelled masks (the UGV
 // paper's Table 6 columns plus IoU against ground truth).
 #pragma once

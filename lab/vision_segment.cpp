@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // segment: threshold, zone weed (and crop) densities and density levels of field images, with
 // an optional overlay PNG showing crop and weed, the zone grid and each zone's weed density.
 #include <cstdio>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // segment and bench-vision subcommands (lab/vision_segment.cpp, lab/vision_bench.cpp).
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Evaluation of the weed sources (vegetation, inter_row, dnn, hybrid) against labelled images:
 // class metrics and the zone trade-off against class-id masks, vegetation IoU against any.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // vision-eval --classes / --weed-sources: the weed sources against labelled images.
 #pragma once
 

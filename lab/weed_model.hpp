@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The weed model and pipeline settings the lab's vision commands run: from --model FILE (its
 // spec from FILE's .json sibling, as tools/train writes it) or from a daemon configuration.
 #pragma once

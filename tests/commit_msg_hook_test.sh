@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # The commit-msg hook (.githooks/commit-msg) takes the project's subjects and refuses the rest.
 hook="$1"
 dir="$(mktemp -d)"

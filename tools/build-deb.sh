@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Builds weedspray's .deb the way a user does: a Release tree configured with
 # -DCMAKE_INSTALL_PREFIX=/usr and tests off, then `cpack -G DEB`. Prints the .deb's path.
 #

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Figures of the fleet (docs/benchmarks.md, "Fleet and cab"): three weedsprayd --sim boards
 # spraying with their bridges on a loopback mosquitto, then the cab page serving 12 boards.
 #  1. broker messages per second per board, and per topic, over 10 s of spraying;

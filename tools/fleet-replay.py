@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Replays one board's recorded broker messages as many boards, for the cab's figures.
 
 usage: fleet-replay.py PORT MACHINE BOARDS SECONDS RECORDING

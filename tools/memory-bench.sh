@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Resident memory of the simulated sprayer: runs `weedsprayd --sim --no-bus` spraying for N
 # seconds with one or four cameras (1280x800, the default camera) and the vegetation or dnn
 # weed source (the default model), and prints one JSON line per case: the peak resident set

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Real-time timing of the simulated sprayer: runs `weedsprayd --sim` on a private session bus,
 # starts spraying, optionally loads the machine with stress-ng, and prints the daemon's timing
 # report (per loop: p50/p99/p99.9/max lateness in microseconds, misses beyond

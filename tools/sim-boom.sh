@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # A simulated boom of N boards as one machine (`./dev sim --boom N`): a loopback mosquitto,
 # N weedsprayd --sim boards (each on a session bus of its own, 3 nozzles, on the bundled field
 # images), a weedspray-fleet bridge each, and the cab page; prints the page's address and the

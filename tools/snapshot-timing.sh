@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Live-view figures: runs `weedsprayd --sim` on a private session bus, its camera replaying a
 # synthetic WxH field (soil with green blocks), spraying, and takes N snapshots 0.6 s apart
 # with `sprayctl snapshot`. Prints mean/sd/worst of: the call's wall time (waiting for the

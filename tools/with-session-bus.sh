@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Runs a command on the D-Bus session bus, starting a private one when there is none (root on a
 # fresh machine has none), and prints, once the sprayer answers on that bus, the line that lets
 # another shell reach it: after the daemon's start-up lines, so it is not lost above them. Used

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The 256-bin histogram of an 8-bit vegetation-index image, and the class statistics the
 // threshold methods share.
 #pragma once

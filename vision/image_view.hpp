@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A non-owning view of one camera frame or image, shared by io/ (cameras produce it) and
 // vision/ (the pipeline consumes it) so frames are never copied on the way.
 #pragma once

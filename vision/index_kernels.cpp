@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Per-pixel loops of the vegetation indices. Hand-written rather than cv::cvtColor +
 // arithmetic because the pipeline needs the index and its histogram in ONE pass over the
 // frame, with no temporary images (allocation-free, memory-bandwidth bound on the board).

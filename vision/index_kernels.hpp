@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Row kernels behind compute_vegetation_index (internal to vision/).
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Hand-written with OpenCV's universal intrinsics (one source for SSE2/AVX2 and NEON):
 // cv::cvtColor + cv::calcHist would need temporary images and three passes over the frame;
 // this needs one and allocates nothing. All arithmetic is in 16-bit lanes: modulo 2^16 for

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // SIMD kernels for the indices that are linear in R, G, B (cive, exg_raw): index and
 // histogram in one pass over packed 24-bit frames, and CIVE over YUYV frames (internal to
 // vision/).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The live view's picture: a camera frame with its segmentation and zone grid drawn in, as
 // sprayctl snapshot and weedspray-lab vision-segment write it. Pure: no threads, no I/O.
 #pragma once

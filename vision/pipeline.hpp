@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The vision pipeline the daemon runs on every frame:
 //   frame -> vegetation index (+ histogram, one pass) -> threshold -> zone densities
 // Pure: no threads, no I/O. After the first frame of a given size, process() allocates

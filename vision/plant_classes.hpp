@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Per-plant classification (the plants weed source): colour finds the plants at the frame's
 // own resolution, the network, run at its coarser ground scale, only votes on which plants are
 // crop. Plants are the vegetation grown by join_px: the pieces colour cuts a grass blade into

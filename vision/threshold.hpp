@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Automatic thresholds on the 256-bin histogram of an 8-bit vegetation index.
 // Convention everywhere: a pixel is vegetation when its index value is > threshold.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Vegetation indices ("graying"): colour frame -> one 8-bit plane where plants are bright.
 //
 // Every index is mapped to 8 bits with a FIXED scale (never per-frame min-max), so a threshold

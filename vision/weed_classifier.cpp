@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "vision/weed_classifier.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Weed and crop densities per zone for the inter_row, dnn, hybrid and plants weed sources, from the
 // frame, its vegetation index image and threshold (internal to vision/; Pipeline owns one).
 #pragma once

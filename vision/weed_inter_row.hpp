@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Crop rows for the inter-row rule: peaks of the column histogram of the vegetation mask,
 // tracked from frame to frame (pure; allocation-free after the first frame of a given width).
 #pragma once

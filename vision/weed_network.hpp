@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A crop/weed/soil segmentation network run through OpenCV DNN (internal to vision/).
 #pragma once
 

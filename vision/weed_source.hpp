@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What the spray decision counts as weed: every green pixel (vegetation), vegetation between
 // tracked crop rows (the 2018 paper's inter-row rule), a segmentation network's weed class
 // (dnn), colour vegetation minus the network's crop mask (hybrid), or colour-segmented plants

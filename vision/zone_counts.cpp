@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Vegetation counts with OpenCV universal intrinsics: one compare and one subtract per 16
 // pixels (the 0xFF compare mask is -1 in each byte lane).
 #include "vision/zone_counts.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Counting vegetation pixels (index > threshold) in the index image (internal to vision/).
 #pragma once
 

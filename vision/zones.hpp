@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Weed density per nozzle zone and the 2018 paper's inter-row (lateral histogram) weed map.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The cab page: polls /api/machine (the broker's latest values of every board) and draws one
 // card per board, left to right along the boom; Start asks for a confirmation first, Stop
 // never waits; the dose at full weed cover goes to every board; each card shows the board's

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # Cross-compiling for the sprayer's board (Raspberry Pi 4/5 class, aarch64) with Debian 12's
 # cross compiler (g++-aarch64-linux-gnu) against Debian 12's arm64 libraries unpacked in a
 # sysroot by cmake/toolchains/arm64-sysroot.sh (`./dev deps` makes both). Tests and build-time

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Makes the arm64 sysroot the aarch64 build links against and qemu-aarch64 runs from:
 # Debian 12's arm64 packages of the project's libraries, unpacked (not installed) with
 # mmdebstrap --variant=extract. Used by `./dev deps`; idempotent (a stamp holds the list).

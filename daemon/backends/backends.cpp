@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/backends/backends.hpp"
 
 #include "io/linux/gpsd_gnss.hpp"

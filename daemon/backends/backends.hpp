@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The devices the daemon drives, behind the io interfaces. backends_hw.cpp opens the board's
 // (libgpiod, IIO, V4L2, libmodbus); backends_sim.cpp builds the simulated machine.
 // pick_backends.cpp picks one; nothing else knows which it got.

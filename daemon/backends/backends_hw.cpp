@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The board: libgpiod lines, the pressure converters (backends_hw_converters.cpp), V4L2 cameras,
 // libmodbus tank sensor, configured from the [gpio], [modbus] and [[camera]] sections.
 #include <cstring>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The pressure ADC and return-valve DAC of the board: Linux IIO devices (e.g. ADS1115 and
 // MCP4725 on a Pi) or Modbus RTU analog modules on their own RS-485 bus ([analog_modbus]).
 #include <algorithm>

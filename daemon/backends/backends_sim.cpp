@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulated machine for `weedsprayd --sim`: the hydraulic plant behind the io adapters,
 // recorded field images as the cameras, simulated time paced to real time.
 #include <atomic>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/backends/emergency_write_handoff.hpp"
 
 #include <sys/socket.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The daemon hands its fatal-exit safe writes (io/emergency_outputs.hpp: one ioctl or pwrite
 // on a descriptor it holds, per output) to its exit watcher over their shared unix socket, each
 // with a copy of its descriptor (SCM_RIGHTS). The watcher can then write every output safe the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/backends/hw_output_lines.hpp"
 
 #include "io/linux/gpio_output_bank.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Board output lines as the daemon and the fail-safe writer request them (libgpiod, each
 // requested at its safe value), kept alive by the Backends that owns them.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/backends/output_manifest.hpp"
 
 #include <fcntl.h>

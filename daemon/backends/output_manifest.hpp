@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The output manifest: weedsprayd's resolved configuration (drop-ins merged, defaults filled in),
 // written under /run when it starts in hardware mode. The safe writers that run without the
 // daemon (its exit watcher, the unit's ExecStopPost) read it instead of the editable files, so a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/backends/pick_backends.hpp"
 
 #include <spdlog/spdlog.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The one choice between the board and the simulation: the backends, their outputs' fatal-exit
 // safe writes registered, and the driver of the world around them (a no-op on the board).
 #pragma once

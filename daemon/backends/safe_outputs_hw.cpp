@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The fail-safe writer's work (ExecStopPost after any exit, kill -9 included): every output
 // line requested at its safe value and released, and the return-valve DAC's safe value.
 #include <cerrno>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/backends/safe_outputs_watch.hpp"
 
 #include <poll.h>

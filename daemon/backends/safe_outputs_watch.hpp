@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The exit watcher: weedspray-safe-outputs --when-closed FD --daemon-pid PID, started by
 // weedsprayd (hardware mode) before it requests any line. FD is one end of a unix socket pair
 // whose other end only the daemon holds. Once its outputs are open the daemon sends over it

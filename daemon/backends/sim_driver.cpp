@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/backends/sim_driver.hpp"
 
 #include <spdlog/spdlog.h>

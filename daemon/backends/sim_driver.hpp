@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulated world's driver (weedsprayd --sim): the vehicle driven and the --sim-fault
 // faults injected each tick, InjectSimFault, a status line a second on the console, and at
 // exit the valve states and the plant's true volume for the tests.

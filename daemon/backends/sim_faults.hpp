@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Faults injected into the simulated plant at a given time (weedsprayd --sim --sim-fault), so
 // alarms and the fail-safe paths can be exercised end to end.
 #pragma once

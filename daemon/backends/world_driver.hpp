@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What a simulated world adds to a run, behind one interface so the main loop has no branch
 // for it: the world advanced each tick (the vehicle's motion, faults due), faults on request,
 // and its ground truth written at exit. This base is hardware mode's: the machine is the world

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What the org.weedspray.Sprayer1 methods do (main thread): each command checked, then handed
 // to what it acts on (the operation, the alarms, the reloads, the live view, the sprayer's
 // wheel calibration, the simulated world).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The org.weedspray.Sprayer1 methods' calls: each read from its message and handed to the
 // CommandHandler, its result the reply (now, or later for ReloadConfig and Snapshot).
 #include <systemd/sd-bus.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The D-Bus names shared by weedsprayd and sprayctl.
 #pragma once
 

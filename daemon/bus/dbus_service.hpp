@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The D-Bus service org.weedspray.Sprayer1 (sd-bus, one vtable), attached to the main
 // thread's sd-event loop, so every callback runs on the main thread without locks.
 //   properties: State s, Pressure d, PressureSetpoint d (MPa), DecisionThreshold d, Flow d

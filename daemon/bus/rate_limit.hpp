@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // At most one event per interval (the live view's snapshots): the interval runs from the
 // last marked event; a refused request marks nothing and is told how long until one would be
 // allowed.

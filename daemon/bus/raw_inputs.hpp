@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The inputs as the hardware gives them, for commissioning (sprayctl inputs): sensor current,
 // pulse counts, contacts. Only what is wired is listed.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What the daemon shows over D-Bus: one plain snapshot, assembled by the main loop from the
 // real-time threads' published values.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What fills the D-Bus status properties: one snapshot of the loops' published values, the
 // state, the alarms, the totals and the calibrations (main thread).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The daemon's configuration: /etc/weedspray/weedspray.toml plus conf.d/*.toml drop-ins,
 // parsed once into this immutable, range-checked struct. Every key, with its type, default,
 // range, unit and documentation, is declared once in config_schema.cpp; the members below

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Renders the key table as the commented default configuration file.
 #include <toml++/toml.h>
 #include <charconv>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // --dump-config: the configuration in force as one TOML document with every key, which the
 // loader reads back to the same configuration.
 #include <toml++/toml.h>

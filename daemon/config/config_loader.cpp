@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Parses TOML documents into Config against the key table of config_schema.cpp.
 #include <toml++/toml.h>
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The loader's two halves: reading and validating the files (weedspray_config, no vision
 // library) and the weed source check that reads the model and builds the vision pipelines
 // (vision_config.cpp, passed in as a function). load_config() joins them; the fail-safe writer

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-config-man VERSION: prints the man page weedspray.toml(5), in roff, from the key
 // table (a build step; not installed).
 #include <iostream>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ReloadConfig and SIGHUP (main thread): the files are read and parsed and the model probed on
 // a thread of its own (seconds for a large model on a slow board), while the main loop goes on
 // feeding the watchdog, judging alarms and serving the bus; each tick applies a finished job.

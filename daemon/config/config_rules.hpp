@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The rules between keys of a configuration whose every value parsed: cameras and nozzles,
 // GPIO lines used once, trip limits against the sensor, Modbus modules, fleet names. Each
 // refusal names the key to blame where it was set (file and line).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The one table of configuration keys: name, type, default, range, unit and documentation.
 // The parser, --check-config, --dump-config and the tests (round trip, etc/weedspray.toml
 // documents every key) all read this table; nothing else declares a key.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The installed configuration file's path. Its one define comes from the install prefix
 // (daemon/CMakeLists.txt sets it on this file alone, so the rest of the tree compiles the same
 // whatever the prefix).

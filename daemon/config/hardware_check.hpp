@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What hardware mode needs before the daemon starts, checked by `weedsprayd --check-config
 // --hardware`: the keys it requires (valve lines, the heartbeat and the E-stop input or their
 // opt-outs, the wheel line when speed comes from pulses) and that every device the configuration

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What a reload (SIGHUP, ReloadConfig) changes in a running daemon. The live keys ([spray],
 // [alarms], pressure.setpoint_mpa, the [daemon] levels) take effect at once, except the
 // safety limits among them (config_schema.hpp, is_safety_limit): those keep their running

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A weed model's description: NAME.json beside NAME.onnx (tools/train/train.py writes it),
 // holding the spec the network must be fed by, the ground scale it learnt at and its licence.
 #pragma once

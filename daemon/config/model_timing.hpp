@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // How long each camera's weed source takes per frame on this machine, for --check-config: a
 // camera and model that need a large network input cost a frame's time many times over, and
 // frames that arrive meanwhile are skipped (ground never looked at), so the user sees the cost

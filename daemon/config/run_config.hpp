@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The configuration a run uses: the files with the command line's overrides. A simulation
 // needs no file (every key has a default) and keeps its records apart from the sprayer's; the
 // board must have its safety wiring (or its opt-out, warned about).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // spray.target_rate_l_per_ha: the dose as a sprayer's operator states it (L/ha), turned into
 // the nozzle flow at the nominal speed that the rate law works in.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Configuration -> the vision library's pipeline for each camera, and the weed model those
 // pipelines are built from (found, read and checked once, when the configuration is loaded).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The weed-density grid: square cells of cell_m on the ground, each the mean weed and crop
 // density of every nozzle patch that fell in it (sprayed or not). Cells are laid out in the
 // local north/east plane of the first point (see map_geometry.hpp), so over a field they stay

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-export-map: the as-applied log -> a map a farm's GIS opens (QGIS: drag the file in);
 // several boards' logs (one --dir each) -> one map of the whole machine.
 // Its own program, not part of sprayctl, because GDAL loads ~200 shared libraries: `sprayctl

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The map export: the as-applied CSV files of one log folder, or of several (one per board of a
 // machine), -> one map's sprayed-stretch and weed-density layers (ogr_map_writer.hpp). Streams:
 // one row in memory at a time, stretches written as they close; only the grid's cell sums are

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/maps/ogr_map_writer.hpp"
 
 #include <gdal_priv.h>

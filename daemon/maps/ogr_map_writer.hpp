@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Writes the map layers with GDAL/OGR, in WGS84 (EPSG:4326, longitude/latitude order):
 //   sprayed       one polygon per nozzle stretch (stretches.hpp)
 //   weed_density  one square per grid cell (density_grid.hpp)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Per-nozzle sprayed stretches from as-applied rows: consecutive records in which one nozzle
 // sprayed become one polygon, the strip its patch swept (nozzle width wide, following the
 // heading through turns). A stretch ends when the nozzle closes, its position is lost, the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The as-applied log: one CSV line per PWM period (time, distance, speed, pressure, flow, the
 // volume sprayed since the previous line, per nozzle duty, weed density and crop density; then
 // where it happened: UTC, the antenna's position and heading, the nozzle width, and per nozzle

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reads the as-applied CSV files back (the soak's reconciliation, a user's scripts): every
 // complete record is counted and its volume summed. A crash or power cut can leave the last
 // line of the newest file torn (cut mid-line: no newline, or fewer fields than the header);

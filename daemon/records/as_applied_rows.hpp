@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reads an as-applied CSV file record by record with every column the map export needs
 // (as_applied_reader.hpp only sums volumes). Columns are found by name in the header, so later
 // additions do not break it. Files written before the map columns existed read fine:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A small state file replaced whole: written to "<file>.tmp", fsync'd, renamed over the old one,
 // so a power cut leaves either the old or the new contents, never half of each.
 #pragma once

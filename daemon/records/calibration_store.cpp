@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/records/calibration_store.hpp"
 
 #include <toml++/toml.h>

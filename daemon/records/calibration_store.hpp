@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The calibrations a user ran from the daemon (sprayctl calibrate meter / nozzles), kept in the
 // state directory as calibration.toml (written atomically) and preferred over the configured
 // values from then on; the configuration stays the fallback:

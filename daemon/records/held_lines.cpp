@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/records/held_lines.hpp"
 
 namespace weedspray::daemon {

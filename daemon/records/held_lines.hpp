@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Formatted as-applied lines that could not be written yet (a full disk, an I/O error), kept in
 // order in memory to be retried, up to a byte bound; a line past the bound is dropped and
 // counted (its seq number is then missing from the file).

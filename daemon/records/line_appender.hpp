@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Appends whole lines to a file: each line goes out in one write(2) on an O_APPEND descriptor,
 // and a write that fails or lands short (ENOSPC, EIO, EFBIG) is cut back off with ftruncate,
 // so the file only ever holds whole lines. Not thread-safe; one writer per file.

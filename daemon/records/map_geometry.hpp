@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Where a record happened on the Earth: the antenna's fix carried forward to the record's time,
 // each nozzle's patch placed from it, UTC text, and a nozzle's rate per hectare. Pure maths
 // (no I/O, clocks or threads), shared by the as-applied writer and the map export.

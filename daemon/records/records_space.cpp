@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/records/records_space.hpp"
 
 #include <sys/statvfs.h>

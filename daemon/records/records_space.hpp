@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The records_disk_full condition, judged by the as-applied writer thread once a second (a
 // statvfs can block on a busy card: never in a real-time loop).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Whether the last run ended in an orderly stop: a marker file in the state folder, written at
 // start and removed by an orderly exit. Left behind by a crash, kill -9, the watchdog or a power
 // cut, it keeps the next start from spraying by itself (daemon.autostart).

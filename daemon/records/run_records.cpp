@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/records/run_records.hpp"
 
 #include <spdlog/spdlog.h>

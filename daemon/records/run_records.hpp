@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The run's records: the totals kept across restarts (<state_dir>/totals.toml), in step with the
 // as-applied log, and the writer thread that drains the control loop's records into that log.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Totals kept across restarts: ground covered, liquid sprayed, and what uniform spraying at the
 // nominal dose would have used. Stored as a small TOML file, written atomically (temp + rename).
 #pragma once

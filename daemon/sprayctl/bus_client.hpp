@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // sprayctl's connection to weedsprayd: property reads, method calls and the signal stream,
 // with each failure turned into a BusError that says whether the daemon refused or is not
 // there.

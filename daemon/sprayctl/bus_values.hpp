@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // sprayctl's reading of weedsprayd's D-Bus values: each property as typed JSON (numbers,
 // booleans, strings; a structure as an object with named fields), the exit statuses, and the
 // error a failed call becomes.

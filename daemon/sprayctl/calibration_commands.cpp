@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The calibrations and commissioning tests sprayctl starts and follows until they end,
 // printing each step.
 #include <chrono>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // sprayctl: a small command-line client of weedsprayd over D-Bus (sd-bus).
 //   sprayctl [--user] [--json] status|monitor|top|start|stop|set-pressure MPA|set-threshold
 //   VALUE|set-rate L_PER_HA|alarms|clear-alarms|reload|snapshot [--camera N]

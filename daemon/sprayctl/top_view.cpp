@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // `sprayctl top`: a live terminal view of one board.
 #include <unistd.h>
 

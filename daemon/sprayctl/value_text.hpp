@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // How sprayctl shows weedsprayd's values: each property's unit, its text for people (three
 // decimals, structures as sentences) and the timestamp every line of output carries.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What sprayctl prints: the status (text or typed JSON), one monitor event, one frame of the
 // live view, and the calibrations it follows to their end.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The calibrations run from the daemon, step by step on the main thread (no real-time work:
 // the control loop only executes the valve duties this asks for, and counts the meter).
 //   Catch test: every valve open for a set time with the pump holding the set-point, then

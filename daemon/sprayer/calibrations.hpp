@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The daemon's side of the calibrations (main thread): the D-Bus commands, the run
 // (calibration_run.hpp) fed each tick, the results stored in the state directory
 // (records/calibration_store.hpp) and what the loops use from them (LiveParams: the meter's K,

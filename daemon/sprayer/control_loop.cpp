@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The control loop's thread: travel, frames, pressure and the meter in, valve duties out.
 #include <algorithm>
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The emergency stop's reaction and latch. The E-stop input (io/estop_input.hpp) runs
 // on_open() on its edge thread at the circuit's first opening: the latch is set, the valves and
 // the pump are written safe there and then, and the time from the edge to those writes is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Configuration -> the control library's camera geometry.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Which ground speed the rate law uses, and when a GNSS fix counts as lost: pure functions of
 // the latest values (no clock of their own), called by the control loop every cycle and by the
 // main loop's alarm evaluation.

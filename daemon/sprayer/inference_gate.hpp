@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One weed-model inference at a time across the camera workers, served in the order the
 // workers asked (a ticket lock): a camera whose worker asks again at once cannot overtake one
 // that is already waiting, so no camera starves the others.

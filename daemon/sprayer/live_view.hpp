@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The live view (sprayctl snapshot, D-Bus Snapshot). The main thread takes a request (one at a
 // time, and none within half a second of the last answer: at most 2 a second) and asks the
 // camera's thread for its next processed frame through its SnapshotHandoff; once that is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Seconds <-> the loops' nanosecond clock times, for the sprayer's thread bodies.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Commissioning checks of the outputs (sprayctl test valve / pump): CalibrationRun's valve and
 // pump tests. A machine builder runs them once wired, before the first calibration: does this
 // valve open and the meter count, does the pump build the set-point pressure.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The pressure loop's thread: the converters' sample in, control::PressureLoopStep, the pump
 // relay and return-valve DAC out; and the valve thread's watch over it.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Values exchanged between the daemon's threads. All trivially copyable: they travel through
 // io::LatestValue slots and io::SpscQueue rings, never through locks.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One camera's latest frame, class map and zone densities, handed from its camera thread to
 // the main thread only when a live-view snapshot is asked for (sprayctl snapshot). The main
 // thread sizes the buffers before it asks, so the camera thread only copies into them: no

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The running sprayer: the real-time loops and workers, wired to the backends.
 //   ws-valve-pwm  io::ValvePwmDriver executing control::PwmSchedule edges (highest priority)
 //   ws-analog     io::AnalogIoWorker: the pressure ADC reads and return-valve DAC writes

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The control steps' settings from a configuration: the one translation of [pressure], [pwm]
 // and [boom] into control/ structs. The daemon's loops build their steps with it; the lab's
 // closed-loop rig takes the same settings from the default configuration, so an experiment

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sprayer's non-real-time workers: cameras, tank level, GNSS (with the wheel calibration),
 // the yaw-rate sensor.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What each alarm means and what to do about it: one entry per alarm, the single source of the
 // journal's message catalog (`journalctl -x`), the D-Bus AlarmDetails property, `sprayctl
 // status` and docs/alarms.md.

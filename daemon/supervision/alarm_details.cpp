@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/supervision/alarm_details.hpp"
 
 #include <spdlog/fmt/fmt.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What one occurrence of an alarm measured, for its log entry (the catalog,
 // alarm_catalog.cpp, holds what each alarm means and what to do), and how raised and cleared
 // alarms are reported: the journal entry and the D-Bus signal.

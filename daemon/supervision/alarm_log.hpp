@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // How a raised or cleared alarm reaches the log: in the journal as one entry with the alarm's
 // catalog MESSAGE_ID (journalctl -x prints its meaning and remedy) and its name and severity
 // as fields; on a console as one line through spdlog, the remedy appended.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The alarms judged each tick (main thread): the inputs gathered from the loops, the outputs,
 // the exit watcher, the GNSS fix and the records; raised and cleared alarms reported; a fault
 // puts the sprayer in Fault and stops the heartbeat; the lamp and buzzer show them.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Alarm evaluation as pure logic: inputs (the latest measurements and counters) in, latched
 // alarms out. Each alarm stays latched until ClearAlarms; a fault-class alarm puts the sprayer
 // in Fault (valves closed, pump off). The caller signals, logs and drives buzzer/LED.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The safe writers outside this process (hardware mode): armed before any output line is
 // requested (the output manifest they read, and the exit watcher), then kept running each tick
 // (supervision/exit_watcher.hpp). A simulation has neither.

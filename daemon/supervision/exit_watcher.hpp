@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Starts the exit watcher (weedspray-safe-outputs --when-closed, see
 // backends/safe_outputs_watch.hpp) beside this program: a separate process that writes every
 // output safe within milliseconds of this one ending, however it ends.

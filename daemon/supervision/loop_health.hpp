@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // How the real-time loops keep time, watched from the main thread: the vision latency window,
 // the deadline misses while spraying, the stalls the loops' cross-watch acted on, the systemd
 // watchdog (fed only while the loops make progress), the CPU wake-up latency request, and the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // How late each real-time loop of the Sprayer runs: the histograms the loops record into, and
 // the timing report (log line, JSON) that `weedsprayd --timing-report` and
 // tools/rt-timing.sh print. Misses are lateness beyond alarms.timing_tolerance_ms, the figure

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sprayer's operating state (main thread): the state machine, the pressure set-point, the
 // rate law's decision threshold and nominal flow, the calibrations, and the live parameters they
 // make for the loops, published on every change (the status follows at once through `published`).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/supervision/output_checks.hpp"
 
 #include <spdlog/spdlog.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The outputs watched from the main thread: the failed writes of every thread (the
 // output_write_failed alarm), the safe writes retried while in Fault, the alarm lamp and
 // buzzer, and at exit whether every output took its safe value.

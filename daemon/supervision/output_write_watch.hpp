@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Turns the outputs' write-failure counters into the `output_write_failed` alarm's condition and
 // a message naming each failing output. The counters come from the threads that write (valve
 // PWM, pressure loop, analog I/O worker) and from the main thread's own writes (buzzer, LED,

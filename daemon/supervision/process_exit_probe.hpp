@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Sees a process begin to die before the kernel has torn it down. The kernel's do_exit() sets
 // PF_EXITING in the task's flags (field 9 of /proc/PID/stat) first thing, before it frees the
 // process's memory (exit_mm: slow for a large mlock'd daemon, hundreds of ms on a slow or

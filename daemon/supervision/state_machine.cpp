@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/supervision/state_machine.hpp"
 
 namespace weedspray::daemon {

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The sprayer's operating state, as pure logic (no threads, no I/O):
 //   Starting -> Idle (sensors live, valves closed, pump off) <-> Spraying
 //   any -> Fault (latched, safe) -> Idle only when the alarms are cleared.

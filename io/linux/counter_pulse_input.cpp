@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "io/linux/counter_pulse_input.hpp"
 
 #include <fcntl.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A PulseInput on the kernel's Counter subsystem, for pulse rates up to tens of kHz without
 // loss: the kernel counts every edge itself and this class only reads the running total.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "io/linux/cpu_latency_qos.hpp"
 
 #include <fcntl.h>

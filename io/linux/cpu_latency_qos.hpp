@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A CPU wake-up latency request through the kernel's PM QoS interface (/dev/cpu_dma_latency):
 // while the file stays open with a 32-bit value written to it, the cpuidle governor keeps every
 // CPU out of idle states whose exit latency exceeds that many microseconds. A real-time loop

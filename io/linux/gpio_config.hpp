@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // How GPIO lines are named in the configuration: by chip + offset, or by line name.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A debounced DigitalInput (the start/stop key) on libgpiod 1.6 edge events, read by its own
 // thread (ThreadRole::kDigitalInput).
 #pragma once

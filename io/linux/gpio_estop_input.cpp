@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "io/linux/gpio_estop_input.hpp"
 
 #include <gpiod.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The emergency-stop circuit on a GPIO line: libgpiod 1.6 edge events read by its own thread
 // (ThreadRole::kEstop, above every other real-time thread), which runs the reaction on the
 // first opening edge. A failed read counts as an opening: the input is monitored, and one

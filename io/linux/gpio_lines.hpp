@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal helpers shared by the libgpiod backends: find a chip and a line from the
 // configuration with errors that name what was looked for.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "io/linux/gpio_output_bank.hpp"
 
 #include <linux/gpio.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A DigitalOutputBank on libgpiod 1.6: all lines requested together as one gpiod::line_bulk,
 // with the request's default values = the safe values so no valve glitches open at start-up;
 // write() sets every line with one set_values() call.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A PulseInput on libgpiod 1.6 edge events: a SCHED_FIFO thread (ThreadRole::kPulseInput)
 // reads events in bulk from the line's event fd (gpiod_line_event_read_fd_multiple into a fixed
 // array: no allocation) and publishes {count, last edge kernel timestamp, errors} wait-free.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // GNSS through gpsd (Debian's libgps): the daemon is a gpsd client, so any receiver gpsd
 // supports works. Blocking (it waits on a socket): only on a worker thread, never on an RT one.
 // When gpsd is not there or goes away, next_fix() reconnects with a doubling backoff.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "io/linux/iio_analog.hpp"
 
 #include <fcntl.h>

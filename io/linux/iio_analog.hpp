@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // ADC and DAC through the kernel's IIO sysfs interface (e.g. ADS1115 and MCP4725 on a Pi):
 // /sys/bus/iio/devices/iio:deviceN/in_voltageX_raw (+ _scale), out_voltageX_raw (+ _scale).
 // Files are opened once at construction; run-time reads/writes are pread/pwrite on open fds.

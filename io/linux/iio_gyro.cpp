@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "io/linux/iio_gyro.hpp"
 
 #include <fcntl.h>

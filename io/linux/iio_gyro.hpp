@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // An IMU's gyro through the kernel's IIO sysfs interface (e.g. MPU-6050 with inv_mpu6050,
 // LSM6DS3 with st_lsm6dsx, BMI160 on a Pi's I2C/SPI): in_anglvel_<axis>_raw, scaled by
 // in_anglvel_<axis>_scale or in_anglvel_scale (rad/s per count), plus in_anglvel_<axis>_offset

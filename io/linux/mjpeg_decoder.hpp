@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 // One MJPEG frame (a whole JPEG image) decoded to BGR24 of the negotiated capture size with
 // libjpeg-turbo's TurboJPEG API. The header is read first and a frame of any other size is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Analog I/O through Modbus RTU analog modules (the alternative to IIO ADC/DAC chips): one
 // register per channel, volts = raw * volts_per_count. Each read/write is one blocking Modbus
 // transaction bounded by the response timeout (about 10 ms at 9600 baud, 1-2 ms at 115200):

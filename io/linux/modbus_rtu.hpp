@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Internal helper shared by the libmodbus backends: one RTU master context from serial
 // settings, validated, with errors that name the device and setting.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "io/linux/modbus_tank_level.hpp"
 
 #include <modbus/modbus.h>

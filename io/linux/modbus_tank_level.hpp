@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The tank level sensor over Modbus RTU (libmodbus 3.1). Blocking reads with a response
 // timeout: only on a worker thread (ThreadRole::kModbus), never on an RT thread.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The hardware clock: CLOCK_MONOTONIC, sleeping with clock_nanosleep(TIMER_ABSTIME) so
 // deadlines are absolute and never drift.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // First line of a sysfs (or any text) attribute, shared by the backends that find their device
 // by its sysfs `name` (IIO ADCs, the counter subsystem).
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A Camera on V4L2 through libv4l2 (v4l2_open / v4l2_ioctl / v4l2_mmap): configurable size,
 // rate and pixel format (YUYV, MJPEG decoded with libjpeg-turbo, RGB24, GREY), mmap streaming, the
 // driver's buffer timestamp carried with each frame, exposure / white-balance controls, and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The ground as a camera of another scale would see it: photos of known ground resolution
 // resampled to the camera's and laid edge to edge, row by row, to fill its frame.
 #pragma once

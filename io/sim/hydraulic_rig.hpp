@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulated machine: owns a weedspray::sim::plant::HydraulicPlant and steps it up to the
 // injected clock's time whenever any simulated device touches it (so it follows a ManualClock as
 // fast as the loops run, or a PacedClock in real time). The device adapters below expose it through

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Reads a field image file (PNG through libpng, JPEG through libjpeg-turbo) into an 8-bit BGR
 // matrix, the order the vision library takes. The simulated camera's only decoder: it keeps
 // OpenCV's imgcodecs, and the ~140 libraries it maps (GDAL among them), out of weedsprayd.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Simulated time that advances when slept on, so closed loops run as fast as the CPU allows.
 // Thread-safe (atomic), but meant for one loop thread or for tests that advance it by hand.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A simulated start/stop key: set by a test or a simulated operator, read like the debounced
 // hardware input.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A simulated emergency-stop circuit, opened and closed by a test or a simulated operator. An
 // opening runs the reaction at once on the thread that opens it, stamped with the clock's time,
 // as the hardware backend's edge thread runs it at the edge. Closing counts at once (no

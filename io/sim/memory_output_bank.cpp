@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "io/sim/memory_output_bank.hpp"
 
 #include <mutex>

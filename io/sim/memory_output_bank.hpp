@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // An output bank that only remembers: the current mask, every write (time from the injected
 // clock), and force_safe() calls. For tests and for outputs that have no plant counterpart
 // (buzzer, LED). History is bounded by a capacity reserved at construction.

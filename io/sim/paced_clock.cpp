@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "io/sim/paced_clock.hpp"
 
 #include <time.h>

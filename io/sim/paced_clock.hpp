@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Simulated time paced by CLOCK_MONOTONIC: sim time = start + speed * elapsed real time.
 // speed 1 runs in real time (weedsprayd --sim), speed 10 ten times faster; several threads can
 // sleep on it at once, as on the real clock.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A mutex with the priority-inheritance protocol, for simulated devices shared between the
 // SCHED_FIFO loops and normal-priority threads (the daemon's main thread drives the simulated
 // world and injects faults through the same lock). With a plain std::mutex, a SCHED_FIFO loop

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A Camera replaying recorded field images (a directory of PNG or JPEG files, or one file; read
 // by io/sim/image_file.hpp). Frames are paced so consecutive images tile the
 // ground: one frame per `footprint_length_m` travelled at the current ground speed (or at a

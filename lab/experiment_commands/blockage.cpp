@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // experiment blockage: per-nozzle health from the one line meter over drawn machines, one
 // nozzle partly blocked after a healthy stretch: how soon it is named, how often a healthy one.
 #include <string>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // experiment calibrate: the flow meter's catch test, then each nozzle's line q = A s + b
 // alone on the one meter; --plants: over drawn machines as made.
 #include <string>

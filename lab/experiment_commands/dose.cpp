@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // experiment dose: the wheat paper's dose check, nozzle 1's delivered flow against the law's
 // at each weed density; --plants: over drawn machines, calibrated as made, then changed.
 #include "lab/experiment_commands/experiment_command.hpp"

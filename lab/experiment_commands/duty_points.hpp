@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One nozzle at one duty over a spray run (linearity, orthogonal): asked for against
 // delivered, as a table row.
 #pragma once

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // One weedspray-lab experiment subcommand per source file in this folder: each runs its
 // experiment (lab/experiments/) and reports it through a Report (lab/report/report.hpp);
 // lab/experiment_commands/register.cpp names them and parses the options.

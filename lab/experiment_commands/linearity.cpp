@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // experiment linearity: nozzle 1 swept 10-100 % while the others stay open, volume asked for
 // against delivered; --plants: over drawn machines, calibrated as made, then changed.
 #include "lab/experiment_commands/duty_points.hpp"

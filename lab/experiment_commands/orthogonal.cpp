@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // experiment orthogonal: the L16 orthogonal test, four nozzles at mixed duties per run;
 // --plants: over drawn machines, calibrated as made, then changed (--change-parts).
 #include <string>

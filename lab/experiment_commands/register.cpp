@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-lab experiment NAME [--json] [--plot OUT.png] [--raw] [--seed N] [--tune]
 // Reruns the papers' experiments on the simulated machine (lab/experiments/); each NAME's
 // command is its own file in this folder.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // experiment ripple: line pressure ripple with the nozzles' PWM in phase against staggered
 // (UGV Fig. 8); --plants: over drawn machines, at the manifold and along the boom.
 #include <vector>

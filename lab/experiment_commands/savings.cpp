@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // experiment savings: liquid saved by variable-rate spraying at equal coverage on a field laid
 // out from labelled crop/weed photos; --plants: over drawn machines as made.
 #include <cstdlib>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Figures over drawn machines (--plants): rows of named spreads. Text: a heading row (what,
 // mean, sd, worst), "-- " lines before sections, then per spread its label and mean, sd and
 // worst in the row's format. JSON: {"mean": ..., "sd": ..., "worst": ..., "n": N} per named

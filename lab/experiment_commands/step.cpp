@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // experiment step: start-up 0 -> 0.2 MPa, conventional PID against fuzzy PID (UGV Fig. 7);
 // --plants: over drawn machines at several set-points with the fair search's gains.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A nozzle blocked while spraying, found from the line flow meter.
 #include <algorithm>
 #include <cmath>

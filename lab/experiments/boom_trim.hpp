@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Boom trim as a model: the line flow meter against what the calibrated lines promise. LAB ONLY
 // (`weedspray-lab experiment orthogonal --plants N`, row "model"): the daemon's FlowTrim
 // (flow_feedback.hpp) is the gain term of this model alone, 1 / (metered over promised). Both

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The two calibrations on the simulated machine: the flow meter's pulses per litre from a catch
 // test, and each nozzle's line q = A s + b from runs of that nozzle alone measured with the
 // ONE line flow meter (the way a user does it on the real boom).

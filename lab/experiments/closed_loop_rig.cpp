@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lab/experiments/closed_loop_rig.hpp"
 #include "lab/experiments/vocabulary.hpp"
 

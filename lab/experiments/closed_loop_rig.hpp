@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulated machine the experiments run on: the hydraulic plant with the daemon's control
 // steps around it, in simulated time (like a vehicle's code under SITL, the steps do not know).
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The papers' experiments, rerun on the simulated machine (closed_loop_rig.hpp). Each returns
 // a plain result struct with its time series / points, for tables, JSON, plots and tests.
 // Volumes are judged against the plant's TRUE delivered volume, never the simulated meter.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Fair tuning of the pressure controllers: ONE search, the same budget and the same
 // bounds for the conventional PID and the fuzzy PID, on a training set of machines and
 // operating points, judged on other machines.

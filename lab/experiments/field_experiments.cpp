@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The wheat paper's field-side checks: delivered vs theoretical flow over weed densities
 // (dose), and liquid saved by variable vs uniform spraying over a field (savings).
 // Both use the spray-rate law of control/spray_rate_law.hpp on a machine calibrated at the

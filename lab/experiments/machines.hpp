@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Machine variation for the --plants experiments: N sprayers drawn from documented spreads
 // around realistic_plant_params(), and the change each one goes through between its calibration
 // and the test (wear, a partial blockage, valve ageing, meter drift, supply voltage and ground

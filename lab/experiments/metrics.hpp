@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Figures of merit the experiments report: step-response metrics and line fits.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "lab/experiments/phase_window_fit.hpp"
 
 #include "control/small_linear_system.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What the ONE line flow meter tells about each nozzle's flow in one fixed-duty run:
 // a lab diagnostic, not a controller.
 //

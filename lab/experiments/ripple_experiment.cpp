@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Line-pressure ripple with 4 nozzles at 50 % duty: synchronous vs staggered PWM (UGV Fig. 8).
 #include <vector>
 

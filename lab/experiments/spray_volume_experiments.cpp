@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Spray-volume accuracy: single-nozzle linearity (UGV Fig. 9) and the L16 orthogonal test
 // (UGV Table 5 / Fig. 10), with the fixes or on the raw machine.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Start-up step 0 -> set-point with the conventional PID and the fuzzy PID (UGV Fig. 7), and
 // the documented tuning search behind the default gains.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #pragma once
 
 // The experiments run the daemon's control code on the plant model: both are named unqualified

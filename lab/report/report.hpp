@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The lab's table-driven reporter: a table of named fields (each with its heading, width and
 // printf formats) prints both the human text and the --json object, so a report is a table of
 // fields rather than hand-written printf lines. Numbers carry their own printf format in each

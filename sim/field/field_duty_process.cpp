@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "sim/field/field_duty_process.hpp"
 
 #include <algorithm>

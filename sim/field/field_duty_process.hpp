@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What a boom is asked to spray in a field, second by second: each nozzle's share of its
 // full-open flow as a weed-density driven rate law would ask for it. Unlike redrawing every
 // duty independently each second, a field's demand is

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Hydraulic plant model of the sprayer: what the papers' test benches are made of, simulated.
 //
 //   tank -> filter -> 24 V diaphragm pump -+-> proportional return valve -> tank

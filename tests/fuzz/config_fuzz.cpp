@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The configuration loader on arbitrary TOML text: every input is either a Config or a
 // ConfigError naming what is wrong. Anything else - another exception, a crash, a sanitizer
 // report - is a bug. A second document exercises the drop-in merge.

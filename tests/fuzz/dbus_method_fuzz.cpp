@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: arbitrary D-Bus method calls on the daemon's dispatch
 // (handle_method_call): any member name, argument signature and values, with a handler that
 // does what the daemon's does with the strings it gets (parse_sim_fault on InjectSimFault's

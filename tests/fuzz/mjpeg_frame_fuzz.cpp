@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // An MJPEG frame as the V4L2 camera decodes it (io::hw::MjpegDecoder, libjpeg-turbo) followed
 // by the vision pipeline on whatever decodes: a malformed frame must be refused without
 // crashing or allocating what its header claims. It replaced a target on cv::imdecode, which

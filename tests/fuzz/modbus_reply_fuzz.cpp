@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // libFuzzer target: arbitrary bytes as the reply on the serial line to the daemon's Modbus
 // readers (the tank level sensor and the analog converter module), through a pty and
 // libmodbus exactly as on an RS-485 adapter. A reply must never crash a reader, hang it past

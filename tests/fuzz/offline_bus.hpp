@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A D-Bus connection with no peer (one end of a socketpair), enough for sd-bus to build and
 // seal method-call messages that handle_method_call() then reads: the unit tests and the
 // D-Bus fuzz target call the daemon's method dispatch without a bus daemon.

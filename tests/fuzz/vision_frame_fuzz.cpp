@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The vision pipeline on arbitrary frames: the first bytes choose the size, stride, grid,
 // region of interest and weed source (vegetation, inter_row); the rest is pixel data. process()
 // must never crash, read outside the view or produce densities outside [0, 1].

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The bash completions (tools/completion) in a fresh non-interactive bash: fixed cases, and
 # every option and subcommand that `sprayctl --help` and `weedsprayd --help` list (to any
 # depth) is offered where it may be typed. Run without the bash-completion package's helpers,

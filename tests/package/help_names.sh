@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Every long option and subcommand that PROGRAM --help lists (and, for each subcommand,
 # PROGRAM SUBCOMMAND... --help, to any depth), one a line after its subcommand path:
 # `calibrate meter --seconds` is an option, `calibrate meter` a subcommand.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Builds the .debs (tools/build-deb.sh: weedspray and the packages beside it, weedspray-maps,
 # -fleet, -lab) and runs Debian's lintian on each: any error (E:), or lintian itself failing,
 # fails the test. Warnings are printed, not failed on.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Every key that `weedsprayd --print-default-config` writes appears in the man page
 # weedspray.toml(5), under the same [section] heading.
 #   man_config_keys_test.sh WEEDSPRAYD MANPAGE

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Every long option and subcommand that PROGRAM --help lists (and, for each subcommand,
 # PROGRAM SUBCOMMAND... --help, to any depth) appears in the man page MANPAGE as rendered by man.
 #   man_options_test.sh PROGRAM MANPAGE

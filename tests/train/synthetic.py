@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Synthetic field photos for the tools/train tests: brown soil, large light-green crop discs,
 small dark-green weed blobs, sensor noise; masks 0 soil, 1 crop, 2 weed."""
 

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tools/train/labels.py and import_labels.py: every export format to class-id masks."""
 
 import base64

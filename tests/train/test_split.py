@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tools/train/split.py: near-duplicate photos stay on one side of the split."""
 
 import contextlib

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tools/train/train.py and train_base.py end to end on a few tiny synthetic photos (seconds)."""
 
 import contextlib

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """tools/train's loss, class weights, sampling, metrics, zones and data-set table."""
 
 import unittest

@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: Apache-2.0
 # Runs inside the systemd guest as the oneshot weedspray-vm-test.service (root), after
 # multi-user.target: the weedspray .deb is installed, udev and the system bus run.
 #

@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: Apache-2.0
 # Hardware in the loop, run in the systemd guest after guest-test.sh (same unit, as
 # root). weedspray-hil plays the sprayer behind the wires (tools/hil): it samples the valve,
 # pump, buzzer, lamp and heartbeat lines of the gpio-sim chip guest-test.sh made, pulses the

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Runs an arm64 program inside an arm64 root directory on an x86-64 host, without binfmt_misc.
 
     run-arm64-in-root.py ROOT PROGRAM [ARG...]

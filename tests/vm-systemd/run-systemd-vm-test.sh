@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Boots a Debian 12 systemd guest in QEMU (Debian's kernel, TCG) with weedspray installed from
 # its own .deb, and checks the shipped weedsprayd.service in hardware mode against real kernel
 # drivers: gpio-sim, interrupt-cnt, vivid and the IIO dummy (ADC + DAC). See README.md.

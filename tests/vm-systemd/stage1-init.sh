@@ -1,4 +1,5 @@
 #!/bin/busybox sh
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck shell=dash
 # Stage-1 PID 1 of the systemd guest (run-systemd-vm-test.sh packs it as /init with busybox and
 # the modules in /modules.load): loads the virtio disk and ext4 drivers Debian builds as

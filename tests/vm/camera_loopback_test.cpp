@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The V4L2 camera (io::hw::V4l2Camera) reading frames a writer puts into the kernel's
 // v4l2loopback device (/dev/video20, guest-init.sh): the path the systemd guest uses to show the
 // daemon real field images. The writer is this test: YUYV 320x180, left half a plant's green,

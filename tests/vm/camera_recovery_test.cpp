@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The V4L2 camera (io::hw::V4l2Camera) losing its device while streaming and getting it back:
 // vivid is "unplugged" with its Disconnect control (see vivid_fixture.hpp) and plugged back.
 #include <gmock/gmock.h>

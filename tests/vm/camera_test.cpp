@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The V4L2 camera (io::hw::V4l2Camera) streaming from the kernel's vivid virtual camera.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

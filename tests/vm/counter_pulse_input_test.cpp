@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The flow meter at high pulse rates: the kernel's interrupt-cnt (Counter subsystem) counts the
 // rising edges of gpio-sim line flow_fast in its hard interrupt handler, and
 // io::hw::CounterPulseInput reads the total from sysfs. Pulses come as fast as sysfs allows

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The fatal-exit path on real kernel lines (gpio-sim): the bank's emergency write is a
 // GPIOHANDLE_SET_LINE_VALUES ioctl on the line handle libgpiod holds, made without libgpiod.
 // To see what a dying process wrote before the kernel releases its lines, the TEST process

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck shell=sh
 # Sourced by both guests' setup scripts (tests/vm/guest-init.sh under busybox sh,
 # tests/vm-systemd/guest-test.sh under bash). The caller defines setup_failed MESSAGE.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "tests/vm/gpio_sim_chip.hpp"
 
 #include <fcntl.h>

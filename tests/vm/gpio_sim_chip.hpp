@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test-side access to a gpio-sim chip made by guest-init.sh: finds its device and gpiochip
 // through configfs (never assumes gpiochipN numbers) and reads/pulls the simulated lines
 // through sysfs, i.e. from outside libgpiod, the way a wired peer would see them.

@@ -1,4 +1,5 @@
 #!/bin/busybox sh
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck shell=dash
 # PID 1 of the test guest (run-vm-tests.sh packs it as /init with busybox, the kernel modules
 # listed in /modules.load and the programs under test in /tests).

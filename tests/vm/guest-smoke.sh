@@ -1,4 +1,5 @@
 #!/bin/sh
+# SPDX-License-Identifier: Apache-2.0
 # Guest program: proves the kernel side with Debian's own tools before the project's classes
 # are tested (an error here points at the harness, not at weedspray's io code).
 #   - a line driven by gpioset shows up in gpio-sim's sim_gpioN/value

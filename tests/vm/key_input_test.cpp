@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The debounced start/stop key (io::hw::GpioDigitalInput) on a gpio-sim line in a real kernel.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

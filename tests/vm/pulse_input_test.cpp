@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The flow/wheel pulse counter (io::hw::GpioPulseInput) on gpio-sim lines in a real kernel:
 // pulses are made from outside libgpiod by switching the simulated pull in sysfs.
 #include <gmock/gmock.h>

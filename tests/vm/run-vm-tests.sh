@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Runs guest test programs inside a QEMU x86-64 (or arm64) guest booted with Debian's own
 # kernel, which gets the kernel's gpio-sim, Counter subsystem and interrupt-cnt (built out of
 # tree here: Debian does not ship them), a test-only fixture binding interrupt-cnt to a gpio-sim

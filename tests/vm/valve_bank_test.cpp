@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The valve bank (io::hw::GpioOutputBank) driving gpio-sim lines in a real kernel: what the
 // lines physically show is read back through gpio-sim's sysfs, outside libgpiod.
 #include <gmock/gmock.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Test-side access to the vivid camera guest-init.sh sets up: finds its video node and
 // "unplugs" it from outside the camera class, the way a cable pulled in the field looks to it.
 //

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck shell=bash
 # Shared by tests/vm/run-vm-tests.sh and tests/vm-systemd/run-systemd-vm-test.sh (sourced,
 # never run): Debian's own kernel for the QEMU guests, plus the modules Debian does not ship,

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Writes the recorded GNSS track of the gpsd integration test: NMEA 0183 sentences (RMC, GGA,
 GSA each second, GSV every 4 s) that gpsfake feeds to a real gpsd, and a CSV of the same epochs (UTC
 time, latitude, longitude, altitude, speed, course) that the test compares the reader's fixes

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Writes the turn-compensation test's track: NMEA 0183 at 5 Hz (RMC, GGA, GSA each epoch) for
 gpsfake to feed a real gpsd in real time (3 sentences an epoch at `gpsfake -c 0.0667`). The
 vehicle drives north at 2 m/s, turns 90 degrees right on an exact 12 m circle (the positions lie

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The simulated sprayer on a simulated field in WGS84: a real gpsd fed by gpsfake plays the
 # project's 5 Hz turn track (tests/data/gnss/turn_track.nmea: 16 m north, a 90-degree right turn
 # on a 12 m circle, 16 m east, a stop at the headland) over and over in real time, and

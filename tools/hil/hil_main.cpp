@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-hil: the sprayer on the far side of the wires, for the hardware-in-the-loop scenario
 // of the systemd guest (tests/vm-systemd/hil-scenario.sh). It runs the hydraulic plant model
 // (sim/plant) in real time against the installed daemon, through kernel interfaces only:

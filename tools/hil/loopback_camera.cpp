@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "tools/hil/loopback_camera.hpp"
 
 #include <fcntl.h>

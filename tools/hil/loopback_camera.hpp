@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The camera's far side: frames written into the kernel's v4l2loopback device, whose capture
 // side the daemon opens as its V4L2 camera. The frames are files of raw YUYV (weedspray-lab
 // hil-frames: tiles of the bundled field photos); a writer thread shows the current one at a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "tools/hil/modbus_slaves.hpp"
 
 #include <fcntl.h>

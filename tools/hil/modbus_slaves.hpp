@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Modbus RTU modules of the simulated board, as libmodbus slaves on the master side of a
 // pty pair: the daemon opens the pty's slave side (a symlink such as /run/weedspray-hil/analog)
 // as its serial port, exactly as it opens an RS-485 adapter.

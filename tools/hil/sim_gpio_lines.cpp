@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "tools/hil/sim_gpio_lines.hpp"
 
 #include <fcntl.h>

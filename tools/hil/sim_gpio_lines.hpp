@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The gpio-sim side of the board's lines, through sysfs (/sys/devices/platform/DEV/CHIP):
 // `sim_gpioN/value` is what the consumer drives (or the pull when no one drives the line),
 // `sim_gpioN/pull` makes the edges an input sees. Descriptors are opened once; each read or

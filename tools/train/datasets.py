@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The shared data sets' table (datasets.json) and what is read from it.
 
 - training_data_entry: the {images, count, licence, attribution} record of a training folder,

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Evaluates a segmentation ONNX model through OpenCV DNN on a list of images + class-id masks.
 
 Masks hold one class id per pixel; 255 marks unlabelled pixels, which no figure counts.

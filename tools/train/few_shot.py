@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """A few-shot cut of a labelled set: --count training photos drawn (seeded) from --pool, none of
 them a near-duplicate (split.py's test) of a photo in --val-list, so that the validation photos
 show plants the model never saw. Measures how a field's own model does from a few photos:

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Converts labels from an annotation tool into the class-id masks train.py reads.
 
 Reads a CVAT "Segmentation mask 1.1" export (folder or .zip), a folder of palette/grey PNG masks,

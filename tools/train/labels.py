@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Label import: annotation tools' exports to the class-id masks train.py reads.
 
 A mask is an 8-bit single-channel PNG named like its photo (STEM.png for STEM.jpg), one class

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The training loss and its class weights.
 
 Loss: class-weighted cross-entropy + soft Dice (mean over classes), both over labelled pixels

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Makes tests/data/tiny-3class.onnx: a few-hundred-byte 3-class segmentation net for C++ tests.
 
 Not trained: the weights are set by hand so that its answer is known. Class k's logit is the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The crop/weed/soil segmentation network: MobileNetV2 (width 0.5) encoder, light U-Net decoder.
 
 Encoder: torchvision mobilenet_v2(weights=None, width_mult=0.5).features[0:18] (down to /32,

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """ONNX export that OpenCV 4.6 DNN loads, and a check of the file against torch.
 
 OpenCV 4.6 pitfalls handled here (see ../shared/notes/dnn.md):

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """What train.py leaves for a person to judge and use: overlay pictures and the install.
 
 Overlays (OUT/NAME-report/NN-STEM.png, the worst validation images first, ranked by the mean of

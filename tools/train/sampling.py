@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Training samples: photos resampled to the network's ground scale, random crops around it.
 
 Each training photo is kept once in memory (ScaledPhoto) at CACHE_FACTOR times the target

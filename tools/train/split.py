@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Seeded train/validation split of a folder of photos that keeps near-duplicates on one side.
 
 Two photos are near-duplicates when

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Trains a small crop/weed/soil segmentation network on CPU and exports it for OpenCV 4.6 DNN.
 
 Made for a field's own model from 25-40 labelled photos on a 2-core CPU in under 30 minutes:

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Trains the plant/soil base network on all shared photo sets, for train.py --base.
 
 A field's own model learns from 25-40 photos; starting from a network that already tells

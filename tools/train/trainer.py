@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """The optimisation loop train.py and train_base.py share, and a quick torch-side IoU.
 
 AdamW (weight decay 1e-4) with a linear warm-up over the first 1/30 of the steps and a cosine

@@ -1,4 +1,5 @@
 #!/bin/bash
+# SPDX-License-Identifier: Apache-2.0
 # The alarm catalog: the committed journal catalog and docs/alarms.md are what weedsprayd
 # prints, and journald's own tool indexes the catalog with one entry per alarm.
 # Usage: alarm_catalog_test.sh WEEDSPRAYD SOURCE_DIR

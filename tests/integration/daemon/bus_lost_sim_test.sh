@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The control link lost while spraying: the simulated sprayer sprays on a private bus, the bus
 # daemon is killed, and weedsprayd stops by itself (valves closed, pump off) and exits with a
 # failure status for systemd to restart it Idle. Without the disconnect watch it sprays on.

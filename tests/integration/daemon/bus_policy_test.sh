@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The D-Bus policy file on a private bus that loads it (like the system bus does), its three
 # permissions: anyone (here: nobody, in no group) may read properties and introspect, but every
 # method call is denied; an operator (group weedspray) may start, stop, set the pressure, the

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The line monitors during a calibration: weedsprayd --sim (3 nozzles) on a private bus runs a
 # catch test (every valve open, the pump on in Idle); the pump's filter blocks: no_flow is
 # raised as it is while spraying, the sprayer goes to Fault, the catch test is cancelled, its

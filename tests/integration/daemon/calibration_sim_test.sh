@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Calibrations from the daemon: weedsprayd --sim (3 nozzles, nozzle 1 30 % blocked) on a private
 # bus, driven with sprayctl and busctl:
 #  1. refused while spraying; a catch test (sprayctl calibrate meter --seconds 2), refused

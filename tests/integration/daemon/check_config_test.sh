@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # weedsprayd --check-config refuses trip limits that would let a fault pass (a cut sensor wire
 # read as a pressure, an over-pressure trip beyond the sensor's full scale), naming
 # file:line: key, as the daemon does at start, and a hardware configuration without a heartbeat

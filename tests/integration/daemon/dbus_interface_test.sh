@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The shipped interface description (systemd/org.weedspray.Sprayer1.xml, installed under
 # /usr/share/dbus-1/interfaces for code generators and D-Bus browsers) is what weedsprayd
 # serves: its org.weedspray.Sprayer1 element equals the daemon's own introspection on a

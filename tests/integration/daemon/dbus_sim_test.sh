@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # weedsprayd --sim on a PRIVATE session bus, driven with busctl and sprayctl:
 # properties, Start -> pressure at set-point and duties following densities, a refused bad
 # set-point, a refused broken reload (old config keeps running), a reloaded trip limit kept until

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The emergency stop end to end: weedsprayd --sim (3 nozzles, 1 m/s) on a private bus sprays;
 # its simulated E-stop circuit opens (InjectSimFault estop_open): the Fault `estop` is raised,
 # the Estop property reports the latch and the time from the edge to valves and pump written

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The online flow trim and calibration_drift: weedsprayd --sim (3 nozzles at 1 m/s; [alarms]
 # calibration_drift_hold_s = 5) on a private bus:
 #  1. Idle, before any spraying: FlowTrim 1, MeteredOverCalibrated 0 (not yet known);

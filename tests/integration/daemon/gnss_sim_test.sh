@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # weedsprayd --sim with [gnss] on a real gpsd fed the project's recorded track by gpsfake
 # (tests/data/gnss, tools/gnss/make_track.py), speed.source = "gnss", on a PRIVATE session bus:
 #  1. GnssFix 3d, Position on the track, SpeedSource gnss and the rate law's Speed the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck shell=bash
 # Sourced (after private_bus_lib.sh) by the daemon's GNSS test scripts: a real gpsd fed an NMEA
 # track by gpsfake, on a free port, in a process group of its own (gpsd goes with it), stopped

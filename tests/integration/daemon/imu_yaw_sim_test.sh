@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Turn compensation from an IIO gyro: weedsprayd --sim (8 nozzles, 4 m boom, 2 m/s, no GNSS) with
 # turn.yaw_source = "imu" on a fake IIO sysfs tree shaped as inv_mpu6050 shows an MPU-6050:
 #  1. the gyro's z axis reads a right turn at 9.55 deg/s (2 m/s on a 12 m radius): YawRate

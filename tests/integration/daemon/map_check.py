@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: Apache-2.0
 """Checks a map exported by weedspray-export-map (as GeoJSON: gnss_sim_test.sh converts the
 GeoPackage and Shapefile exports with ogr2ogr) against the as-applied log it came from and the
 NMEA track the daemon drove:

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Nozzle health while spraying: weedsprayd --sim (4 nozzles, [nozzle_health] on, a 20 s
 # baseline) on a private bus:
 #  1. healthy: the baseline is learned while spraying and no nozzle_flow_fault is raised;

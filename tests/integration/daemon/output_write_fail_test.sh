@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Checked output writes, end to end in weedsprayd --sim (no bus, autostart):
 #  1. the pump relay refuses writes, then a sensor fault asks for the pump off: the pressure
 #     loop's refused safe write raises output_write_failed naming the pump relay; it keeps

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 """Writes an 8-bit RGB PNG with the standard library only (zlib): the simulated camera's test
 fields. pixel(x, y) -> (r, g, b), y from the top."""
 import struct

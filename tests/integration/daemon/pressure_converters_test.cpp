@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The daemon's pressure converters chosen by configuration ([adc]/[dac] source = "modbus") and
 // driven by the converters' thread (io::AnalogIoWorker), against an independent Modbus RTU peer
 // (Debian's pymodbus over a socat pty pair).

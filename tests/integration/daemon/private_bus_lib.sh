@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck shell=bash
 # Sourced by the daemon's D-Bus test scripts: a scratch folder $T, removed at exit together with
 # the daemon and the bus the script started ($DAEMON_PID, $BUS_PID) and whatever the script

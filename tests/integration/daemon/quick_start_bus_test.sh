@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The quick start as a newcomer runs it on a fresh machine as root (no session bus): the
 # simulated daemon under tools/with-session-bus.sh (what `./dev sim` runs) prints one line, once
 # the sprayer answers (after its start-up lines);

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # A full disk under the as-applied log while the simulated sprayer sprays: the warning
 # records_disk_full is raised and shown in the status, spraying goes on, no line is torn; once
 # space returns the lines held in memory are written in order (seq continuous) and the alarm

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # A reload reads the files and probes the model on a thread of its own: the simulated sprayer
 # sprays on a private bus while a reload is made to take 3 s (WEEDSPRAY_TEST_RELOAD_DELAY_MS);
 # meanwhile its properties keep answering within 1 s and keep moving (the main loop runs), and

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # weedspray-safe-outputs, the unit's ExecStopPost: it loads none of OpenCV (so it starts in
 # milliseconds), it still writes the outputs when the weed model is missing or broken (a vision
 # problem must never keep the valves open), and its errors name the file, line and key, or the

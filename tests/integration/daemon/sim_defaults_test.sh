@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # weedsprayd --sim as a newcomer runs it: no configuration file -> the built-in defaults (said
 # so); its records go to the user's sim state folder, never daemon.state_dir (the sprayer's);
 # a second run starts from zero unless --resume. Hardware mode without its file stays an error.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The live view end to end: weedsprayd --sim on a PRIVATE session bus, its camera replaying a
 # synthetic 320x200 field (soil, one green block); `sprayctl snapshot OUT.png` writes the PNG,
 # which is decoded here (size = the camera's frame, weed red on the block, zone grid yellow,

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # sprayctl's command line and exit statuses (sprayctl(1) EXIT STATUS): --version names the
 # project's version; a bare call and usage errors print usage and exit 2, without a bus; with
 # no session bus, and on a PRIVATE session bus without weedsprayd, it says weedsprayd is not

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Totals reconciled from the as-applied log at start: the simulated sprayer sprays and is
 # killed with SIGKILL before it saves its totals again (every 60 s); the next start adds the
 # volume its log holds after the saved totals, so the totals equal the log's sum.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Turn compensation and the GNSS wheel calibration, end to end: weedsprayd --sim with an
 # 8-nozzle, 4 m boom on a real gpsd fed by gpsfake with the 5 Hz turn track
 # (tests/data/gnss/turn_track.nmea, tools/gnss/make_turn_track.py: 16 m north, a 90-degree

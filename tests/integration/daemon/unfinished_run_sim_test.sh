@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # No spraying by itself after a run that did not end in order: the simulated sprayer with
 # daemon.autostart sprays; killed with SIGKILL, the next start (the same state folder) waits
 # for Start and says why; after that run ends in order, autostart sprays again.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Flow with every valve commanded closed, end to end in weedsprayd --sim (no bus, autostart):
 # spraying with nothing to spray (decision_threshold = 1: every valve closed, the pump holding
 # the set-point), the meter reads no flow and no Fault is raised; valve 1 sticks open: once the

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # The cab page in Debian's headless Chromium, driven over the DevTools protocol (cdp.py): three
 # weedsprayd --sim boards with their fleet bridges on a loopback mosquitto, weedspray-cab serving
 # the page. The page shows every board; Start (then its confirmation) on the page -> every board

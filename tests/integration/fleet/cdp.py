@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Drives a headless Chromium's page over the DevTools protocol (Debian's python3-websocket).
 
 usage: cdp.py PROFILE_DIR EXPRESSION

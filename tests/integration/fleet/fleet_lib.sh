@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: Apache-2.0
 # shellcheck shell=bash
 # Sourced by the fleet tests: a machine of simulated boards on a loopback MQTT broker.
 # A scratch folder $T (removed at exit with every process started here; KEEP=1 keeps it),

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: Apache-2.0
 # Three weedsprayd --sim boards joined into one machine over a loopback mosquitto, one
 # weedspray-fleet bridge each (each board on a private session bus of its own): their state
 # appears retained on the broker; "start" on the machine's command topic makes every board

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The gpsd client (io/linux/gpsd_gnss.hpp) against a real gpsd fed by gpsfake (Debian's gpsd and
 // gpsd-clients) on a private port, with the project's recorded track (tools/gnss/make_track.py:
 // a straight run, a 90-degree turn, braking to a stop). It checks that each fix the reader

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A bad frame on the pressure converters' Modbus line: the analog input flushes and is ready at
 // once (the sample goes stale after three 10 ms loop periods, so it cannot sleep a 300 ms
 // response timeout the way libmodbus's protocol recovery does), and the next read succeeds.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "tests/integration/io/modbus_peer.hpp"
 
 #include <fcntl.h>

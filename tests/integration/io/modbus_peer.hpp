@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Modbus peer fixture of the integration tests: a socat pty pair and, on its far end,
 // tests/integration/io/modbus_slave.py (Debian's pymodbus RTU server, or a slave that is silent,
 // sends bad CRCs or junk). socat and pymodbus are REQUIRED: SetUp fails (never skips) when they

@@ -1,4 +1,5 @@
 #!/usr/bin/python3
+# SPDX-License-Identifier: Apache-2.0
 """Modbus RTU peer for the tank-level integration test, on one end of a socat pty pair.
 
   modbus_slave.py PORT normal  SLAVE_ID REG=VALUE...   pymodbus RTU server (independent peer)

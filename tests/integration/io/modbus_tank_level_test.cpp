@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Modbus tank level reader and analog modules against independent peers: Debian's pymodbus
 // RTU server and misbehaving slaves, over a socat pty pair (tests/integration/io/modbus_peer.hpp).
 #include "io/linux/modbus_tank_level.hpp"

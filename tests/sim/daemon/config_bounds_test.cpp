@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What `weedsprayd --check-config` accepts, the daemon must be able to run: every numeric key
 // of the schema at each end of its range, one at a time, through the loader; a configuration
 // the loader accepts must then build the simulated machine's backends and the sprayer (every

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The pressure converters on their own thread (io::AnalogIoWorker): when the ADC hangs (an I2C
 // bus stuck, a Modbus module gone silent) the pressure loop keeps its rhythm, sees the sample
 // age, and makes the machine safe; when the ADC comes back, pressure control resumes.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The loops' cross-watch on the simulated machine: when the pressure loop stalls (stuck inside
 // an output write), the valve thread switches the pump off; when the valve thread stalls, the
 // pressure loop switches the pump off and opens the return valve. Each stall is made by an

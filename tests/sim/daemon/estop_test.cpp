@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The emergency stop on the simulated machine: opening the E-stop circuit while spraying
 // closes every valve and stops the pump within the 10 ms bound, and the stop holds - whatever
 // the loops are told - until the circuit is closed again and the stop is reset.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The daemon's online flow trim on the simulated machine: it follows the line meter (a meter
 // that starts counting 10 % more pulses per litre makes it take 10 % off the nozzles' flows),
 // and a new calibration (a new meter K or nozzle line, as `sprayctl calibrate` publishes)

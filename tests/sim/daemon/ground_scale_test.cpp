@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The shipped weed model at the default camera's geometry: held-out peanut photos (about
 // 0.31 mm per pixel) laid out as the default [[camera]] sees that ground (about 1 mm per pixel,
 // 1280 x 800), segmented by the pipeline the daemon builds from its configuration, and scored

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Several cameras on one board: each steers its own contiguous range of nozzles.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Placement in distance coordinates, closed loop on the simulated machine: the whole runtime
 // (cameras -> vision -> scheduler -> rate law -> PWM driver -> plant valves) with the speed
 // varying 0.5-2.5 m/s. Each zone's spray must start and stop within 5 cm of the ground

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The run's totals are saved by the as-applied writer thread, on its own, while the machine
 // sprays: the main loop never calls persist() (its fsync stays off the main loop).
 #include <gtest/gtest.h>

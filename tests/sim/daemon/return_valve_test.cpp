@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The return valve's safe direction ([dac] return_valve_open_at): with a reverse-acting valve
 // (fully open at 0 V) the pressure loop still holds the set-point through the same DAC, and
 // every safe write puts the DAC at 0 V; with the default valve it rests at full scale.

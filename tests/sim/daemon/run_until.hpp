@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Drives the simulated world (vehicle speed, plant) from the test thread until a condition
 // holds, as the daemon's main loop would: shared by the sim tests of the Sprayer's loops.
 #pragma once

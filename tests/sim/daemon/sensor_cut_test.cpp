@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A cut pressure-sensor wire while spraying, on the simulated machine, with the most
 // permissive sensor fault limit the configuration accepts: the reading is a sensor fault (never
 // a pressure), the pressure loop switches the pump off and closes the valves in the same cycle,

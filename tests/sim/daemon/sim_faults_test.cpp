@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The names --sim-fault and InjectSimFault take that carry a number (percent or count): one
 // parser for all of them, 1-2 digits within each one's range, anything else refused.
 #include <gtest/gtest.h>

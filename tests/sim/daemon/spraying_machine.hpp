@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The simulated machine the Sprayer's loop tests spray on: default config, constant speed, sim
 // backends (swap an output or converter in `backends` for a wrapper before start()), pump and
 // valves enabled.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The daemon's valves keep their stagger slots: the PWM driver starts a closed valve at once
 // (immediate mode, so spray lands on the imaged ground), and valves that start together — at
 // Start, or at the end of a weed-free stretch — must still fall back into their own phases, or

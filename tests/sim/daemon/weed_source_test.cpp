@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The weed source decides what the sprayer sprays: the same frames through the whole runtime
 // (replay camera -> vision pipeline -> scheduler -> rate law -> valve duties) give different
 // duties with weed_source "vegetation" and "dnn"; a weed model failing at run time closes the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // sim::FieldDutyProcess: a field's spray demand has the statistics it promises.
 #include "sim/field/field_duty_process.hpp"
 

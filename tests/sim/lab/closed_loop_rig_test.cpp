@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The lab's rig runs the daemon's control steps: a rule that lives only in a step
 // (control::PressureLoopStep's over-pressure trip) acts in the rig, and a step's setting
 // (control::FlowTrimStep's correction bounds) moves an experiment's figure.

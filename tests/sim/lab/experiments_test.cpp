@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The papers' experiments on the simulated machine, asserting the figures the project
 // promises (brief: plant engineer). Volumes are judged against the plant's TRUE volumes.
 #include <gtest/gtest.h>

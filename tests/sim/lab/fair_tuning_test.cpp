@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The fair tuning: one search for both controllers, the fuzzy corrections earning
 // their place, and the daemon's default controller being the one that wins on machines the
 // search never saw.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Experiments over drawn machines: machine draws, the online flow trim after a
 // change, staggered PWM with a pulsing pump, and the fairly tuned controllers on machines they
 // were not tuned on. Each test would fail with the fix it covers switched off (trim disabled,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // PhaseWindowFit (a lab diagnostic): each nozzle's metered / promised ratio from the
 // phase windows of one line meter, and the rig feeding it.
 #include "lab/experiments/phase_window_fit.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The savings experiment's field from labelled crop/weed photos (lab/experiment_field): zone
 // truth from class-id masks, and the weed density the sprayer acts on.
 #include "lab/experiment_field.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Unit-level checks of the hydraulic plant model (label sim: they integrate seconds of
 // simulated time).
 #include "sim/plant/hydraulic_plant.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The realism effects of the hydraulic plant, each against the law it documents.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The cab's view of the machine, folded from the broker's messages.
 #include <gtest/gtest.h>
 

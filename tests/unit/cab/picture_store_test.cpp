@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The cab's latest picture of every board, kept from the broker's picture topics.
 #include <gtest/gtest.h>
 

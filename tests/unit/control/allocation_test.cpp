@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The per-cycle functions of the control algorithms must not allocate: this executable
 // replaces the global operator new and counts the calls made while they run.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The control loop's flow-trim step: a boom whose meter counts more than the lines promise is
 // trimmed down inside the law's band; closed and held-open nozzles are left alone; not spraying
 // holds the correction.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // NozzleHealth on synthetic windows: staggered phases make the nozzles separable, a blocked
 // one is named, healthy ones are not (also with open times that are not quite the flow's, and
 // with the whole line drifting), synchronous phases cannot tell nozzles apart.

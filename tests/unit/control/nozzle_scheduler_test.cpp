@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "control/nozzle_scheduler.hpp"
 
 #include "control/odometry.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Phase windows for nozzle health (control/phase_windows.hpp): a staggered boom whose
 // valve writes and meter are known exactly, sampled like the control loop (every 2 ms, some
 // cycles missed): each window's open times are the true ones, its volume the true volume a meter

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "control/spray_rate_law.hpp"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The as-applied log on a full disk: no torn line ever, lines held and written in order when
 // space returns, dropped lines counted and visible as a seq gap.
 #include <gtest/gtest.h>

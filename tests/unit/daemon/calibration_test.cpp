@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The calibrations run from the daemon: the run's steps against a made-up boom and meter, and
 // the stored results and which of them the rate law uses.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The configuration key table, parser and default file.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The E-stop's reaction and latch on simulated outputs: the reaction writes valves and pump
 // safe and records how long after the edge; the latch holds until reset() finds the circuit
 // closed.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The exit watcher's two tools: seeing the daemon begin to die (PF_EXITING / zombie, never a
 // stopped process) and receiving the daemon's safe writes with copies of their descriptors.
 #include <fcntl.h>

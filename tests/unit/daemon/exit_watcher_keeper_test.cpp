@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The daemon keeps an exit watcher running: one that ended is reaped and started again, at most
 // once per retry interval; one that cannot be started is reported lost (the exit_watcher_lost
 // alarm). Real child processes stand in for weedspray-safe-outputs.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // speed.source and the lost-fix rules (daemon/sprayer/ground_speed.hpp), and the alarm they
 // raise.
 #include "daemon/sprayer/ground_speed.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedsprayd --check-config --hardware: every key hardware mode needs and every device the
 // configuration names, checked against a test's /dev and /sys trees.
 #include "daemon/config/hardware_check.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The camera workers' shared inference gate serves callers in the order they asked.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The checks of the rate law's settings changed live (SetDecisionThreshold, SetTargetRate):
 // the same ranges as the configuration's keys, with the figures in the refusal.
 #include <gtest/gtest.h>

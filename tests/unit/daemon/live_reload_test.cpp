@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // A reload applies the live keys at once but keeps the running safety limits: a change to a
 // trip limit waits for a restart, and a set-point above the running trip is refused.
 #include "daemon/config/live_reload.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // North/east metres between two positions, for the map and as-applied tests' assertions.
 #pragma once
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // weedspray-export-map over several boards' logs: two boards of one machine write their own
 // as-applied logs (the same GNSS track, each with its own nozzles and antenna offset, their
 // records interleaved in time), exported with two --dir into one map, read back as GeoJSON.

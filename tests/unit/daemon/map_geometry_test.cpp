@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "daemon/records/map_geometry.hpp"
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The commissioning checks (sprayctl test valve / pump): what they command, what they report,
 // and that they are guarded as the calibrations are.
 #include <gtest/gtest.h>

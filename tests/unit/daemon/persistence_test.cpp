@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Totals across restarts and the as-applied CSV log.
 #include <gtest/gtest.h>
 #include <unistd.h>

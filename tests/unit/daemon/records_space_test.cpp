@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The records_disk_full condition and the free-space reading behind it.
 #include "daemon/records/records_space.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The configuration a run starts with: a simulation needs no file and keeps its records apart
 // from the sprayer's; the board reads its file and names each safeguard it is allowed to lack.
 #include "daemon/config/run_config.hpp"

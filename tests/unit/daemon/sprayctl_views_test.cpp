@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // What sprayctl prints from the daemon's values: the live view's frame, the text of
 // structures, units and timestamps.
 #include <gtest/gtest.h>

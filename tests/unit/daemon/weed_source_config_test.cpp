@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // [vision] weed source keys: the model is found, read and run once at load, and every
 // problem with it is a ConfigError naming the file, line and key.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The board's topics' payloads from its snapshot.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The broker's commands: parsing, the permission split, replies and counters.
 #include <gtest/gtest.h>
 

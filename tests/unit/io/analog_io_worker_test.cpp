@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // io::AnalogIoWorker: the schedule of converter reads/writes around the pressure loop's
 // deadlines, the adaptive lead, and that a hung converter never blocks the loop's side.
 #include "io/analog_io_worker.hpp"

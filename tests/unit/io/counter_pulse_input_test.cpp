@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // io::hw::CounterPulseInput against a fake /sys/bus/counter tree in a temp dir (no kernel
 // counter needed); the real interrupt-cnt driver is exercised in the QEMU harness (tests/vm).
 #include <fcntl.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The PM QoS request: what it writes, that it holds the file open, and a clear error when it
 // cannot (a stand-in file replaces /dev/cpu_dma_latency, which needs root).
 #include "io/linux/cpu_latency_qos.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The fatal-exit path: a child process registers a file-backed safe write (the same pwrite a
 // sysfs DAC attribute gets), "opens a valve" by writing another value, then dies of a fatal
 // signal or std::terminate. The file must hold the safe value afterwards, and the child must

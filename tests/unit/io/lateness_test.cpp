@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Lateness figures of the real-time loops: the histogram, PeriodicLoop's misses and the valve
 // driver's missed edges (what the daemon's control_overruns alarm counts).
 #include <gtest/gtest.h>

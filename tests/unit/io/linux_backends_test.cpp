@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The Linux backends' start-up paths that need no hardware: IIO against a fake sysfs tree,
 // and the clear errors for missing GPIO chips / cameras. The real-kernel paths (gpio-sim,
 // vivid) run in the QEMU harness (tests/vm).

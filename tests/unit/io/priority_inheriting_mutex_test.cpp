@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // io::sim::PriorityInheritingMutex against the inversion it exists for, on one CPU: a
 // normal-priority thread holds the lock, a SCHED_FIFO hog takes the CPU, and a higher SCHED_FIFO
 // waiter blocks on the lock. With priority inheritance the holder runs at the waiter's priority,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 #include "io/valve_pwm_driver.hpp"
 
 #include <gtest/gtest.h>

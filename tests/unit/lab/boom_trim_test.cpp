@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // BoomTrim on a synthetic boom: the meter against the calibrated lines' promise, as a model
 // (common gain k, valve timing offset D). It must learn a change of both from windows of
 // changing duty mixes, make the nozzles deliver what was asked at every duty, and not push the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The lab's table reporter: one table of named fields gives the text table and the JSON rows,
 // numbers in each form's own printf format, texts escaped in the JSON, formats that do not fit
 // a cell refused.

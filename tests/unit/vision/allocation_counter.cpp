@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Replaces the global operator new/delete of the test binary. In its own translation unit
 // so the compiler never inlines the malloc/free pair into a new/delete call site.
 #include "allocation_counter.hpp"

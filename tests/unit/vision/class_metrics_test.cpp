@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The lab's crop/weed metrics against masks computed by hand.
 #include "lab/class_metrics.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Agreement with the 142 hand-labelled EWS field images (data/ews-train), through the same
 // evaluation code as `weedspray-lab vision-eval`. The expected figures are that command's
 // measured output; the margins are small so a regression in any stage shows.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The plants weed source's per-plant rule: colour plants at full resolution, classified by a
 // coarser network's votes.
 #include "vision/plant_classes.hpp"

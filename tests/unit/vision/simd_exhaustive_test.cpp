@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The SIMD kernels of vision/linear_index_simd.cpp (OpenCV universal intrinsics: SSE2 on x86-64,
 // NEON on aarch64) against the per-pixel reference on every input they can meet: all 2^24
 // RGB colours for cive and exg_raw, all 2^24 (Y, U, V) for cive straight from YUYV. The arm64

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // Small synthetic frames for the vision tests.
 #pragma once
 

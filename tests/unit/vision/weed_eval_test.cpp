@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // vision-eval --classes end to end on a synthetic labelled field whose answer is known.
 #include "lab/weed_eval.hpp"
 

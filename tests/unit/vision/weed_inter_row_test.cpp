@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // The inter-row rule on synthetic crop rows: peaks, bands, tracking a drifting row, frames
 // where the rows are missing, and re-acquisition.
 #include "vision/weed_inter_row.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
 // dnn, hybrid and plants weed sources with tests/data/tiny-3class.onnx, a hand-set network whose
 // class k is the strongest of input channels R, G, B (after the spec's mean, scale and order).
 #include <gtest/gtest.h>
