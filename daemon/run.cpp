@@ -34,6 +34,7 @@
 #include "daemon/supervision/alarm_watch.hpp"
 #include "daemon/supervision/exit_watch.hpp"
 #include "daemon/supervision/loop_health.hpp"
+#include "daemon/supervision/memory_residency.hpp"
 #include "daemon/supervision/operation.hpp"
 #include "daemon/supervision/output_checks.hpp"
 #include "daemon/test_crash_hook.hpp"
@@ -305,7 +306,7 @@ int run_daemon(const Options& options) {
   sigemptyset(&signals);
   for (int signal : {SIGTERM, SIGINT, SIGHUP}) sigaddset(&signals, signal);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-  if (io::lock_memory() != 0) spdlog::info("memory not locked (mlockall not permitted)");
+  lock_what_the_loops_run();
 
   std::optional<ExitWatch> exit_watch = ExitWatch::arm(run.config, options);
   if (!exit_watch) return 1;

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // Real-time threads: ALL thread priorities in one table, SCHED_FIFO when permitted (normal
-// priority plus a returned status otherwise, so an unprivileged run still works), mlockall, and
+// priority plus a returned status otherwise, so an unprivileged run still works), and
 // a periodic loop on absolute deadlines of the injected clock with an overrun counter.
 #pragma once
 
@@ -72,9 +72,6 @@ std::string_view to_string(RtStatus status) noexcept;
 
 // Applies the table's policy and name to the calling thread.
 RtStatus apply_thread_role(ThreadRole role) noexcept;
-
-// mlockall(MCL_CURRENT | MCL_FUTURE). Returns 0 or -errno (e.g. -EPERM unprivileged).
-int lock_memory() noexcept;
 
 // A std::jthread running `body(stop_token)` with the role's policy applied first. The
 // constructor waits until the thread has applied its policy, so status() is final.

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "control/pwm_schedule.hpp"
+#include "io/linux/memory_lock.hpp"
 #include "io/linux/monotonic_clock.hpp"
 #include "io/realtime.hpp"
 #include "io/valve_pwm_driver.hpp"
@@ -80,7 +81,8 @@ int run_bench_pwm(const BenchPwmOptions& options) {
   driver_config.command_expiry = std::chrono::milliseconds(500);
   io::ValvePwmDriver<control::PwmSchedule> driver(clock, bank, schedule, driver_config);
 
-  const int mlock_rc = io::lock_memory();
+  // Everything this bench maps is locked, as the daemon locks what its loops run.
+  const int mlock_rc = io::lock_memory_except({}).error;
 
   // CPU load: busy threads at normal priority on every core, stopped at the end.
   std::atomic<bool> loading{true};
