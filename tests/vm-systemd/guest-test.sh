@@ -303,4 +303,20 @@ catalogued="$(journalctl -u weedsprayd -b --no-pager -q -x MESSAGE_ID="$sensor_i
 check alarm_catalog_in_journal "$([ "${catalogued:-0}" -ge 1 ]; echo $?)" \
   "journalctl -x entries of pressure_sensor_fault with the catalog's remedy: $catalogued; catalog: $(journalctl --list-catalog 2>/dev/null | grep -c 'weedspray: alarm') weedspray entries"
 
+# The installed man pages open with man(1), each showing its NAME line.
+man_shown=""
+man_missing=""
+for page in 8:weedsprayd 1:sprayctl 5:weedspray.toml 8:weedspray-safe-outputs; do
+  # The whole page is read before it is searched: a reader that stops at the NAME line would
+  # end man's pipeline early (SIGPIPE), which pipefail reports as a failure.
+  shown="$(MANPAGER=cat MANWIDTH=100 man "${page%%:*}" "${page#*:}" 2>/dev/null)"
+  if grep -qE "^ +${page#*:} +- " <<<"$shown"; then
+    man_shown+=" ${page#*:}(${page%%:*})"
+  else
+    man_missing+=" ${page#*:}(${page%%:*})"
+  fi
+done
+check man_pages "$([ -z "$man_missing" ]; echo $?)" \
+  "man shows:${man_shown:- none}; missing or without a NAME line:${man_missing:- none}"
+
 finish

@@ -139,8 +139,9 @@ package_arm64_tree() {
 }
 
 # --- the rootfs, cached by package list --------------------------------------------------
-# systemd as PID 1 with udev and the system bus; gpiod and v4l-utils for the fixtures.
-base_packages=(systemd systemd-sysv dbus udev kmod gpiod v4l-utils)
+# systemd as PID 1 with udev and the system bus; gpiod and v4l-utils for the fixtures; man-db
+# to read the installed man pages as a user would.
+base_packages=(systemd systemd-sysv dbus udev kmod gpiod v4l-utils man-db)
 debian_suite=bookworm
 debian_mirror="${WEEDSPRAY_DEBIAN_MIRROR:-http://deb.debian.org/debian}"
 
