@@ -67,12 +67,16 @@ void Bridge::on_mqtt_events() {
         mqtt_.publish(topics_.board("commands"), counters_.to_json().dump(), true);
         break;
       case MqttEvent::Kind::kDisconnected:
+        // A board that takes its speed from another stops receiving it here: its daemon's
+        // timeout closes the valves.
         std::fprintf(stderr, "the broker connection closed; reconnecting\n");
         if (policy_.stop_on_broker_lost) stop_board("the broker connection was lost");
         break;
       case MqttEvent::Kind::kMessage:
         if (const auto board = topics_.online_board(event.topic)) {
           board_online(*board, event.payload, event.retained);
+        } else if (shared_motion_ != nullptr && shared_motion_->take(event)) {
+          // handed to the daemon (or dropped, and counted)
         } else {
           handle_command(event);
         }

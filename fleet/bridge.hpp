@@ -11,6 +11,7 @@
 #include "fleet/daemon_client.hpp"
 #include "fleet/fleet_commands.hpp"
 #include "fleet/mqtt_link.hpp"
+#include "fleet/shared_motion_feed.hpp"
 #include "fleet/topics.hpp"
 
 namespace weedspray::fleet {
@@ -26,6 +27,8 @@ class Bridge : public DaemonListener {
   Bridge(MqttLink& mqtt, BoardInfo info, LossPolicy policy);
   // The daemon's side; set once both exist (the client calls back into the bridge).
   void attach(DaemonClient& daemon) { daemon_ = &daemon; }
+  // fleet.speed_from's motion topic, handed to the daemon (set once, after attach).
+  void take_shared_motion(SharedMotionFeed& feed) { shared_motion_ = &feed; }
 
   // Everything the MQTT thread queued.
   void on_mqtt_events();
@@ -50,6 +53,7 @@ class Bridge : public DaemonListener {
 
   MqttLink& mqtt_;
   DaemonClient* daemon_ = nullptr;
+  SharedMotionFeed* shared_motion_ = nullptr;
   BoardInfo info_;
   LossPolicy policy_;
   Topics topics_;

@@ -118,6 +118,13 @@ const std::map<std::string_view, PropertyReader>& property_readers() {
   return readers;
 }
 
+// A method error's name and message as one line.
+std::string error_text(const sd_bus_error* error) {
+  std::string text = error->name != nullptr ? error->name : "error";
+  if (error->message != nullptr) text += std::string(": ") + error->message;
+  return text;
+}
+
 struct PendingCall {
   DaemonClient::Reply reply;
 };
@@ -128,12 +135,7 @@ int on_method_reply(sd_bus_message* message, void* userdata, sd_bus_error*) {
   if (error == nullptr) {
     pending->reply(Refusal::kNone, "");
   } else {
-    std::string text = error->name != nullptr ? error->name : "error";
-    if (error->message != nullptr) {
-      text += ": ";
-      text += error->message;
-    }
-    pending->reply(Refusal::kFailed, text);
+    pending->reply(Refusal::kFailed, error_text(error));
   }
   return 0;
 }
@@ -142,9 +144,7 @@ int on_picture_reply(sd_bus_message* message, void* userdata, sd_bus_error*) {
   std::unique_ptr<DaemonClient::PictureReply> reply(
       static_cast<DaemonClient::PictureReply*>(userdata));
   if (const sd_bus_error* error = sd_bus_message_get_error(message)) {
-    std::string text = error->name != nullptr ? error->name : "error";
-    if (error->message != nullptr) text += std::string(": ") + error->message;
-    (*reply)("", text);
+    (*reply)("", error_text(error));
     return 0;
   }
   const void* data = nullptr;
@@ -154,6 +154,24 @@ int on_picture_reply(sd_bus_message* message, void* userdata, sd_bus_error*) {
     (*reply)("", std::string("malformed Snapshot reply: ") + std::strerror(-r));
   } else {
     (*reply)(std::string(static_cast<const char*>(data), size), "");
+  }
+  return 0;
+}
+
+int on_motion_reply(sd_bus_message* message, void* userdata, sd_bus_error*) {
+  std::unique_ptr<DaemonClient::MotionReply> reply(
+      static_cast<DaemonClient::MotionReply*>(userdata));
+  if (const sd_bus_error* error = sd_bus_message_get_error(message)) {
+    (*reply)({}, error_text(error));
+    return 0;
+  }
+  MotionSample sample;
+  const int r = sd_bus_message_read(message, "ddt", &sample.speed_m_per_s, &sample.distance_m,
+                                    &sample.time_ns);
+  if (r < 0) {
+    (*reply)({}, std::string("malformed Motion reply: ") + std::strerror(-r));
+  } else {
+    (*reply)(sample, "");
   }
   return 0;
 }
@@ -310,6 +328,34 @@ void DaemonClient::picture(std::uint32_t camera, PictureReply reply) {
     return;
   }
   (void)pending.release();  // on_picture_reply owns it now
+}
+
+}  // namespace weedspray::fleet
+
+namespace weedspray::fleet {
+
+void DaemonClient::motion(MotionReply reply) {
+  auto pending = std::make_unique<MotionReply>(std::move(reply));
+  const int r = sd_bus_call_method_async(bus_, nullptr, kBusName, kObjectPath, kInterface, "Motion",
+                                         on_motion_reply, pending.get(), "");
+  if (r < 0) {
+    (*pending)({}, std::string("cannot call Motion: ") + std::strerror(-r));
+    return;
+  }
+  (void)pending.release();  // on_motion_reply owns it now
+}
+
+void DaemonClient::feed_motion(const MotionSample& sample, Reply reply) {
+  auto pending = std::make_unique<PendingCall>(PendingCall{std::move(reply)});
+  const int r = sd_bus_call_method_async(bus_, nullptr, kBusName, kObjectPath, kInterface,
+                                         "FeedSharedMotion", on_method_reply, pending.get(), "ddt",
+                                         sample.speed_m_per_s, sample.distance_m, sample.time_ns);
+  if (r < 0) {
+    pending->reply(Refusal::kFailed,
+                   std::string("cannot call FeedSharedMotion: ") + std::strerror(-r));
+    return;
+  }
+  (void)pending.release();  // on_method_reply owns it now
 }
 
 }  // namespace weedspray::fleet

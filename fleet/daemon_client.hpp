@@ -13,6 +13,7 @@
 
 #include "fleet/board_snapshot.hpp"
 #include "fleet/fleet_commands.hpp"
+#include "fleet/motion.hpp"
 
 namespace weedspray::fleet {
 
@@ -45,6 +46,12 @@ class DaemonClient {
   using PictureReply = std::function<void(std::string png, const std::string& error)>;
   // Calls Snapshot(camera); `reply` is called once, later, on the event loop.
   void picture(std::uint32_t camera, PictureReply reply);
+  // The sample, or an empty one and the daemon's (or the bus's) error.
+  using MotionReply = std::function<void(const MotionSample&, const std::string& error)>;
+  // Calls Motion(); `reply` is called once, later, on the event loop.
+  void motion(MotionReply reply);
+  // Calls FeedSharedMotion(speed, distance, time); `reply` as for call().
+  void feed_motion(const MotionSample& sample, Reply reply);
 
  private:
   static int on_properties_changed(sd_bus_message* message, void* userdata, sd_bus_error*);

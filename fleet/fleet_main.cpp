@@ -8,13 +8,17 @@
 #include <cstdio>
 #include <exception>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
 #include "daemon/config/config.hpp"
 #include "fleet/bridge.hpp"
 #include "fleet/broker_settings.hpp"
+#include "fleet/motion_publisher.hpp"
 #include "fleet/picture_publisher.hpp"
+#include "fleet/shared_motion_feed.hpp"
 
 namespace {
 
@@ -41,9 +45,13 @@ int run(const daemon::Config& config, bool user_bus) {
   sigprocmask(SIG_BLOCK, &signals, nullptr);
   const auto& f = config.fleet;
   const fleet::Topics topics(f.machine, f.board);
-  fleet::MqttLink mqtt(fleet::broker_settings(
-      f, "weedspray-" + f.machine + "-" + f.board, topics.board("online"),
-      {topics.machine_commands(), topics.board_commands(), topics.every_online()}));
+  std::vector<std::string> subscriptions{topics.machine_commands(), topics.board_commands(),
+                                         topics.every_online()};
+  const std::string motion_topic =
+      f.speed_from.empty() ? std::string() : topics.other_board(f.speed_from, "motion");
+  if (!motion_topic.empty()) subscriptions.push_back(motion_topic);
+  fleet::MqttLink mqtt(fleet::broker_settings(f, "weedspray-" + f.machine + "-" + f.board,
+                                              topics.board("online"), std::move(subscriptions)));
   fleet::Bridge bridge(mqtt,
                        {f.machine, f.board, config.boom.nozzles, config.boom.nozzle_width_m,
                         f.first_nozzle_offset_m, f.commands},
@@ -56,7 +64,10 @@ int run(const daemon::Config& config, bool user_bus) {
   sd_event_add_io(event, nullptr, mqtt.event_fd(), EPOLLIN, on_mqtt, &bridge);
   fleet::DaemonClient daemon(event, user_bus, bridge);
   bridge.attach(daemon);
+  fleet::SharedMotionFeed shared_motion(daemon, motion_topic);
+  bridge.take_shared_motion(shared_motion);
   const fleet::PicturePublisher pictures(event, f.picture_interval_s, daemon, mqtt, topics);
+  const fleet::MotionPublisher motion(event, f.motion_rate_hz, daemon, mqtt, topics);
   std::fprintf(stderr, "weedspray-fleet: board %s of machine %s, broker %s:%d\n", f.board.c_str(),
                f.machine.c_str(), f.host.c_str(), f.port);
   int status = sd_event_loop(event);

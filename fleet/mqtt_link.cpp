@@ -116,9 +116,9 @@ void MqttLink::on_message(mosquitto*, void* self, const mosquitto_message* messa
        std::string(bytes, bytes + static_cast<std::size_t>(message->payloadlen)), message->retain});
 }
 
-bool MqttLink::publish(const std::string& topic, const std::string& payload, bool retain) {
+bool MqttLink::publish(const std::string& topic, const std::string& payload, bool retain, int qos) {
   return mosquitto_publish(client_, nullptr, topic.c_str(), static_cast<int>(payload.size()),
-                           payload.data(), kQos, retain) == MOSQ_ERR_SUCCESS;
+                           payload.data(), qos, retain) == MOSQ_ERR_SUCCESS;
 }
 
 void MqttLink::disconnect_with_will() {

@@ -49,9 +49,10 @@ class MqttLink {
   [[nodiscard]] int event_fd() const { return event_fd_; }
   [[nodiscard]] std::deque<MqttEvent> take();
 
-  // QoS 1. Returns false when libmosquitto refuses it (not connected: the message is lost,
-  // the state is published again on the next connection).
-  bool publish(const std::string& topic, const std::string& payload, bool retain);
+  // QoS 1 unless told (0 for samples a retry would deliver too late). Returns false when
+  // libmosquitto refuses it (not connected: the message is lost, the state is published again
+  // on the next connection).
+  bool publish(const std::string& topic, const std::string& payload, bool retain, int qos = 1);
 
   // An orderly goodbye: the broker publishes the last will at once (MQTT 5 reason 0x04).
   void disconnect_with_will();

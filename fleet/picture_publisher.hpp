@@ -6,11 +6,13 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include <systemd/sd-event.h>
 
 #include "fleet/daemon_client.hpp"
 #include "fleet/mqtt_link.hpp"
+#include "fleet/repeating_timer.hpp"
 #include "fleet/topics.hpp"
 
 namespace weedspray::fleet {
@@ -20,23 +22,20 @@ class PicturePublisher {
   // interval_s <= 0: never. Throws std::runtime_error when the timer cannot be made.
   PicturePublisher(sd_event* event, double interval_s, DaemonClient& daemon, MqttLink& mqtt,
                    const Topics& topics);
-  ~PicturePublisher();
   PicturePublisher(const PicturePublisher&) = delete;
   PicturePublisher& operator=(const PicturePublisher&) = delete;
 
  private:
-  static int on_timer(sd_event_source* source, std::uint64_t, void* userdata);
   void take();
   void done(const std::string& png, const std::string& error);
 
   DaemonClient& daemon_;
   MqttLink& mqtt_;
   std::string topic_;
-  std::uint64_t interval_us_ = 0;
-  sd_event_source* timer_ = nullptr;
   bool pending_ = false;
   std::uint64_t published_ = 0;
   std::uint64_t skipped_ = 0;  // RateLimited, Unavailable, a reply still pending, a bus error
+  RepeatingTimer timer_;       // last: gone before what its callback uses
 };
 
 }  // namespace weedspray::fleet

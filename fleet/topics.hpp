@@ -17,6 +17,10 @@ class Topics {
 
   // weedspray/<machine>/<board>/<leaf>: state, alarms, nozzles, online, reply ...
   [[nodiscard]] std::string board(const std::string& leaf) const { return board_ + "/" + leaf; }
+  // weedspray/<machine>/<other board>/<leaf>: what another board of the machine publishes.
+  [[nodiscard]] std::string other_board(const std::string& other, const std::string& leaf) const {
+    return machine_ + "/" + other + "/" + leaf;
+  }
   [[nodiscard]] std::string machine_commands() const { return machine_ + "/cmd"; }
   [[nodiscard]] std::string board_commands() const { return board_ + "/cmd"; }
   // weedspray/<machine>/+/online: every board's online flag.

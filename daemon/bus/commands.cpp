@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "daemon/config/config_schema.hpp"
@@ -90,6 +91,34 @@ CommandResult Commands::calibrate_wheel(double run_distance_m, std::uint64_t& re
             "(wheel.source = \"pulses\")"};
   }
   spdlog::info("wheel calibration {} started: {:.0f} m straight run", request, run_distance_m);
+  return {};
+}
+
+CommandResult Commands::motion(double& speed_m_per_s, double& distance_m, std::uint64_t& time_ns) {
+  if (sprayer_ == nullptr) return {kErrorUnavailable, "Motion: the sprayer is not running yet"};
+  const ControlStatus control = sprayer_->control();
+  if (control.cycles == 0) return {kErrorUnavailable, "Motion: no control cycle yet"};
+  speed_m_per_s = control.speed_m_per_s;
+  distance_m = control.distance_m;
+  time_ns = static_cast<std::uint64_t>(control.time.count());
+  return {};
+}
+
+CommandResult Commands::feed_shared_motion(double speed_m_per_s, double distance_m,
+                                           std::uint64_t sender_time_ns) {
+  if (to_.config.speed.source != "fleet") {
+    return {kErrorNotPermitted,
+            "FeedSharedMotion: this board takes its speed from speed.source = \"" +
+                to_.config.speed.source + "\", not \"fleet\""};
+  }
+  constexpr double kMaxSpeed = 50.0;  // m/s: no sprayer drives faster; a garbled sample does
+  if (!(speed_m_per_s >= 0.0 && speed_m_per_s <= kMaxSpeed) || !std::isfinite(distance_m)) {
+    return {kErrorInvalidArgument,
+            "FeedSharedMotion: speed must be 0..50 m/s and the distance a number"};
+  }
+  if (sprayer_ == nullptr)
+    return {kErrorUnavailable, "FeedSharedMotion: the sprayer is not running yet"};
+  sprayer_->feed_shared_motion(speed_m_per_s, distance_m, sender_time_ns);
   return {};
 }
 

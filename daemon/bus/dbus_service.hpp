@@ -19,7 +19,9 @@
 //     CalibrateWheel(d metres) -> t request (wheel pulses per metre from GNSS over a straight
 //     run; the WheelCalibration property reports it), StartCatchTest(d seconds),
 //     CalibrateMeter(d litres), CalibrateNozzles(), TestValve(u nozzle, d duty %, d seconds),
-//     TestPump(d seconds) (the Calibration property follows them)
+//     TestPump(d seconds) (the Calibration property follows them), Motion() -> (d m/s, d m,
+//     t ns) (the control loop's latest speed, odometer and time), FeedSharedMotion(d m/s, d m,
+//     t ns) (speed.source = "fleet": another board's sample, its clock's time)
 //   signals: AlarmRaised(s), AlarmCleared(s)
 #pragma once
 

@@ -66,7 +66,10 @@ Status build_status(const StatusSources& from, const PressureStatus& pressure,
   s.wheel_calibration_distance_m = calibration.status.distance_m;
   s.wheel_calibration_pulses = calibration.status.pulses;
   s.wheel_calibration_pulses_per_metre = calibration.status.pulses_per_metre;
-  if (control.speed_fell_back) s.speed_source += " (gnss fix lost)";
+  if (control.speed_fell_back) {
+    s.speed_source +=
+        control.speed_source == SpeedSource::kFleet ? " (samples lost)" : " (gnss fix lost)";
+  }
   s.distance_m = control.distance_m;
   if (from.backends.gnss != nullptr) {
     add_gnss_status(s, sprayer.gnss(), from.backends.clock->now(),

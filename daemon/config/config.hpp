@@ -229,7 +229,8 @@ struct WheelSection {
 
 // How the ground speed is found (daemon/sprayer/ground_speed.hpp).
 struct SpeedSection {
-  std::string source;  // wheel|gnss|fixed
+  std::string source;       // wheel|gnss|fixed|fleet
+  double shared_timeout_s;  // fleet: no sample from the owning board for this long is a loss
 };
 
 // The GNSS receiver, read through gpsd.
@@ -328,6 +329,8 @@ struct FleetSection {
   std::string on_board_lost;   // continue|stop: another board of the machine lost
   std::string on_broker_lost;  // continue|stop: this board's link to the broker lost
   double picture_interval_s;   // camera 0's live-view picture published this often (0 = never)
+  double motion_rate_hz;       // this board's speed and distance published this often (0 = never)
+  std::string speed_from;      // the board whose motion this board's daemon takes ("" = none)
 };
 
 // The cab page (weedspray-cab, a program of its own; the daemon ignores these keys): where it

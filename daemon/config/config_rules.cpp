@@ -215,6 +215,16 @@ class Rules {
         return std::isalnum(static_cast<unsigned char>(ch)) != 0 || ch == '-' || ch == '_';
       });
     };
+    if (config_.speed.source == "fleet" && f.speed_from.empty()) {
+      fail("speed.source", "\"fleet\" needs fleet.speed_from (the board that owns the speed)",
+           "fleet.speed_from");
+    }
+    if (!f.speed_from.empty() && f.speed_from == f.board) {
+      fail("fleet.speed_from", "names this board itself (fleet.board)");
+    }
+    if (!f.speed_from.empty() && !topic_level_ok(f.speed_from)) {
+      fail("fleet.speed_from", "\"" + f.speed_from + "\": needs letters, digits, '-' or '_' only");
+    }
     for (const auto& [key, value] :
          {std::pair{"fleet.machine", &f.machine}, std::pair{"fleet.board", &f.board}}) {
       if (!topic_level_ok(*value)) {

@@ -458,8 +458,14 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "the ground speed of the rate law: \"wheel\" as [wheel] says (its pulses, or its fixed "
      "speed), \"gnss\" the receiver's speed over ground ([gnss] enabled; the wheel's pulses stay "
      "the distance base when wheel.source = \"pulses\"; without a usable fix the speed falls back "
-     "to the wheel's pulses, else wheel.fixed_speed_m_per_s), \"fixed\" wheel.fixed_speed_m_per_s",
-     {"wheel", "fixed", "gnss"}},
+     "to the wheel's pulses, else wheel.fixed_speed_m_per_s), \"fixed\" wheel.fixed_speed_m_per_s, "
+     "\"fleet\" another board's speed and distance over the broker (fleet.speed_from; both the "
+     "speed and the distance base, the wheel unused)",
+     {"wheel", "fixed", "gnss", "fleet"}},
+    {WS_KEY(speed, shared_timeout_s), 0.5, 0.1, 2.0, "s",
+     "speed.source = \"fleet\": no sample from the owning board for this long closes every "
+     "valve and raises shared_speed_lost (at 2.5 m/s, 0.5 s is 1.25 m travelled on an old "
+     "speed)"},
     // [gnss]
     {WS_KEY(gnss, enabled), false, 0, 1, "",
      "read position, speed and course from gpsd (the receiver is gpsd's: NMEA, u-blox, RTK)"},
@@ -647,6 +653,13 @@ const std::vector<KeySpec<Config>>& config_keys() {
      "how often the bridge publishes camera 0's live-view picture (the daemon's Snapshot: a PNG "
      "with the weed overlay) on weedspray/<machine>/<board>/picture, retained, for the cab page; "
      "0 = never"},
+    {WS_KEY(fleet, motion_rate_hz), 0.0, 0, 100, "Hz",
+     "how often the bridge publishes this board's ground speed and distance with its daemon's "
+     "time stamp on weedspray/<machine>/<board>/motion (QoS 0, not retained) for boards that "
+     "take their speed from it; 0 = never (20 on the board that owns the speed)"},
+    {WS_KEY(fleet, speed_from), std::string(""), 0, 0, "",
+     "the board whose motion topic the bridge hands to this board's daemon (FeedSharedMotion), "
+     "for speed.source = \"fleet\"; empty = none"},
     // [cab]
     {WS_KEY(cab, listen_address), std::string("127.0.0.1"), 0, 0, "",
      "weedspray-cab serves the cab page on this address: the cab's network address (or "

@@ -68,6 +68,11 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   Nanos flow_window_start = last;
   double fixed_distance = 0;
   std::uint64_t frames_lost = 0;
+  // speed.source = "fleet": another board's speed and odometer are this board's travel.
+  const bool fleet_travel = speed_source_ == SpeedSource::kFleet;
+  const bool wheel_travel = odometry_.has_value() && !fleet_travel;
+  SharedMotionTracker shared_motion(from_seconds(config_.speed.shared_timeout_s));
+  SharedMotionSample shared_sample;
   GnssSample gnss;
   const Nanos lost_fix_timeout = from_seconds(config_.gnss.lost_fix_timeout_s);
   // Turn compensation (control/turn_rate.hpp): each nozzle's ground speed and the extra
@@ -112,8 +117,9 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
         trim_calibration = params;
       }
     }
-    // Travel: the wheel's pulses are the distance base whenever it is wired; the speed comes
-    // from speed.source (daemon/sprayer/ground_speed.hpp).
+    // Travel: the wheel's pulses are the distance base whenever it is wired (another board's
+    // odometer with speed.source = "fleet"); the speed comes from speed.source
+    // (daemon/sprayer/ground_speed.hpp).
     GroundSpeedInputs speed_in;
     speed_in.source = speed_source_;
     speed_in.wheel_wired = odometry_.has_value();
@@ -121,7 +127,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
     if (odometry_) {
       const io::PulseSnapshot wheel = io_.wheel->snapshot();
       odometry_->update(wheel.count, wheel.last_edge_time, now);
-      status.distance_m = odometry_->distance_m();
+      if (wheel_travel) status.distance_m = odometry_->distance_m();
       speed_in.wheel_speed_m_per_s = odometry_->speed_m_per_s();
     }
     if (io_.gnss != nullptr) {
@@ -142,11 +148,21 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       }
       if (turn_compensation && gnss_yaw && !speed_in.gnss_usable) yaw_rate.reset();
     }
+    if (fleet_travel) {
+      shared_motion_.try_read(shared_sample);  // a collision keeps the previous sample
+      shared_motion.update(shared_sample, now);
+      speed_in.shared_fresh = shared_motion.fresh();
+      speed_in.shared_speed_m_per_s = shared_motion.speed_m_per_s();
+      status.shared_motion_lost = !shared_motion.fresh();
+      status.shared_motion_seen = shared_motion.had_sample();
+    }
     const GroundSpeed ground = select_ground_speed(speed_in);
     status.speed_m_per_s = ground.speed_m_per_s;
     status.speed_source = ground.used;
     status.speed_fell_back = ground.fell_back;
-    if (!odometry_) {
+    if (fleet_travel) {
+      status.distance_m = shared_motion.distance_m();
+    } else if (!odometry_) {
       fixed_distance += status.speed_m_per_s * dt;
       status.distance_m = fixed_distance;
     }
@@ -184,7 +200,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       auto& worker = cameras_[c];
       while (auto frame = worker.frames.try_pop()) {
         const double frame_distance =
-            odometry_
+            wheel_travel
                 ? odometry_->distance_at(frame->capture_time)
                 : status.distance_m - status.speed_m_per_s * seconds(now - frame->capture_time);
         const auto zones = static_cast<std::size_t>(frame->rows * frame->cols);
@@ -220,7 +236,8 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
     const bool pressure_stale = !have_pressure || !pressure.sensor_ok ||
                                 seconds(now - pressure.time) > params.stale_timeout_s;
     status.inputs_stale = pressure_stale;
-    const bool spray = params.valves_enabled && !pressure_stale;
+    // Without the owning board's samples the ground under the nozzles is unknown: closed.
+    const bool spray = params.valves_enabled && !pressure_stale && !status.shared_motion_lost;
     // A calibration moves liquid only with the pump on (the daemon runs it for the
     // calibration in Idle) and the pressure sensor fresh.
     const bool calibrating = params.calibration_valves && params.pump_enabled &&

@@ -9,6 +9,7 @@ std::optional<SpeedSource> parse_speed_source(std::string_view name) noexcept {
   if (name == "wheel") return SpeedSource::kWheel;
   if (name == "gnss") return SpeedSource::kGnss;
   if (name == "fixed") return SpeedSource::kFixed;
+  if (name == "fleet") return SpeedSource::kFleet;
   return std::nullopt;
 }
 
@@ -18,6 +19,8 @@ std::string_view to_string(SpeedSource source) noexcept {
       return "wheel";
     case SpeedSource::kGnss:
       return "gnss";
+    case SpeedSource::kFleet:
+      return "fleet";
     case SpeedSource::kFixed:
       break;
   }
@@ -49,6 +52,11 @@ GroundSpeed select_ground_speed(const GroundSpeedInputs& in) noexcept {
     case SpeedSource::kGnss:
       if (in.gnss_usable) return {in.gnss_speed_m_per_s, SpeedSource::kGnss, false};
       return {wheel_or_fixed.speed_m_per_s, wheel_or_fixed.used, true};
+    case SpeedSource::kFleet:
+      // No fallback: a board's own wheel or a fixed speed would place its spray off the
+      // others'. Standing still holds the plan, and the control loop closes the valves.
+      if (in.shared_fresh) return {in.shared_speed_m_per_s, SpeedSource::kFleet, false};
+      return {0.0, SpeedSource::kFleet, true};
     case SpeedSource::kFixed:
       break;
   }

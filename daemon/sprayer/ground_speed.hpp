@@ -7,6 +7,8 @@
 //                "gnss":  the receiver's speed over ground while its fix is usable; otherwise
 //                         the wheel's pulses when wired, else wheel.fixed_speed_m_per_s.
 //                "fixed": wheel.fixed_speed_m_per_s.
+//                "fleet": another board's speed while its samples arrive (shared_motion.hpp);
+//                         none (0, and the valves held closed) once they stop.
 #pragma once
 
 #include <chrono>
@@ -19,9 +21,10 @@
 
 namespace weedspray::daemon {
 
-enum class SpeedSource : std::uint8_t { kWheel, kGnss, kFixed };
+enum class SpeedSource : std::uint8_t { kWheel, kGnss, kFixed, kFleet };
 std::optional<SpeedSource> parse_speed_source(std::string_view name) noexcept;
-std::string_view to_string(SpeedSource source) noexcept;  // "wheel", "gnss", "fixed"
+// "wheel", "gnss", "fixed", "fleet"
+std::string_view to_string(SpeedSource source) noexcept;
 
 using GnssSample = io::Stamped<io::GnssFix>;  // sample_time: when the fix arrived
 
@@ -52,12 +55,14 @@ struct GroundSpeedInputs {
   double fixed_speed_m_per_s = 0;
   bool gnss_usable = false;  // gnss_fix_usable() of the latest fix
   double gnss_speed_m_per_s = 0;
+  bool shared_fresh = false;  // the owning board's latest sample is within its timeout
+  double shared_speed_m_per_s = 0;
 };
 
 struct GroundSpeed {
   double speed_m_per_s = 0;
   SpeedSource used = SpeedSource::kFixed;  // where it came from this cycle
-  bool fell_back = false;                  // "gnss" asked, no usable fix
+  bool fell_back = false;  // "gnss" asked, no usable fix; "fleet" asked, its samples stopped
 };
 
 GroundSpeed select_ground_speed(const GroundSpeedInputs& in) noexcept;

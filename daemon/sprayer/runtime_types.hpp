@@ -118,6 +118,10 @@ struct ControlStatus {
   bool inputs_stale = false;  // valves held closed because an input is stale
   SpeedSource speed_source = SpeedSource::kFixed;  // where speed_m_per_s came from this cycle
   bool speed_fell_back = false;                    // speed.source = "gnss" without a usable fix
+  // speed.source = "fleet": no sample within speed.shared_timeout_s (valves held closed), and
+  // whether one ever arrived.
+  bool shared_motion_lost = false;
+  bool shared_motion_seen = false;
   double yaw_rate_deg_per_s = 0;  // turn compensation's yaw rate, clockwise (0: off or straight)
   // Nozzle health ([nozzle_health] enabled): each nozzle's flow over its baseline (1 until the
   // baseline is learned) and the nozzle named at fault (-1: none), its flow down (blocked) or up.

@@ -172,6 +172,12 @@ std::string Sprayer::vision_failures() const {
   return failures;
 }
 
+void Sprayer::feed_shared_motion(double speed_m_per_s, double distance_m,
+                                 std::uint64_t sender_time_ns) noexcept {
+  shared_motion_.publish(
+      {speed_m_per_s, distance_m, sender_time_ns, io_.clock->now(), ++shared_motion_count_});
+}
+
 void Sprayer::start() {
   stopped_ = false;
   safe_write_errors_ = io_.force_safe();  // outputs start safe, explicitly

@@ -33,6 +33,7 @@
 #include "daemon/sprayer/ground_speed.hpp"
 #include "daemon/sprayer/inference_gate.hpp"
 #include "daemon/sprayer/runtime_types.hpp"
+#include "daemon/sprayer/shared_motion.hpp"
 #include "daemon/sprayer/snapshot_handoff.hpp"
 #include "daemon/supervision/loop_timing.hpp"
 #include "io/analog_io_worker.hpp"
@@ -77,6 +78,12 @@ class Sprayer {
   // The latest GNSS fix (mode none and sample_time 0 until the first) and the gpsd link.
   GnssSample gnss() const noexcept { return gnss_.read(); }
   io::GnssLinkStats gnss_link() const noexcept { return gnss_link_.read(); }
+  // speed.source = "fleet": one sample of the owning board's speed (m/s), odometer (m) and
+  // clock (ns), stamped with this board's clock now. One caller at a time (the main thread's
+  // FeedSharedMotion); the control loop takes the latest.
+  void feed_shared_motion(double speed_m_per_s, double distance_m,
+                          std::uint64_t sender_time_ns) noexcept;
+  SharedMotionSample shared_motion() const noexcept { return shared_motion_.read(); }
   // Wheel calibration from GNSS (control/wheel_calibration.hpp), run by the gpsd thread on
   // each fix with the wheel counter read as the fix arrives. Starting forgets an earlier
   // result.
@@ -165,6 +172,8 @@ class Sprayer {
   io::LatestValue<io::GnssLinkStats> gnss_link_;
   io::LatestValue<WheelCalibrationReport> wheel_calibration_;
   io::LatestValue<io::Stamped<double>> imu_yaw_rate_;  // deg/s clockwise, from imu_loop
+  io::LatestValue<SharedMotionSample> shared_motion_;  // feed_shared_motion() -> control loop
+  std::uint64_t shared_motion_count_ = 0;              // feed_shared_motion()'s caller only
   // start_wheel_calibration(): the run distance (as bits of a double) and a request counter
   // the gpsd thread compares with the last one it served.
   std::atomic<std::uint64_t> wheel_calibration_distance_bits_{0};

@@ -103,6 +103,14 @@ constexpr std::array<AlarmCatalogEntry, kAlarmCount> kCatalog = {{
      "Look in the journal for why the watcher ended or could not start (a missing or broken "
      "weedspray-safe-outputs, memory); reinstall the package or restart the service. Clear the "
      "alarms once a watcher runs again."},
+    {"5d0f5b0e8c6a4f4e9a43c1d7e2b86a19",
+     "speed.source = \"fleet\": no speed sample from the owning board (fleet.speed_from) for "
+     "speed.shared_timeout_s: that board, its bridge, the broker or this board's bridge is gone, "
+     "so this board no longer knows where its nozzles are; the control loop closed every valve "
+     "in the cycle that found it.",
+     "Check the owning board's daemon and bridge, the broker and this board's bridge "
+     "(`systemctl status weedspray-fleet`; the journal says when the broker connection "
+     "closed). Once `SpeedSource` reads \"fleet\" again, clear the alarms and start."},
 }};
 
 }  // namespace

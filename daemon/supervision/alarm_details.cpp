@@ -22,6 +22,18 @@ std::string estop_detail(const EstopStatus& estop) {
       estop.safe_write_errors);
 }
 
+// How long the owning board has been silent, by this board's clock.
+std::string shared_speed_detail(const AlarmMeasurements& m) {
+  const SharedMotionSample last = m.sprayer.shared_motion();
+  const std::string silent =
+      last.count == 0
+          ? std::string("no sample yet")
+          : fmt::format("last sample {:.2f} s ago",
+                        std::chrono::duration<double>(m.control.time - last.arrival).count());
+  return fmt::format("board {}: {} (speed.shared_timeout_s = {} s); every valve closed",
+                     m.config.fleet.speed_from, silent, m.config.speed.shared_timeout_s);
+}
+
 // What the control loop uses without a fix (it switched on its own, at the same timeout).
 std::string gnss_detail(const AlarmMeasurements& m) {
   GroundSpeedInputs without_fix;
@@ -86,6 +98,8 @@ std::string alarm_detail(AlarmId id, const AlarmMeasurements& m) {
       return m.vision_failures;
     case AlarmId::kExitWatcherLost:
       return m.exit_watcher_lost;
+    case AlarmId::kSharedSpeedLost:
+      return shared_speed_detail(m);
     case AlarmId::kTankLow:
     case AlarmId::kTankEmpty:
       return fmt::format("{:.0f} %", m.in.tank_level_pct);

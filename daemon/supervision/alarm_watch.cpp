@@ -83,6 +83,8 @@ void AlarmWatch::evaluate(Nanos now, const PressureStatus& pressure, const Contr
   in.calibration_ratio = control.calibration_ratio;
   in.estop_latched = sprayer.estop().latched;
   in.records_at_risk = from.records.at_risk();
+  in.shared_speed_lost =
+      control.cycles > 0 && control.shared_motion_lost && (control.shared_motion_seen || spraying);
 
   const AlarmMask raised = alarms_.evaluate(in);
   report_alarms_cleared(alarms_.cleared_by_itself(), "its condition ended", from.bus);

@@ -26,6 +26,7 @@ constexpr std::array<std::string_view, kAlarmCount> kNames = {
     "estop",
     "records_disk_full",
     "exit_watcher_lost",
+    "shared_speed_lost",
 };
 
 double seconds(std::chrono::nanoseconds t) {
@@ -57,6 +58,7 @@ bool is_fault(AlarmId id) noexcept {
     case AlarmId::kFlowValvesClosed:
     case AlarmId::kEstop:
     case AlarmId::kExitWatcherLost:
+    case AlarmId::kSharedSpeedLost:
       return true;
     default:
       return false;
@@ -153,6 +155,9 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
   set(AlarmId::kRecordsDiskFull, in.records_at_risk, false);
   // A fault: after a kill -9 only ExecStopPost would close the valves, seconds later.
   set(AlarmId::kExitWatcherLost, in.exit_watcher_lost, false);
+  // A fault at once (its timeout is the hold): the control loop has already closed the valves,
+  // and spraying on a board that no longer knows where it is must wait for the operator.
+  set(AlarmId::kSharedSpeedLost, in.shared_speed_lost, false);
 
   AlarmMask raised = 0;
   present_ = 0;

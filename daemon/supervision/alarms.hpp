@@ -34,8 +34,9 @@ enum class AlarmId : std::uint8_t {
   kEstop,              // the emergency-stop circuit opened: outputs held safe until reset
   kRecordsDiskFull,    // as-applied lines not written, or free space under log.min_free_mb
   kExitWatcherLost,    // the process that writes the outputs safe after a kill -9 is gone
+  kSharedSpeedLost,    // speed.source = "fleet": the owning board's samples stopped
 };
-inline constexpr std::size_t kAlarmCount = 19;
+inline constexpr std::size_t kAlarmCount = 20;
 
 using AlarmMask = std::uint32_t;
 constexpr AlarmMask alarm_bit(AlarmId id) noexcept {
@@ -84,6 +85,8 @@ struct AlarmInputs {
   // it has not been reset since.
   bool estop_latched = false;
   bool records_at_risk = false;  // see records_at_risk() (daemon/records/records_space.hpp)
+  // speed.source = "fleet": no sample for speed.shared_timeout_s, once one came or spraying.
+  bool shared_speed_lost = false;
 };
 
 class AlarmEvaluator {

@@ -73,6 +73,17 @@ class Handler final : public weedspray::daemon::CommandHandler {
       return {weedspray::daemon::kErrorInvalidArgument, "out of range"};
     return {};
   }
+  CommandResult motion(double& speed_m_per_s, double& distance_m, std::uint64_t& time_ns) override {
+    speed_m_per_s = 1;
+    distance_m = 2;
+    time_ns = 3;
+    return {};
+  }
+  CommandResult feed_shared_motion(double speed_m_per_s, double, std::uint64_t) override {
+    if (!(speed_m_per_s >= 0 && speed_m_per_s <= 50))
+      return {weedspray::daemon::kErrorInvalidArgument, "out of range"};
+    return {};
+  }
   void bus_lost() override {}
   // One camera; its reply at once (the daemon's comes from a later main-loop tick).
   CommandResult snapshot(std::uint32_t camera, weedspray::daemon::SnapshotReply reply) override {

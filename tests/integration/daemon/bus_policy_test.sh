@@ -84,7 +84,10 @@ passed_by_the_bus() {  # passed_by_the_bus WHO METHOD [SIGNATURE ARGS...]: the c
   shift
   "$who" busctl --user call org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
     org.weedspray.Sprayer1 "$@" >/dev/null 2>"$T/err.txt" || true
-  if grep -q "AccessDenied" "$T/err.txt"; then fail "$who: $* denied: $(cat "$T/err.txt")"; fi
+  # busctl words the refusal "Access denied"; sd-bus clients name it AccessDenied.
+  if grep -Eq "AccessDenied|Access denied" "$T/err.txt"; then
+    fail "$who: $* denied: $(cat "$T/err.txt")"
+  fi
 }
 state() { busctl --user get-property org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
   org.weedspray.Sprayer1 State; }
@@ -135,6 +138,14 @@ if as_operator busctl --user call org.weedspray.Sprayer1 /org/weedspray/Sprayer1
   org.weedspray.Sprayer1 InjectSimFault s pump_stops@1 2>/dev/null; then
   fail "an operator could inject a simulated fault"
 fi
+# The fleet bridge (group weedspray) reads and feeds the ground speed shared between boards;
+# nobody else may feed one.
+passed_by_the_bus as_operator Motion
+passed_by_the_bus as_operator FeedSharedMotion ddt 1.5 10 1000
+as_nobody busctl --user call org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
+  org.weedspray.Sprayer1 FeedSharedMotion ddt 1.5 10 1000 >"$T/err.txt" 2>&1 || true
+grep -Eq "AccessDenied|Access denied" "$T/err.txt" ||
+  fail "nobody could feed a shared speed sample: $(cat "$T/err.txt")"
 echo "ok: an operator may operate, not reload or calibrate"
 
 "$BUILD/daemon/sprayctl" --user start || fail "root cannot Start"

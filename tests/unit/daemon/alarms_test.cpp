@@ -282,6 +282,23 @@ TEST(Alarms, ALostExitWatcherIsAFaultAtOnce) {
   EXPECT_EQ(alarm_name(AlarmId::kExitWatcherLost), "exit_watcher_lost");
 }
 
+// The shared speed lost: a fault at once, latched after the samples return until ClearAlarms.
+TEST(Alarms, ALostSharedSpeedIsAFaultAtOnceAndStaysUntilCleared) {
+  AlarmEvaluator alarms(thresholds());
+  auto in = healthy(1s);
+  EXPECT_EQ(alarms.evaluate(in), 0U);
+  in.shared_speed_lost = true;
+  EXPECT_EQ(alarms.evaluate(at(in, 2s)), alarm_bit(AlarmId::kSharedSpeedLost));
+  EXPECT_TRUE(alarms.fault_latched());
+  in.shared_speed_lost = false;
+  EXPECT_EQ(alarms.evaluate(at(in, 3s)), 0U);
+  EXPECT_TRUE(alarms.fault_latched()) << "samples back: still latched until cleared";
+  alarms.clear();
+  EXPECT_EQ(alarms.evaluate(at(in, 4s)), 0U);
+  EXPECT_FALSE(alarms.fault_latched());
+  EXPECT_EQ(alarm_name(AlarmId::kSharedSpeedLost), "shared_speed_lost");
+}
+
 // Only records_disk_full clears itself: the others wait for ClearAlarms.
 TEST(Alarms, OnlyRecordsDiskFullClearsItself) {
   for (std::size_t i = 0; i < kAlarmCount; ++i) {

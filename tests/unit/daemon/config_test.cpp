@@ -611,6 +611,32 @@ TEST(ConfigSchema, FleetPictureIntervalRange) {
   }
 }
 
+TEST(ConfigSchema, FleetSpeedNeedsTheBoardItComesFrom) {
+  const Config config = parse(
+      "[speed]\nsource = \"fleet\"\nshared_timeout_s = 0.3\n[fleet]\nspeed_from = \"left\"\n");
+  EXPECT_EQ(config.speed.source, "fleet");
+  EXPECT_DOUBLE_EQ(config.speed.shared_timeout_s, 0.3);
+  EXPECT_EQ(config.fleet.speed_from, "left");
+  EXPECT_DOUBLE_EQ(parse("").speed.shared_timeout_s, 0.5);
+  EXPECT_DOUBLE_EQ(parse("").fleet.motion_rate_hz, 0.0);
+  const auto none = parse_error({{"main.toml", "[speed]\nsource = \"fleet\"\n"}});
+  EXPECT_EQ(none.key(), "speed.source");
+  EXPECT_EQ(none.line(), 2);
+  EXPECT_NE(std::string(none.what()).find("fleet.speed_from"), std::string::npos) << none.what();
+  const auto itself =
+      parse_error({{"main.toml", "[fleet]\nboard = \"left\"\nspeed_from = \"left\"\n"}});
+  EXPECT_EQ(itself.key(), "fleet.speed_from");
+  const auto not_a_level = parse_error({{"main.toml", "[fleet]\nspeed_from = \"a/b\"\n"}});
+  EXPECT_EQ(not_a_level.key(), "fleet.speed_from");
+  // The timeout's floor and ceiling: a loss noticed within 2 s at most, never on jitter alone.
+  for (const char* bad : {"0.05", "2.5"}) {
+    SCOPED_TRACE(bad);
+    const auto error =
+        parse_error({{"main.toml", std::string("[speed]\nshared_timeout_s = ") + bad + "\n"}});
+    EXPECT_EQ(error.key(), "speed.shared_timeout_s");
+  }
+}
+
 class ConfigFiles : public ::testing::Test {
  protected:
   void SetUp() override {

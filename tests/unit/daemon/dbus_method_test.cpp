@@ -68,6 +68,18 @@ class RecordingHandler final : public CommandHandler {
     pump_test_s = seconds;
     return {};
   }
+  CommandResult motion(double& speed_m_per_s, double& distance_m, std::uint64_t& time_ns) override {
+    speed_m_per_s = 1.5;
+    distance_m = 12.25;
+    time_ns = 123456789;
+    return {};
+  }
+  CommandResult feed_shared_motion(double speed_m_per_s, double distance_m,
+                                   std::uint64_t sender_time_ns) override {
+    shared_motion = {speed_m_per_s, distance_m, static_cast<double>(sender_time_ns)};
+    return {};
+  }
+  std::array<double, 3> shared_motion{-1, -1, -1};
   void bus_lost() override {}
   std::array<double, 3> tested_valve{-1, -1, -1};
   double pump_test_s = -1;
@@ -149,6 +161,14 @@ TEST_F(DbusMethodTest, TheCommissioningTestsReachTheirCommands) {
   EXPECT_DOUBLE_EQ(handler_.pump_test_s, 20.0);
   EXPECT_LT(call("TestValve", "u", 1U), 0) << "no duty and time given";
   EXPECT_EQ(handler_.tested_valve[0], 2.0);
+}
+
+TEST_F(DbusMethodTest, ASharedMotionSampleReachesItsCommandWhole) {
+  EXPECT_GE(call("FeedSharedMotion", "ddt", 2.5, 104.75, std::uint64_t{9000000000}), 0);
+  EXPECT_EQ(handler_.shared_motion, (std::array<double, 3>{2.5, 104.75, 9e9}));
+  EXPECT_LT(call("FeedSharedMotion", "dd", 1.0, 2.0), 0) << "no sender time given";
+  EXPECT_EQ(handler_.shared_motion[0], 2.5);
+  EXPECT_GE(call("Motion"), 0);
 }
 
 TEST_F(DbusMethodTest, ARefusalBecomesTheNamedError) {
