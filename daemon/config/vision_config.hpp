@@ -12,6 +12,7 @@
 
 #include "daemon/config/config.hpp"
 #include "daemon/config/config_loader.hpp"
+#include "daemon/config/model_loading.hpp"
 #include "vision/pipeline.hpp"
 
 namespace weedspray::daemon {
@@ -32,10 +33,6 @@ namespace weedspray::daemon {
 // weed-peanut.onnx (0.94 mm/px, CC BY-SA 4.0 ...): network input 1376x864"; empty when the weed
 // source needs no model.
 [[nodiscard]] std::vector<std::string> describe_model_use(const Config& config);
-
-// Folders a relative vision.model is looked up in, in order: the folder of the file that set
-// it (when it was set in a file), the installed models, and a build tree's models/.
-[[nodiscard]] std::vector<std::filesystem::path> model_search_dirs(const std::string& set_in_file);
 
 // Checks the weed source keys of a loaded configuration and, when the source needs a model,
 // reads it and builds every camera's pipeline once (one forward pass): null for sources
