@@ -12,11 +12,11 @@
 #include "daemon/backends/backends.hpp"
 #include "daemon/config/vision_config.hpp"
 #include "daemon/sprayer/geometry.hpp"
-#include "io/sim/hydraulic_rig.hpp"
 #include "io/sim/manual_estop_input.hpp"
 #include "io/sim/memory_output_bank.hpp"
 #include "io/sim/paced_clock.hpp"
 #include "io/sim/replay_camera.hpp"
+#include "io/sim/simulated_machine.hpp"
 #include "sim/plant/hydraulic_plant.hpp"
 
 #ifndef WEEDSPRAY_DEFAULT_SIM_IMAGES
@@ -47,8 +47,8 @@ Backends make_sim_backends(const Config& config, const Options& options) {
   b.clock = clock.get();
   b.owned.push_back(clock);
 
-  io::sim::RigConfig rig_config;
-  auto& plant = rig_config.plant;
+  io::sim::SimulatedMachineConfig machine_config;
+  auto& plant = machine_config.plant;
   plant.nozzle_count = config.boom.nozzles;
   plant.wheel.nominal_pulses_per_m = config.wheel.pulses_per_metre;
   plant.wheel.slip = config.sim.wheel_slip_pct / 100.0;
@@ -57,18 +57,20 @@ Backends make_sim_backends(const Config& config, const Options& options) {
   plant.pressure_sensor.shunt_ohms = config.adc.shunt_ohms;
   plant.tank.capacity_l = 200.0;  // a field-sized tank so a long simulation does not run dry
   plant.tank.initial_level_l = 200.0;
-  rig_config.seed = static_cast<std::uint64_t>(config.sim.seed);
-  auto rig = std::make_shared<io::sim::HydraulicRig>(rig_config, *clock);
-  b.owned.push_back(rig);
+  machine_config.seed = static_cast<std::uint64_t>(config.sim.seed);
+  auto machine = std::make_shared<io::sim::SimulatedMachine>(machine_config, *clock);
+  b.owned.push_back(machine);
 
-  auto valves = std::make_shared<io::sim::RigValveBank>(*rig);
-  auto pump = std::make_shared<io::sim::RigPumpRelay>(*rig);
-  auto adc = std::make_shared<io::sim::RigPressureAdc>(*rig, *clock);
+  auto valves = std::make_shared<io::sim::SimulatedValveBank>(*machine);
+  auto pump = std::make_shared<io::sim::SimulatedPumpRelay>(*machine);
+  auto adc = std::make_shared<io::sim::SimulatedPressureAdc>(*machine, *clock);
   b.drive = valve_drive_config(config);
-  auto dac = std::make_shared<io::sim::RigReturnValveDac>(*rig, b.drive);
-  auto flow = std::make_shared<io::sim::RigPulseInput>(*rig, io::sim::RigPulseSource::kFlowMeter);
-  auto wheel = std::make_shared<io::sim::RigPulseInput>(*rig, io::sim::RigPulseSource::kWheel);
-  auto tank = std::make_shared<io::sim::RigTankLevel>(*rig, *clock);
+  auto dac = std::make_shared<io::sim::SimulatedReturnValveDac>(*machine, b.drive);
+  auto flow = std::make_shared<io::sim::SimulatedPulseInput>(
+      *machine, io::sim::SimulatedPulseSource::kFlowMeter);
+  auto wheel = std::make_shared<io::sim::SimulatedPulseInput>(
+      *machine, io::sim::SimulatedPulseSource::kWheel);
+  auto tank = std::make_shared<io::sim::SimulatedTankLevel>(*machine, *clock);
   auto buzzer = std::make_shared<io::sim::MemoryOutputBank>(1, 0, *clock);
   auto led = std::make_shared<io::sim::MemoryOutputBank>(1, 0, *clock);
   // Keeps its last 4096 edges so tests can see the wave.
@@ -99,21 +101,22 @@ Backends make_sim_backends(const Config& config, const Options& options) {
   auto speed = std::make_shared<std::atomic<double>>(sim_speed_m_per_s(config.sim, 0.0));
   b.owned.push_back(speed);
   const SimSection sim = config.sim;
-  b.drive_world = [rig, speed, sim](double t_s) {
+  b.drive_world = [machine, speed, sim](double t_s) {
     const double v = sim_speed_m_per_s(sim, t_s);
     speed->store(v);
-    rig->with_plant([v](sim::plant::HydraulicPlant& p) { p.set_ground_speed(v); });
+    machine->with_plant([v](sim::plant::HydraulicPlant& p) { p.set_ground_speed(v); });
   };
-  b.with_plant = [rig](const std::function<void(sim::plant::HydraulicPlant&)>& fn) {
-    rig->with_plant(fn);
+  b.with_plant = [machine](const std::function<void(sim::plant::HydraulicPlant&)>& fn) {
+    machine->with_plant(fn);
   };
-  b.fail_output_writes = [rig, buzzer, led, heartbeat, dac](OutputRole role, int error, int count) {
+  b.fail_output_writes = [machine, buzzer, led, heartbeat, dac](OutputRole role, int error,
+                                                                int count) {
     switch (role) {
       case OutputRole::kValves:
-        rig->fail_writes(io::sim::HydraulicRig::Output::kValves, error);
+        machine->fail_writes(io::sim::SimulatedMachine::Output::kValves, error);
         break;
       case OutputRole::kPump:
-        rig->fail_writes(io::sim::HydraulicRig::Output::kPump, error);
+        machine->fail_writes(io::sim::SimulatedMachine::Output::kPump, error);
         break;
       case OutputRole::kBuzzer:
         buzzer->fail_writes(error);
@@ -130,11 +133,11 @@ Backends make_sim_backends(const Config& config, const Options& options) {
     }
   };
   const double nominal_ppl = config.flow.pulses_per_litre;
-  b.plant_truth = [rig, nominal_ppl]() {
+  b.plant_truth = [machine, nominal_ppl]() {
     double delivered = 0;
     double metered = 0;
     double meter_gain = 1;
-    rig->with_plant([&](sim::plant::HydraulicPlant& p) {
+    machine->with_plant([&](sim::plant::HydraulicPlant& p) {
       delivered = p.total_delivered_l();
       metered = static_cast<double>(p.flow_meter_pulses()) / nominal_ppl;
       meter_gain = p.true_meter_pulses_per_l() / nominal_ppl;
@@ -146,10 +149,10 @@ Backends make_sim_backends(const Config& config, const Options& options) {
                   metered, meter_gain);
     return std::string(text);
   };
-  b.describe_outputs = [rig]() {
+  b.describe_outputs = [machine]() {
     std::ostringstream out;
-    out << "valves=0x" << std::hex << rig->valve_mask() << std::dec
-        << " pump=" << (rig->pump_on() ? 1 : 0) << "\n";
+    out << "valves=0x" << std::hex << machine->valve_mask() << std::dec
+        << " pump=" << (machine->pump_on() ? 1 : 0) << "\n";
     return out.str();
   };
 

@@ -10,7 +10,7 @@
 
 #include "daemon/backends/backends.hpp"
 #include "daemon/sprayer/sprayer.hpp"
-#include "io/sim/hydraulic_rig.hpp"
+#include "io/sim/simulated_machine.hpp"
 #include "tests/sim/daemon/run_until.hpp"
 #include "tests/sim/daemon/spraying_machine.hpp"
 
@@ -25,7 +25,7 @@ void holds_the_setpoint_and_rests_open(const std::string& open_at, double safe_v
   Options options;
   options.sim = true;
   m.backends = make_sim_backends(m.config, options);
-  auto* dac = dynamic_cast<io::sim::RigReturnValveDac*>(m.backends.return_valve);
+  auto* dac = dynamic_cast<io::sim::SimulatedReturnValveDac*>(m.backends.return_valve);
   ASSERT_NE(dac, nullptr);
   m.start();
   Sprayer& sprayer = *m.sprayer;

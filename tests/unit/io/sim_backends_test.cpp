@@ -7,11 +7,11 @@
 
 #include "io/digital_input.hpp"
 #include "io/signal_conversion.hpp"
-#include "io/sim/hydraulic_rig.hpp"
 #include "io/sim/manual_clock.hpp"
 #include "io/sim/manual_digital_input.hpp"
 #include "io/sim/memory_output_bank.hpp"
 #include "io/sim/paced_clock.hpp"
+#include "io/sim/simulated_machine.hpp"
 
 namespace weedspray::io::sim {
 namespace {
@@ -21,15 +21,15 @@ using std::chrono::nanoseconds;
 
 struct SimMachine {
   ManualClock clock;
-  HydraulicRig rig{RigConfig{}, clock};
-  RigValveBank valves{rig};
-  RigPumpRelay pump{rig};
-  RigPressureAdc adc{rig, clock};
+  SimulatedMachine machine{SimulatedMachineConfig{}, clock};
+  SimulatedValveBank valves{machine};
+  SimulatedPumpRelay pump{machine};
+  SimulatedPressureAdc adc{machine, clock};
   ValveDriveConfig drive{};
-  RigReturnValveDac dac{rig, drive};
-  RigPulseInput flow{rig, RigPulseSource::kFlowMeter};
-  RigPulseInput wheel{rig, RigPulseSource::kWheel};
-  RigTankLevel tank{rig, clock};
+  SimulatedReturnValveDac dac{machine, drive};
+  SimulatedPulseInput flow{machine, SimulatedPulseSource::kFlowMeter};
+  SimulatedPulseInput wheel{machine, SimulatedPulseSource::kWheel};
+  SimulatedTankLevel tank{machine, clock};
   CurrentLoopSensorConfig sensor{};
 };
 
@@ -48,7 +48,7 @@ TEST(SimRig, PumpAndClosedReturnValveBuildPressureSeenThroughTheAdc) {
   const auto p = pressure_from_sensor_volts(s.volts, m.sensor);
   ASSERT_TRUE(p.ok());
   double true_p = 0;
-  m.rig.with_plant([&](auto& plant) { true_p = plant.line_pressure_mpa(); });
+  m.machine.with_plant([&](auto& plant) { true_p = plant.line_pressure_mpa(); });
   EXPECT_GT(true_p, 0.2);
   EXPECT_NEAR(p.pressure_mpa, true_p, 0.02);
 
@@ -77,12 +77,12 @@ TEST(SimRig, OpenValvesMakeFlowPulsesWithTimestamps) {
   m.valves.force_safe();
   EXPECT_EQ(m.valves.mask(), 0U) << "every valve ended closed";
   m.pump.force_safe();
-  EXPECT_FALSE(m.rig.pump_on());
+  EXPECT_FALSE(m.machine.pump_on());
 }
 
 TEST(SimRig, WheelPulsesFollowGroundSpeedAndTankDrains) {
   SimMachine m;
-  m.rig.with_plant([](auto& plant) { plant.set_ground_speed(2.0); });
+  m.machine.with_plant([](auto& plant) { plant.set_ground_speed(2.0); });
   m.clock.advance(5s);
   const PulseSnapshot w = m.wheel.snapshot();
   // 10 m at the default 20 pulses/m.
@@ -110,10 +110,10 @@ TEST(SimRig, WheelPulsesFollowGroundSpeedAndTankDrains) {
 TEST(SimRig, FollowsTheClockLazily) {
   SimMachine m;
   m.clock.advance(1500ms);
-  m.rig.advance();
-  EXPECT_EQ(m.rig.plant_time(), 1500ms);
+  m.machine.advance();
+  EXPECT_EQ(m.machine.plant_time(), 1500ms);
   double t = 0;
-  m.rig.with_plant([&](auto& plant) { t = plant.time_s(); });
+  m.machine.with_plant([&](auto& plant) { t = plant.time_s(); });
   EXPECT_NEAR(t, 1.5, 1e-6);
 }
 

@@ -9,9 +9,9 @@
 #include <stop_token>
 
 #include "control/pwm_schedule.hpp"
-#include "io/sim/hydraulic_rig.hpp"
 #include "io/sim/manual_clock.hpp"
 #include "io/sim/memory_output_bank.hpp"
+#include "io/sim/simulated_machine.hpp"
 
 namespace weedspray::io {
 namespace {
@@ -81,23 +81,23 @@ std::array<double, 4> open_fraction(const std::vector<sim::OutputWrite>& writes,
 TEST(ValvePwmDriver, ExecutesTheScheduleEdgeForEdgeOnTime) {
   ValvePwmDriverConfig config;
   config.command_expiry = 10s;
-  Rig rig(config);
-  rig.driver.command(Rig::command(0ns));
-  rig.clock.stop_at = 2s;
-  rig.driver.run(rig.clock.stop.get_token());
+  Rig machine(config);
+  machine.driver.command(Rig::command(0ns));
+  machine.clock.stop_at = 2s;
+  machine.driver.run(machine.clock.stop.get_token());
 
-  const ValvePwmStats stats = rig.driver.stats();
+  const ValvePwmStats stats = machine.driver.stats();
   EXPECT_EQ(stats.deadman_expiries, 0U);
   EXPECT_EQ(stats.late_edges, 0U);
   EXPECT_EQ(stats.skipped_edges, 0U);
   EXPECT_EQ(stats.schedule_start, 0ns);
 
   // The same schedule, computed independently, gives every write's time and mask.
-  control::PwmSchedule reference(rig.pwm_config);
+  control::PwmSchedule reference(machine.pwm_config);
   const auto cmd = Rig::command(0ns);
   reference.set_duties(std::span<const double>(cmd.duty_pct.data(), 4));
   reference.start(0ns);
-  const auto writes = rig.bank.history();
+  const auto writes = machine.bank.history();
   ASSERT_GT(writes.size(), 40U);
   EXPECT_EQ(writes.size(), stats.edges_written);
   for (const auto& w : writes) {
@@ -111,78 +111,78 @@ TEST(ValvePwmDriver, ExecutesTheScheduleEdgeForEdgeOnTime) {
   EXPECT_NEAR(duty[1], 0.50, 1e-6);
   EXPECT_NEAR(duty[2], 0.75, 1e-6);
   EXPECT_NEAR(duty[3], 0.40, 1e-6);
-  EXPECT_EQ(rig.bank.mask(), 0U) << "valves closed after run() returns";
-  EXPECT_GE(rig.bank.force_safe_count(), 2U) << "force_safe at start and at stop";
+  EXPECT_EQ(machine.bank.mask(), 0U) << "valves closed after run() returns";
+  EXPECT_GE(machine.bank.force_safe_count(), 2U) << "force_safe at start and at stop";
 }
 
 TEST(ValvePwmDriver, DeadManClosesAllValvesWhenCommandsStop) {
   ValvePwmDriverConfig config;
   config.command_expiry = 300ms;
-  Rig rig(config);
-  rig.driver.command(Rig::command(0ns));
+  Rig machine(config);
+  machine.driver.command(Rig::command(0ns));
   nanoseconds expired_seen{-1};
   std::uint64_t force_safe_before = 0;
-  rig.clock.on_sleep = [&](nanoseconds now) {
-    if (expired_seen < 0ns && rig.driver.stats().expired && now > 0ns) {
+  machine.clock.on_sleep = [&](nanoseconds now) {
+    if (expired_seen < 0ns && machine.driver.stats().expired && now > 0ns) {
       expired_seen = now;
-      force_safe_before = rig.bank.force_safe_count();
+      force_safe_before = machine.bank.force_safe_count();
     }
   };
-  rig.clock.stop_at = 1s;
-  rig.driver.run(rig.clock.stop.get_token());
+  machine.clock.stop_at = 1s;
+  machine.driver.run(machine.clock.stop.get_token());
 
-  const ValvePwmStats stats = rig.driver.stats();
+  const ValvePwmStats stats = machine.driver.stats();
   EXPECT_EQ(stats.deadman_expiries, 1U);
   EXPECT_GE(expired_seen, 300ms);
   EXPECT_LE(expired_seen, 300ms + config.max_sleep);
   EXPECT_GE(force_safe_before, 2U) << "force_safe at start and at expiry";
-  for (const auto& w : rig.bank.history())
+  for (const auto& w : machine.bank.history())
     EXPECT_LT(w.time, 300ms) << "no valve write after the command expired";
-  EXPECT_EQ(rig.bank.mask(), 0U);
+  EXPECT_EQ(machine.bank.mask(), 0U);
 }
 
 TEST(ValvePwmDriver, RefreshedCommandsKeepValvesRunning) {
   ValvePwmDriverConfig config;
   config.command_expiry = 300ms;
-  Rig rig(config);
-  rig.driver.command(Rig::command(0ns));
+  Rig machine(config);
+  machine.driver.command(Rig::command(0ns));
   nanoseconds last_refresh = 0ns;
-  rig.clock.on_sleep = [&](nanoseconds now) {
+  machine.clock.on_sleep = [&](nanoseconds now) {
     if (now - last_refresh >= 100ms) {
       last_refresh = now;
-      rig.driver.command(Rig::command(now));
+      machine.driver.command(Rig::command(now));
     }
   };
-  rig.clock.stop_at = 3s;
-  rig.driver.run(rig.clock.stop.get_token());
-  const ValvePwmStats stats = rig.driver.stats();
+  machine.clock.stop_at = 3s;
+  machine.driver.run(machine.clock.stop.get_token());
+  const ValvePwmStats stats = machine.driver.stats();
   EXPECT_EQ(stats.deadman_expiries, 0U);
   EXPECT_GT(stats.commands_applied, 25U);
-  const auto duty = open_fraction(rig.bank.history(), 400ms, 2800ms);
+  const auto duty = open_fraction(machine.bank.history(), 400ms, 2800ms);
   EXPECT_NEAR(duty[1], 0.50, 1e-6);
 }
 
 TEST(ValvePwmDriver, ResumesAfterExpiryWhenCommandsReturn) {
   ValvePwmDriverConfig config;
   config.command_expiry = 200ms;
-  Rig rig(config);
-  rig.driver.command(Rig::command(0ns));
+  Rig machine(config);
+  machine.driver.command(Rig::command(0ns));
   bool resumed = false;
-  rig.clock.on_sleep = [&](nanoseconds now) {
+  machine.clock.on_sleep = [&](nanoseconds now) {
     if (!resumed && now >= 1s) {
       resumed = true;
       ValveCommand c = Rig::command(now);
       c.issued_at = now;
-      rig.driver.command(c);
+      machine.driver.command(c);
     }
   };
-  rig.clock.stop_at = 1150ms;
-  rig.driver.run(rig.clock.stop.get_token());
-  const ValvePwmStats stats = rig.driver.stats();
+  machine.clock.stop_at = 1150ms;
+  machine.driver.run(machine.clock.stop.get_token());
+  const ValvePwmStats stats = machine.driver.stats();
   EXPECT_EQ(stats.deadman_expiries, 1U);
   EXPECT_GE(stats.schedule_start, 1s) << "phases restarted when commands returned";
   bool wrote_after_resume = false;
-  for (const auto& w : rig.bank.history())
+  for (const auto& w : machine.bank.history())
     if (w.time >= 1s && w.mask != 0) wrote_after_resume = true;
   EXPECT_TRUE(wrote_after_resume);
   EXPECT_EQ(stats.late_edges, 0U);
@@ -237,22 +237,22 @@ TEST(ValvePwmDriver, AppliesAnImmediateStartAndStopWhenTheCommandArrives) {
 }
 
 TEST(ValvePwmDriver, NoCommandMeansNoValveEverOpens) {
-  Rig rig(ValvePwmDriverConfig{});
-  rig.clock.stop_at = 1s;
-  rig.driver.run(rig.clock.stop.get_token());
-  EXPECT_TRUE(rig.bank.history().empty());
-  EXPECT_EQ(rig.bank.mask(), 0U);
-  EXPECT_EQ(rig.driver.stats().edges_written, 0U);
+  Rig machine(ValvePwmDriverConfig{});
+  machine.clock.stop_at = 1s;
+  machine.driver.run(machine.clock.stop.get_token());
+  EXPECT_TRUE(machine.bank.history().empty());
+  EXPECT_EQ(machine.bank.mask(), 0U);
+  EXPECT_EQ(machine.driver.stats().edges_written, 0U);
 }
 
 // The driver on the simulated machine: the plant's valves follow the duties (more duty, more
 // liquid) and every valve ends closed.
 TEST(ValvePwmDriver, DrivesThePlantValvesAndLeavesThemClosed) {
   ScriptedClock clock;
-  sim::HydraulicRig rig(sim::RigConfig{}, clock);
-  sim::RigValveBank valves(rig);
-  sim::RigPumpRelay pump(rig);
-  sim::RigReturnValveDac dac(rig, ValveDriveConfig{});
+  sim::SimulatedMachine machine(sim::SimulatedMachineConfig{}, clock);
+  sim::SimulatedValveBank valves(machine);
+  sim::SimulatedPumpRelay pump(machine);
+  sim::SimulatedReturnValveDac dac(machine, ValveDriveConfig{});
   pump.write(1);
   dac.write(0.3);
   control::PwmConfig pwm;
@@ -273,7 +273,7 @@ TEST(ValvePwmDriver, DrivesThePlantValvesAndLeavesThemClosed) {
   EXPECT_EQ(max_mask_seen, 0xFU) << "every valve opened at some point";
   EXPECT_EQ(valves.mask(), 0U) << "every valve ended closed";
   std::array<double, 4> delivered{};
-  rig.with_plant([&](auto& plant) {
+  machine.with_plant([&](auto& plant) {
     for (int i = 0; i < 4; ++i)
       delivered[static_cast<std::size_t>(i)] = plant.nozzle_delivered_l(i);
   });
@@ -281,7 +281,7 @@ TEST(ValvePwmDriver, DrivesThePlantValvesAndLeavesThemClosed) {
     EXPECT_GT(delivered[i], delivered[i - 1] * 1.2) << "nozzle " << i << " has more duty";
   EXPECT_GT(delivered[0], 0.0);
   double plant_time_s = 0.0;
-  rig.with_plant([&](auto& plant) { plant_time_s = plant.time_s(); });
+  machine.with_plant([&](auto& plant) { plant_time_s = plant.time_s(); });
   EXPECT_NEAR(plant_time_s, 5.0, 0.05) << "the plant followed the clock";
   RecordProperty("delivered_l", std::to_string(delivered[0]) + " " + std::to_string(delivered[1]) +
                                     " " + std::to_string(delivered[2]) + " " +
@@ -335,58 +335,58 @@ struct HeartbeatRig {
 // The heartbeat stops (low, no more toggles) when told to - a latched Fault - and beats again
 // when resumed; the relay it holds then drops within its hold-up time.
 TEST(ValvePwmDriver, HeartbeatStopsWhenToldAndBeatsAgainWhenResumed) {
-  HeartbeatRig rig;
+  HeartbeatRig machine;
   std::uint64_t toggles_at_stop = 0;
   bool low_while_stopped = true;
-  rig.clock.on_sleep = [&](nanoseconds now) {
+  machine.clock.on_sleep = [&](nanoseconds now) {
     if (now >= 300ms && now < 310ms) {
-      rig.driver.stop_heartbeat();
-      toggles_at_stop = rig.heartbeat.write_count();
+      machine.driver.stop_heartbeat();
+      toggles_at_stop = machine.heartbeat.write_count();
     }
-    if (now >= 350ms && now < 700ms && rig.heartbeat.mask() != 0) low_while_stopped = false;
-    if (now >= 700ms) rig.driver.resume_heartbeat();
+    if (now >= 350ms && now < 700ms && machine.heartbeat.mask() != 0) low_while_stopped = false;
+    if (now >= 700ms) machine.driver.resume_heartbeat();
   };
-  rig.clock.stop_at = 1s;
-  rig.driver.run(rig.clock.stop.get_token());
+  machine.clock.stop_at = 1s;
+  machine.driver.run(machine.clock.stop.get_token());
 
   EXPECT_TRUE(low_while_stopped);
   std::size_t toggles_while_stopped = 0;
   std::size_t toggles_after = 0;
-  for (const auto& write : rig.heartbeat.history()) {
+  for (const auto& write : machine.heartbeat.history()) {
     if (write.time > 330ms && write.time < 700ms) ++toggles_while_stopped;
     if (write.time > 720ms) ++toggles_after;
   }
   EXPECT_GT(toggles_at_stop, 25U) << "it beat before";
   EXPECT_EQ(toggles_while_stopped, 0U);
   EXPECT_GT(toggles_after, 20U) << "it beats again once resumed";
-  EXPECT_EQ(rig.heartbeat.mask(), 0U);
+  EXPECT_EQ(machine.heartbeat.mask(), 0U);
 }
 
 // A refused valve write may leave a valve open: the heartbeat stops at once, from the valve
 // thread itself, and stays stopped (until resumed) even when the writes work again.
 TEST(ValvePwmDriver, AFailedValveWriteStopsTheHeartbeat) {
-  HeartbeatRig rig;
+  HeartbeatRig machine;
   nanoseconds failed_at{0};
-  rig.clock.on_sleep = [&](nanoseconds now) {
+  machine.clock.on_sleep = [&](nanoseconds now) {
     if (now >= 400ms && failed_at == 0ns) {
-      rig.bank.fail_writes(EIO);
+      machine.bank.fail_writes(EIO);
       failed_at = now;
     }
-    if (now >= 500ms) rig.bank.fail_writes(0);
+    if (now >= 500ms) machine.bank.fail_writes(0);
   };
-  rig.clock.stop_at = 1s;
-  rig.driver.run(rig.clock.stop.get_token());
+  machine.clock.stop_at = 1s;
+  machine.driver.run(machine.clock.stop.get_token());
 
-  ASSERT_GT(rig.driver.stats().write_errors, 0U) << "the failure was not reached";
+  ASSERT_GT(machine.driver.stats().write_errors, 0U) << "the failure was not reached";
   nanoseconds last_toggle{0};
-  for (const auto& write : rig.heartbeat.history()) {
+  for (const auto& write : machine.heartbeat.history()) {
     if (write.mask != 0) last_toggle = write.time;
   }
   EXPECT_GT(last_toggle, 300ms) << "it beat before";
   // Stopped by the first refused edge: a 5 Hz schedule of four valves has one every 50 ms.
   EXPECT_LT(last_toggle, failed_at + 100ms);
-  EXPECT_TRUE(rig.driver.stats().heartbeat_stopped);
-  EXPECT_EQ(rig.heartbeat.mask(), 0U);
+  EXPECT_TRUE(machine.driver.stats().heartbeat_stopped);
+  EXPECT_EQ(machine.heartbeat.mask(), 0U);
 }
 
 // A driver with a 50 Hz heartbeat, a hold flag (the E-stop's latch) and commands refreshed
@@ -423,32 +423,32 @@ struct HoldRig {
 // While held, no valve opens and the heartbeat stays low, commands or not; released, the
 // valves follow their commands again and the heartbeat beats.
 TEST(ValvePwmDriver, AHoldClosesTheValvesAndStopsTheHeartbeatUntilReleased) {
-  HoldRig rig;
+  HoldRig machine;
   bool valve_open_while_held = false;
   bool heartbeat_high_while_held = false;
-  rig.clock.on_sleep = [&](nanoseconds now) {
-    rig.refresh(now);
-    if (now >= 300ms && now < 700ms) rig.hold = true;
-    if (now >= 700ms) rig.hold = false;
+  machine.clock.on_sleep = [&](nanoseconds now) {
+    machine.refresh(now);
+    if (now >= 300ms && now < 700ms) machine.hold = true;
+    if (now >= 700ms) machine.hold = false;
     // One wake (max_sleep) after the hold is set, everything must be safe.
     if (now >= 303ms && now < 700ms) {
-      valve_open_while_held |= rig.bank.mask() != 0;
-      heartbeat_high_while_held |= rig.heartbeat.mask() != 0;
+      valve_open_while_held |= machine.bank.mask() != 0;
+      heartbeat_high_while_held |= machine.heartbeat.mask() != 0;
     }
   };
-  rig.clock.stop_at = 1s;
-  rig.driver.run(rig.clock.stop.get_token());
+  machine.clock.stop_at = 1s;
+  machine.driver.run(machine.clock.stop.get_token());
 
   EXPECT_FALSE(valve_open_while_held);
   EXPECT_FALSE(heartbeat_high_while_held);
-  EXPECT_EQ(rig.driver.stats().holds, 1U);
-  EXPECT_EQ(rig.driver.stats().deadman_expiries, 0U) << "a hold is not a dead-man expiry";
+  EXPECT_EQ(machine.driver.stats().holds, 1U);
+  EXPECT_EQ(machine.driver.stats().deadman_expiries, 0U) << "a hold is not a dead-man expiry";
   std::size_t opened_before = 0, opened_after = 0, beats_after = 0;
-  for (const auto& w : rig.bank.history()) {
+  for (const auto& w : machine.bank.history()) {
     if (w.mask != 0 && w.time < 300ms) ++opened_before;
     if (w.mask != 0 && w.time > 700ms) ++opened_after;
   }
-  for (const auto& w : rig.heartbeat.history())
+  for (const auto& w : machine.heartbeat.history())
     if (w.time > 705ms) ++beats_after;
   EXPECT_GT(opened_before, 3U) << "the valves were running before the hold";
   EXPECT_GT(opened_after, 3U) << "and run again once it is released";
@@ -458,23 +458,23 @@ TEST(ValvePwmDriver, AHoldClosesTheValvesAndStopsTheHeartbeatUntilReleased) {
 // The pressure loop's hold (a sensor fault): no valve opens while it holds, the heartbeat beats
 // on, and the valves follow their commands again once it is released.
 TEST(ValvePwmDriver, AClosingHoldKeepsTheValvesClosedAndTheHeartbeatBeating) {
-  HoldRig rig;
+  HoldRig machine;
   bool valve_open_while_held = false;
-  rig.clock.on_sleep = [&](nanoseconds now) {
-    rig.refresh(now);
-    rig.close = now >= 300ms && now < 700ms;
-    if (now >= 303ms && now < 700ms) valve_open_while_held |= rig.bank.mask() != 0;
+  machine.clock.on_sleep = [&](nanoseconds now) {
+    machine.refresh(now);
+    machine.close = now >= 300ms && now < 700ms;
+    if (now >= 303ms && now < 700ms) valve_open_while_held |= machine.bank.mask() != 0;
   };
-  rig.clock.stop_at = 1s;
-  rig.driver.run(rig.clock.stop.get_token());
+  machine.clock.stop_at = 1s;
+  machine.driver.run(machine.clock.stop.get_token());
 
   EXPECT_FALSE(valve_open_while_held);
-  EXPECT_EQ(rig.driver.stats().holds, 1U);
-  EXPECT_EQ(rig.driver.stats().deadman_expiries, 0U);
+  EXPECT_EQ(machine.driver.stats().holds, 1U);
+  EXPECT_EQ(machine.driver.stats().deadman_expiries, 0U);
   std::size_t beats_while_held = 0, opened_after = 0;
-  for (const auto& w : rig.heartbeat.history())
+  for (const auto& w : machine.heartbeat.history())
     if (w.time > 310ms && w.time < 690ms) ++beats_while_held;
-  for (const auto& w : rig.bank.history())
+  for (const auto& w : machine.bank.history())
     if (w.mask != 0 && w.time > 700ms) ++opened_after;
   EXPECT_GT(beats_while_held, 20U) << "the relay keeps power: the valves reopen after the fault";
   EXPECT_GT(opened_after, 3U);

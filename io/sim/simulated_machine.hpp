@@ -25,16 +25,16 @@
 
 namespace weedspray::io::sim {
 
-struct RigConfig {
+struct SimulatedMachineConfig {
   weedspray::sim::plant::PlantParams plant;
   std::uint64_t seed = 1;
   // Longest plant step per chunk; pulse edges are timestamped at chunk ends.
   std::chrono::nanoseconds max_chunk = std::chrono::microseconds(500);
 };
 
-class HydraulicRig {
+class SimulatedMachine {
  public:
-  HydraulicRig(const RigConfig& config, const Clock& clock);
+  SimulatedMachine(const SimulatedMachineConfig& config, const Clock& clock);
 
   // Steps the plant to the clock's current time (no-op if already there).
   void advance() noexcept;
@@ -81,25 +81,25 @@ class HydraulicRig {
 };
 
 // Nozzle valves -> plant valves. Safe = all closed.
-class RigValveBank final : public DigitalOutputBank {
+class SimulatedValveBank final : public DigitalOutputBank {
  public:
-  explicit RigValveBank(HydraulicRig& rig) noexcept : rig_(rig) {}
+  explicit SimulatedValveBank(SimulatedMachine& machine) noexcept : machine_(machine) {}
   std::size_t size() const noexcept override;
   int write(std::uint32_t mask) noexcept override;
   int force_safe() noexcept override;
   std::uint32_t safe_mask() const noexcept override { return 0; }
   std::string describe() const override { return "simulated valve bank"; }
   // What the plant's valves are commanded to now: a test checks it is 0 at the end.
-  std::uint32_t mask() const noexcept { return rig_.valve_mask(); }
+  std::uint32_t mask() const noexcept { return machine_.valve_mask(); }
 
  private:
-  HydraulicRig& rig_;
+  SimulatedMachine& machine_;
 };
 
 // Pump relay (one line) -> plant pump. Safe = off.
-class RigPumpRelay final : public DigitalOutputBank {
+class SimulatedPumpRelay final : public DigitalOutputBank {
  public:
-  explicit RigPumpRelay(HydraulicRig& rig) noexcept : rig_(rig) {}
+  explicit SimulatedPumpRelay(SimulatedMachine& machine) noexcept : machine_(machine) {}
   std::size_t size() const noexcept override { return 1; }
   int write(std::uint32_t mask) noexcept override;
   int force_safe() noexcept override;
@@ -107,36 +107,38 @@ class RigPumpRelay final : public DigitalOutputBank {
   std::string describe() const override { return "simulated pump relay"; }
 
  private:
-  HydraulicRig& rig_;
+  SimulatedMachine& machine_;
 };
 
-enum class RigPulseSource { kFlowMeter, kWheel };
+enum class SimulatedPulseSource { kFlowMeter, kWheel };
 
-class RigPulseInput final : public PulseInput {
+class SimulatedPulseInput final : public PulseInput {
  public:
-  RigPulseInput(HydraulicRig& rig, RigPulseSource source) noexcept : rig_(rig), source_(source) {}
+  SimulatedPulseInput(SimulatedMachine& machine, SimulatedPulseSource source) noexcept
+      : machine_(machine), source_(source) {}
   PulseSnapshot snapshot() const noexcept override;
 
  private:
-  HydraulicRig& rig_;
-  RigPulseSource source_;
+  SimulatedMachine& machine_;
+  SimulatedPulseSource source_;
 };
 
 // ADC pin of the pressure sensor's I/V stage.
-class RigPressureAdc final : public AnalogInput {
+class SimulatedPressureAdc final : public AnalogInput {
  public:
-  RigPressureAdc(HydraulicRig& rig, const Clock& clock) noexcept : rig_(rig), clock_(clock) {}
+  SimulatedPressureAdc(SimulatedMachine& machine, const Clock& clock) noexcept
+      : machine_(machine), clock_(clock) {}
   AnalogSample read() noexcept override;
 
  private:
-  HydraulicRig& rig_;
+  SimulatedMachine& machine_;
   const Clock& clock_;
 };
 
 // DAC -> amplifier -> return valve volts. Safe: return valve fully open (no line pressure).
-class RigReturnValveDac final : public AnalogOutput {
+class SimulatedReturnValveDac final : public AnalogOutput {
  public:
-  RigReturnValveDac(HydraulicRig& rig, const ValveDriveConfig& drive) noexcept;
+  SimulatedReturnValveDac(SimulatedMachine& machine, const ValveDriveConfig& drive) noexcept;
   int write(double volts) noexcept override;
   int force_safe() noexcept override;
   double full_scale_volts() const noexcept override { return drive_.dac_full_scale_volts; }
@@ -147,7 +149,7 @@ class RigReturnValveDac final : public AnalogOutput {
   void fail_writes(int error, int count) noexcept;
 
  private:
-  HydraulicRig& rig_;
+  SimulatedMachine& machine_;
   ValveDriveConfig drive_;
   double last_volts_ = 0.0;
   std::atomic<int> error_{0};
@@ -157,15 +159,16 @@ class RigReturnValveDac final : public AnalogOutput {
 
 // Tank level from the plant's tank (drains as the pump delivers), with optional injected
 // failures for alarm tests.
-class RigTankLevel final : public TankLevelSensor {
+class SimulatedTankLevel final : public TankLevelSensor {
  public:
-  RigTankLevel(HydraulicRig& rig, const Clock& clock) noexcept : rig_(rig), clock_(clock) {}
+  SimulatedTankLevel(SimulatedMachine& machine, const Clock& clock) noexcept
+      : machine_(machine), clock_(clock) {}
   TankLevelSample read() noexcept override;
   // The next `n` reads time out (any thread).
   void inject_timeouts(int n) noexcept { pending_timeouts_.store(n); }
 
  private:
-  HydraulicRig& rig_;
+  SimulatedMachine& machine_;
   const Clock& clock_;
   TankLevelSample counters_;
   std::atomic<int> pending_timeouts_{0};
