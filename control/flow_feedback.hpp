@@ -12,10 +12,8 @@
 // the error of the nozzles it cannot move (held open, clamped at the law's minimum duty) on the
 // modulated ones, amplified by total / modulated share: with three worn nozzles held open, the
 // one modulated nozzle took all of their excess. The ratio corrects each modulated nozzle by the
-// boom's common change and leaves a held-open nozzle's own error where it is. Measured on 20
-// drawn machines after a drawn change (`weedspray-lab experiment orthogonal --plants 20`, README):
-// mean / max-mean / worst-max error 1.93 / 4.93 / 9.25 % against the integrator's 2.12 / 6.50 /
-// 10.3 %; `experiment dose` a little better, `savings` about the same (README).
+// boom's common change and leaves a held-open nozzle's own error where it is (the two compared
+// on drawn machines: `weedspray-lab experiment orthogonal --plants 20`, docs/benchmarks.md).
 // Windows are unusable (the ratio and the trim hold) when too little flow is promised, the
 // valves are mostly closed, a nozzle held open has no measured full-open flow
 // (FlowTrimInput::promise_known), or the pressure was off its set-point during the window:

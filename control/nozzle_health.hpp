@@ -13,8 +13,8 @@
 //
 // Two judges (NozzleJudge). kBand, the first: each nozzle's ratio() (below) outside
 // [1 - alarm_fraction, 1 + alarm_fraction] for alarm_hold_s names it. Simple and tolerant of a
-// common change of the whole line up to alarm_fraction, but the running fit scatters by up to
-// ±9-14 % on a healthy machine, so the band must be wide and the 20 % blockage is named late.
+// common change of the whole line up to alarm_fraction, but the running fit scatters widely
+// on a healthy machine, so the band must be wide and a blockage is named late.
 //
 // kCusum: a CUSUM per nozzle and direction on the residual against the baselines,
 // r(w) = V(w) - sum_i open_s(i, w) c0_i: the log-likelihood ratio of "nozzle i's flow changed
@@ -24,7 +24,7 @@
 // nozzle i (blocked: down, worn or valve stuck open: up); the margin because the nozzles'
 // open times overlap, so one nozzle's fault raises its neighbours' evidence too for the first
 // duty mixes. This holds the other nozzles at their baselines instead of re-estimating all of
-// them every window: the running fit's scatter (±9-14 % at 6 s, anti-correlated between
+// them every window: the running fit's scatter (anti-correlated between
 // neighbours) is mostly a poorly conditioned duty mix, which this test does not see, and the
 // evidence accumulates while the fault lasts instead of a band having to clear the scatter.
 // A slow common scale of every nozzle (forgotten over common_time_constant_s) is taken out of

@@ -48,11 +48,10 @@ void append_measurement_keys(std::vector<KeySpec<Config>>& keys) {
     {WS_KEY(nozzle_health, judge), std::string("band"), 0, 0, "",
      "band: a nozzle whose ratio is off 1 by alarm_fraction for alarm_hold_s is a fault; cusum: "
      "the evidence that one nozzle's flow changed by alarm_fraction, summed over the meter's "
-     "windows (the lab's 20 % blockage named in 3.5 s instead of 7-9 s, no false alarm in 400 "
-     "machine-minutes; but the daemon's simulator still gets a false alarm within 240 s of "
-     "healthy spraying: the valves' unequal opening and closing delays make the flow per "
-     "commanded second depend on the duty, and windows at duties far from the first 60 s are "
-     "not judged: README, experiment blockage)",
+     "windows (faster on the lab's varied duties, but it false-alarms on a field's correlated "
+     "duties and on the daemon's simulator: the valves' unequal opening and closing delays make "
+     "the flow per commanded second depend on the duty; figures: weedspray-lab experiment "
+     "blockage, docs/benchmarks.md)",
      {"band", "cusum"}},
     {WS_KEY(nozzle_health, alarm_fraction), 0.12, 0.01, 0.99, "",
      "band: a nozzle whose flow / baseline is off 1 by more than this is a fault...; cusum: the "
