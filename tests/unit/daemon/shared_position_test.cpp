@@ -90,6 +90,21 @@ TEST(SharedPosition, ASampleWithoutAFixIsNoFixAtItsArrival) {
   EXPECT_FALSE(gnss_fix_usable(fix, 500s, 2s));
 }
 
+// The owner's samples stop: the last shared fix ages like a receiver's, counted from when it was
+// taken (0.1 s before its sample), so gnss_fix_lost comes at the lost-fix timeout.
+TEST(SharedPosition, WhenTheSamplesStopTheFixIsLostAtTheTimeout) {
+  SharedMotionTracker tracker(500ms);
+  LostFixWatch watch(0s, 2s, 60s);
+  const auto arrival = 100s;
+  const SharedMotionSample s = sample_with_fix(2.0, 0.0, 10s, 10s - 100ms, arrival, 1);
+  tracker.update(s, arrival);
+  const GnssSample fix = shared_gnss_sample(s, tracker);
+  EXPECT_TRUE(gnss_fix_usable(fix, arrival, 2s));
+  EXPECT_FALSE(watch.lost(fix, arrival));
+  EXPECT_FALSE(watch.lost(fix, arrival + 1890ms));
+  EXPECT_TRUE(watch.lost(fix, arrival + 1910ms));
+}
+
 TEST(SharedPosition, AFixOutsideTheGlobeIsNone) {
   SharedFix fix{95.0, 5.0, 0.0, io::GnssFixMode::k2D, 1, 0};
   EXPECT_FALSE(fix.has_position());
