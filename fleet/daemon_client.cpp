@@ -166,10 +166,12 @@ int on_motion_reply(sd_bus_message* message, void* userdata, sd_bus_error*) {
     return 0;
   }
   MotionSample sample;
-  const int r = sd_bus_message_read(message, "ddt", &sample.speed_m_per_s, &sample.distance_m,
-                                    &sample.time_ns);
+  MotionFix& fix = sample.fix;
+  const int r = sd_bus_message_read(message, "ddtdddutx", &sample.speed_m_per_s, &sample.distance_m,
+                                    &sample.time_ns, &fix.latitude_deg, &fix.longitude_deg,
+                                    &fix.heading_deg, &fix.mode, &fix.time_ns, &fix.utc_ns);
   if (r < 0) {
-    (*reply)({}, std::string("malformed Motion reply: ") + std::strerror(-r));
+    (*reply)({}, std::string("malformed MotionWithFix reply: ") + std::strerror(-r));
   } else {
     (*reply)(sample, "");
   }
@@ -336,10 +338,10 @@ namespace weedspray::fleet {
 
 void DaemonClient::motion(MotionReply reply) {
   auto pending = std::make_unique<MotionReply>(std::move(reply));
-  const int r = sd_bus_call_method_async(bus_, nullptr, kBusName, kObjectPath, kInterface, "Motion",
-                                         on_motion_reply, pending.get(), "");
+  const int r = sd_bus_call_method_async(bus_, nullptr, kBusName, kObjectPath, kInterface,
+                                         "MotionWithFix", on_motion_reply, pending.get(), "");
   if (r < 0) {
-    (*pending)({}, std::string("cannot call Motion: ") + std::strerror(-r));
+    (*pending)({}, std::string("cannot call MotionWithFix: ") + std::strerror(-r));
     return;
   }
   (void)pending.release();  // on_motion_reply owns it now
@@ -347,12 +349,14 @@ void DaemonClient::motion(MotionReply reply) {
 
 void DaemonClient::feed_motion(const MotionSample& sample, Reply reply) {
   auto pending = std::make_unique<PendingCall>(PendingCall{std::move(reply)});
-  const int r = sd_bus_call_method_async(bus_, nullptr, kBusName, kObjectPath, kInterface,
-                                         "FeedSharedMotion", on_method_reply, pending.get(), "ddt",
-                                         sample.speed_m_per_s, sample.distance_m, sample.time_ns);
+  const int r = sd_bus_call_method_async(
+      bus_, nullptr, kBusName, kObjectPath, kInterface, "FeedSharedMotionWithFix", on_method_reply,
+      pending.get(), "ddtdddutx", sample.speed_m_per_s, sample.distance_m, sample.time_ns,
+      sample.fix.latitude_deg, sample.fix.longitude_deg, sample.fix.heading_deg, sample.fix.mode,
+      sample.fix.time_ns, sample.fix.utc_ns);
   if (r < 0) {
     pending->reply(Refusal::kFailed,
-                   std::string("cannot call FeedSharedMotion: ") + std::strerror(-r));
+                   std::string("cannot call FeedSharedMotionWithFix: ") + std::strerror(-r));
     return;
   }
   (void)pending.release();  // on_method_reply owns it now

@@ -48,9 +48,9 @@ class DaemonClient {
   void picture(std::uint32_t camera, PictureReply reply);
   // The sample, or an empty one and the daemon's (or the bus's) error.
   using MotionReply = std::function<void(const MotionSample&, const std::string& error)>;
-  // Calls Motion(); `reply` is called once, later, on the event loop.
+  // Calls MotionWithFix(); `reply` is called once, later, on the event loop.
   void motion(MotionReply reply);
-  // Calls FeedSharedMotion(speed, distance, time); `reply` as for call().
+  // Calls FeedSharedMotionWithFix(speed, distance, time, the fix); `reply` as for call().
   void feed_motion(const MotionSample& sample, Reply reply);
 
  private:

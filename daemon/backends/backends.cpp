@@ -102,6 +102,10 @@ void add_yaw_sensor(Backends& b, const Config& config) {
 
 void add_gnss(Backends& b, const Config& config) {
   if (!config.gnss.enabled) return;
+  if (config.gnss.source == "fleet") {
+    b.gnss_from_fleet = true;
+    return;
+  }
   io::hw::GpsdGnssConfig gpsd;
   gpsd.host = config.gnss.host;
   gpsd.port = std::to_string(config.gnss.port);

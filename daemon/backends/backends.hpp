@@ -41,12 +41,15 @@ struct Backends {
   io::DigitalOutputBank* heartbeat = nullptr;  // null: not wired (valve thread's square wave)
   io::AnalogInput* pressure_adc = nullptr;
   io::AnalogOutput* return_valve = nullptr;
-  io::PulseInput* flow = nullptr;           // null: no flow meter
-  io::PulseInput* wheel = nullptr;          // null: fixed speed
-  io::DigitalInput* key = nullptr;          // null: no start/stop key
-  io::EstopInput* estop = nullptr;          // null: no emergency-stop input
-  io::TankLevelSensor* tank = nullptr;      // null: no tank sensor
-  io::GnssReceiver* gnss = nullptr;         // null: gnss.enabled = false
+  io::PulseInput* flow = nullptr;       // null: no flow meter
+  io::PulseInput* wheel = nullptr;      // null: fixed speed
+  io::DigitalInput* key = nullptr;      // null: no start/stop key
+  io::EstopInput* estop = nullptr;      // null: no emergency-stop input
+  io::TankLevelSensor* tank = nullptr;  // null: no tank sensor
+  io::GnssReceiver* gnss = nullptr;     // null: gnss.enabled = false, or its source "fleet"
+  // gnss.source = "fleet": no receiver; the control loop publishes the fix that comes with the
+  // shared motion samples (daemon/sprayer/shared_position.hpp).
+  bool gnss_from_fleet = false;
   io::YawRateSensor* yaw_sensor = nullptr;  // null: turn.yaw_source is not "imu"
   std::vector<io::Camera*> cameras;         // one per [[camera]]
   io::CurrentLoopSensorConfig sensor{};
@@ -56,6 +59,9 @@ struct Backends {
   // frames that are images as they are): the weed model then takes each frame squeezed to its
   // own input size.
   bool frames_at_camera_scale = true;
+
+  // A GNSS fix reaches the sprayer: a receiver, or another board's over the fleet.
+  [[nodiscard]] bool has_gnss() const noexcept { return gnss != nullptr || gnss_from_fleet; }
 
   // Sim only: advances the simulated world that no device drives (the vehicle's speed).
   std::function<void(double t_s)> drive_world;

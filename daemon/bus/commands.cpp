@@ -94,18 +94,34 @@ CommandResult Commands::calibrate_wheel(double run_distance_m, std::uint64_t& re
   return {};
 }
 
-CommandResult Commands::motion(double& speed_m_per_s, double& distance_m, std::uint64_t& time_ns) {
+CommandResult Commands::motion(double& speed_m_per_s, double& distance_m, std::uint64_t& time_ns,
+                               SharedFix& fix) {
   if (sprayer_ == nullptr) return {kErrorUnavailable, "Motion: the sprayer is not running yet"};
   const ControlStatus control = sprayer_->control();
   if (control.cycles == 0) return {kErrorUnavailable, "Motion: no control cycle yet"};
   speed_m_per_s = control.speed_m_per_s;
   distance_m = control.distance_m;
   time_ns = static_cast<std::uint64_t>(control.time.count());
+  fix = {};
+  if (to_.backends.has_gnss()) {
+    // Only a fix this board would place its own records by; its time is when it arrived here.
+    const GnssSample gnss = sprayer_->gnss();
+    const auto timeout = std::chrono::duration_cast<std::chrono::nanoseconds>(
+        std::chrono::duration<double>(to_.config.gnss.lost_fix_timeout_s));
+    if (gnss_fix_usable(gnss, to_.backends.clock->now(), timeout) && gnss.value.has_position()) {
+      fix = {gnss.value.latitude_deg,
+             gnss.value.longitude_deg,
+             gnss.value.course_deg,
+             gnss.value.mode,
+             static_cast<std::uint64_t>(gnss.sample_time.count()),
+             gnss.value.utc_ns};
+    }
+  }
   return {};
 }
 
 CommandResult Commands::feed_shared_motion(double speed_m_per_s, double distance_m,
-                                           std::uint64_t sender_time_ns) {
+                                           std::uint64_t sender_time_ns, const SharedFix& fix) {
   if (to_.config.speed.source != "fleet") {
     return {kErrorNotPermitted,
             "FeedSharedMotion: this board takes its speed from speed.source = \"" +
@@ -118,7 +134,7 @@ CommandResult Commands::feed_shared_motion(double speed_m_per_s, double distance
   }
   if (sprayer_ == nullptr)
     return {kErrorUnavailable, "FeedSharedMotion: the sprayer is not running yet"};
-  sprayer_->feed_shared_motion(speed_m_per_s, distance_m, sender_time_ns);
+  sprayer_->feed_shared_motion(speed_m_per_s, distance_m, sender_time_ns, fix);
   return {};
 }
 

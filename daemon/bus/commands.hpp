@@ -55,9 +55,10 @@ class Commands final : public CommandHandler {
   CommandResult calibrate_nozzles() override;
   CommandResult test_valve(std::uint32_t nozzle, double duty_pct, double seconds) override;
   CommandResult test_pump(double seconds) override;
-  CommandResult motion(double& speed_m_per_s, double& distance_m, std::uint64_t& time_ns) override;
+  CommandResult motion(double& speed_m_per_s, double& distance_m, std::uint64_t& time_ns,
+                       SharedFix& fix) override;
   CommandResult feed_shared_motion(double speed_m_per_s, double distance_m,
-                                   std::uint64_t sender_time_ns) override;
+                                   std::uint64_t sender_time_ns, const SharedFix& fix) override;
   void bus_lost() override;
 
  private:

@@ -111,20 +111,34 @@ int dispatch(sd_bus_message* message, CommandHandler& handler, sd_bus_error* err
     const int r = sd_bus_message_read(message, "d", &seconds);
     if (r < 0) return r;
     result = handler.test_pump(seconds);
-  } else if (member == "Motion") {
+  } else if (member == "Motion" || member == "MotionWithFix") {
     double speed_m_per_s = 0;
     double distance_m = 0;
     std::uint64_t time_ns = 0;
-    result = handler.motion(speed_m_per_s, distance_m, time_ns);
-    if (result.ok())
+    SharedFix fix;
+    result = handler.motion(speed_m_per_s, distance_m, time_ns, fix);
+    if (result.ok() && member == "Motion")
       return sd_bus_reply_method_return(message, "ddt", speed_m_per_s, distance_m, time_ns);
-  } else if (member == "FeedSharedMotion") {
+    if (result.ok()) {
+      return sd_bus_reply_method_return(message, "ddtdddutx", speed_m_per_s, distance_m, time_ns,
+                                        fix.latitude_deg, fix.longitude_deg, fix.heading_deg,
+                                        fix_mode_number(fix.mode), fix.sender_time_ns, fix.utc_ns);
+    }
+  } else if (member == "FeedSharedMotion" || member == "FeedSharedMotionWithFix") {
     double speed_m_per_s = 0;
     double distance_m = 0;
     std::uint64_t sender_time_ns = 0;
-    const int r = sd_bus_message_read(message, "ddt", &speed_m_per_s, &distance_m, &sender_time_ns);
+    SharedFix fix;
+    int r = sd_bus_message_read(message, "ddt", &speed_m_per_s, &distance_m, &sender_time_ns);
     if (r < 0) return r;
-    result = handler.feed_shared_motion(speed_m_per_s, distance_m, sender_time_ns);
+    if (member == "FeedSharedMotionWithFix") {
+      std::uint32_t mode = 0;
+      r = sd_bus_message_read(message, "dddutx", &fix.latitude_deg, &fix.longitude_deg,
+                              &fix.heading_deg, &mode, &fix.sender_time_ns, &fix.utc_ns);
+      if (r < 0) return r;
+      fix.mode = fix_mode_from_number(mode);
+    }
+    result = handler.feed_shared_motion(speed_m_per_s, distance_m, sender_time_ns, fix);
   } else {
     return sd_bus_error_setf(error, SD_BUS_ERROR_UNKNOWN_METHOD, "no method %s",
                              std::string(member).c_str());

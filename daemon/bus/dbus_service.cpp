@@ -173,6 +173,15 @@ const sd_bus_vtable kVtable[] = {
     WS_METHOD("FeedSharedMotion", "ddt",
               SD_BUS_PARAM(speed_m_per_s) SD_BUS_PARAM(distance_m) SD_BUS_PARAM(sender_time_ns), "",
               ""),
+    WS_METHOD("MotionWithFix", "", "", "ddtdddutx",
+              SD_BUS_PARAM(speed_m_per_s) SD_BUS_PARAM(distance_m) SD_BUS_PARAM(time_ns)
+                  SD_BUS_PARAM(latitude_deg) SD_BUS_PARAM(longitude_deg) SD_BUS_PARAM(heading_deg)
+                      SD_BUS_PARAM(fix_mode) SD_BUS_PARAM(fix_time_ns) SD_BUS_PARAM(fix_utc_ns)),
+    WS_METHOD("FeedSharedMotionWithFix", "ddtdddutx",
+              SD_BUS_PARAM(speed_m_per_s) SD_BUS_PARAM(distance_m) SD_BUS_PARAM(sender_time_ns)
+                  SD_BUS_PARAM(latitude_deg) SD_BUS_PARAM(longitude_deg) SD_BUS_PARAM(heading_deg)
+                      SD_BUS_PARAM(fix_mode) SD_BUS_PARAM(fix_time_ns) SD_BUS_PARAM(fix_utc_ns),
+              "", ""),
     SD_BUS_SIGNAL_WITH_NAMES("AlarmRaised", "s", SD_BUS_PARAM(alarm), 0),
     SD_BUS_SIGNAL_WITH_NAMES("AlarmCleared", "s", SD_BUS_PARAM(alarm), 0),
     SD_BUS_VTABLE_END,

@@ -21,7 +21,10 @@
 //     CalibrateMeter(d litres), CalibrateNozzles(), TestValve(u nozzle, d duty %, d seconds),
 //     TestPump(d seconds) (the Calibration property follows them), Motion() -> (d m/s, d m,
 //     t ns) (the control loop's latest speed, odometer and time), FeedSharedMotion(d m/s, d m,
-//     t ns) (speed.source = "fleet": another board's sample, its clock's time)
+//     t ns) (speed.source = "fleet": another board's sample, its clock's time), MotionWithFix()
+//     and FeedSharedMotionWithFix(...) (the same with the GNSS fix: d lat, d lon, d heading,
+//     u mode 0/2/3, t the fix's time on the owner's clock, x its UTC ns; gnss.source = "fleet"
+//     takes it)
 //   signals: AlarmRaised(s), AlarmCleared(s)
 #pragma once
 

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "daemon/sprayer/shared_fix.hpp"
+
 namespace weedspray::daemon {
 
 // One latched alarm as the operator sees it (daemon/supervision/alarm_catalog.hpp).
@@ -176,12 +178,14 @@ class CommandHandler {
   virtual CommandResult test_valve(std::uint32_t nozzle, double duty_pct, double seconds) = 0;
   virtual CommandResult test_pump(double seconds) = 0;
   // The control loop's latest ground speed (m/s) and odometer (m), and the time of that cycle
-  // on this board's clock (ns): what the fleet bridge publishes for boards that share it.
-  virtual CommandResult motion(double& speed_m_per_s, double& distance_m,
-                               std::uint64_t& time_ns) = 0;
-  // speed.source = "fleet": one sample of the owning board's motion, stamped with its clock.
+  // on this board's clock (ns), with the board's GNSS fix while it is usable (mode none
+  // otherwise): what the fleet bridge publishes for boards that share it.
+  virtual CommandResult motion(double& speed_m_per_s, double& distance_m, std::uint64_t& time_ns,
+                               SharedFix& fix) = 0;
+  // speed.source = "fleet": one sample of the owning board's motion, stamped with its clock,
+  // and its fix (mode none: none; gnss.source = "fleet" takes it as this board's own).
   virtual CommandResult feed_shared_motion(double speed_m_per_s, double distance_m,
-                                           std::uint64_t sender_time_ns) = 0;
+                                           std::uint64_t sender_time_ns, const SharedFix& fix) = 0;
   // The bus connection is gone (the bus daemon stopped or died): nobody can stop the sprayer
   // any more, so it must stop by itself.
   virtual void bus_lost() = 0;

@@ -71,7 +71,7 @@ Status build_status(const StatusSources& from, const PressureStatus& pressure,
         control.speed_source == SpeedSource::kFleet ? " (samples lost)" : " (gnss fix lost)";
   }
   s.distance_m = control.distance_m;
-  if (from.backends.gnss != nullptr) {
+  if (from.backends.has_gnss()) {
     add_gnss_status(s, sprayer.gnss(), from.backends.clock->now(),
                     std::chrono::duration_cast<Nanos>(
                         std::chrono::duration<double>(from.config.gnss.lost_fix_timeout_s)));

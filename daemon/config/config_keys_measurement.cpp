@@ -83,7 +83,13 @@ void append_measurement_keys(std::vector<KeySpec<Config>>& keys) {
      "speed)"},
     // [gnss]
     {WS_KEY(gnss, enabled), false, 0, 1, "",
-     "read position, speed and course from gpsd (the receiver is gpsd's: NMEA, u-blox, RTK)"},
+     "take position, speed and course: from gpsd (the receiver is gpsd's: NMEA, u-blox, RTK) "
+     "or, with gnss.source = \"fleet\", from another board"},
+    {WS_KEY(gnss, source), std::string("gpsd"), 0, 0, "",
+     "where the fix comes from: \"gpsd\" this board's receiver, \"fleet\" the fix the board "
+     "fleet.speed_from publishes with its motion (speed.source = \"fleet\"; the antenna keys "
+     "then say where that board's antenna sits relative to this board's nozzles)",
+     {"gpsd", "fleet"}},
     {WS_KEY(gnss, host), std::string("localhost"), 0, 0, "", "gpsd's host"},
     {WS_KEY(gnss, port), 2947, 1, 65535, "", "gpsd's TCP port"},
     {WS_KEY(gnss, lost_fix_timeout_s), 2.0, 0.2, 60, "s",

@@ -45,6 +45,7 @@ struct SpeedSection {
 // The GNSS receiver, read through gpsd.
 struct GnssSection {
   bool enabled;
+  std::string source;  // "gpsd" (this board's receiver) | "fleet" (speed_from's fix)
   std::string host;
   int port;
   double lost_fix_timeout_s;   // no usable fix for this long: gnss_fix_lost, speed falls back

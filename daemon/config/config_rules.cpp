@@ -201,6 +201,10 @@ class Rules {
     if (c.speed.source == "gnss" && !c.gnss.enabled) {
       fail("speed.source", "\"gnss\" needs gnss.enabled = true", "gnss.enabled");
     }
+    if (c.gnss.enabled && c.gnss.source == "fleet" && c.speed.source != "fleet") {
+      fail("gnss.source", "\"fleet\" needs speed.source = \"fleet\" (the fix comes with the speed)",
+           "speed.source");
+    }
     if (c.sim.speed_min_m_per_s > c.sim.speed_max_m_per_s) {
       fail("sim.speed_min_m_per_s", "must not exceed sim.speed_max_m_per_s");
     }

@@ -6,6 +6,7 @@
 #include "control/turn_rate.hpp"
 #include "daemon/sprayer/geometry.hpp"
 #include "daemon/sprayer/loop_time.hpp"
+#include "daemon/sprayer/shared_position.hpp"
 #include "daemon/sprayer/sprayer.hpp"
 
 namespace weedspray::daemon {
@@ -74,6 +75,10 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   SharedMotionTracker shared_motion(from_seconds(config_.speed.shared_timeout_s));
   SharedMotionSample shared_sample;
   GnssSample gnss;
+  // gnss.source = "fleet": the owning board's fix comes with its motion samples; this loop is
+  // then the one writer of gnss_ (no gpsd thread runs).
+  const bool fleet_fix = io_.gnss_from_fleet && fleet_travel;
+  const bool has_gnss = io_.gnss != nullptr || fleet_fix;
   const Nanos lost_fix_timeout = from_seconds(config_.gnss.lost_fix_timeout_s);
   // Turn compensation (control/turn_rate.hpp): each nozzle's ground speed and the extra
   // distance its arc has run beyond the centre line's, so the rate law and the schedule use
@@ -130,10 +135,24 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       if (wheel_travel) status.distance_m = odometry_->distance_m();
       speed_in.wheel_speed_m_per_s = odometry_->speed_m_per_s();
     }
-    if (io_.gnss != nullptr) {
-      gnss_.try_read(gnss);  // a collision with the writer keeps the previous fix
+    if (fleet_travel) {
+      shared_motion_.try_read(shared_sample);  // a collision keeps the previous sample
+      shared_motion.update(shared_sample, now);
+      speed_in.shared_fresh = shared_motion.fresh();
+      speed_in.shared_speed_m_per_s = shared_motion.speed_m_per_s();
+      status.shared_motion_lost = !shared_motion.fresh();
+      status.shared_motion_seen = shared_motion.had_sample();
+      if (fleet_fix && shared_motion.took_sample()) {
+        gnss = shared_gnss_sample(shared_sample, shared_motion);
+        gnss_.publish(gnss);
+      }
+    }
+    if (io_.gnss != nullptr) gnss_.try_read(gnss);  // a collision keeps the previous fix
+    if (has_gnss) {
       speed_in.gnss_usable = gnss_fix_usable(gnss, now, lost_fix_timeout);
       speed_in.gnss_speed_m_per_s = gnss.value.speed_m_per_s;
+    }
+    if (io_.gnss != nullptr) {  // gnss_yaw: a receiver's own fixes only
       if (turn_compensation && gnss_yaw && gnss.sample_time != last_fix_time) {
         last_fix_time = gnss.sample_time;
         // The receiver's own fix times difference best (no USB or gpsd latency jitter).
@@ -147,14 +166,6 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
         }
       }
       if (turn_compensation && gnss_yaw && !speed_in.gnss_usable) yaw_rate.reset();
-    }
-    if (fleet_travel) {
-      shared_motion_.try_read(shared_sample);  // a collision keeps the previous sample
-      shared_motion.update(shared_sample, now);
-      speed_in.shared_fresh = shared_motion.fresh();
-      speed_in.shared_speed_m_per_s = shared_motion.speed_m_per_s();
-      status.shared_motion_lost = !shared_motion.fresh();
-      status.shared_motion_seen = shared_motion.had_sample();
     }
     const GroundSpeed ground = select_ground_speed(speed_in);
     status.speed_m_per_s = ground.speed_m_per_s;
@@ -352,7 +363,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
         record.nozzle_flow_l_per_min[n] = static_cast<float>(control::flow_for_duty_l_per_min(
             params.lines[n], status.duty_pct[n], pressure.pressure_mpa));
       }
-      if (io_.gnss != nullptr) {
+      if (has_gnss) {
         record.fix = gnss.value;
         record.fix_time = gnss.sample_time;
         record.fix_usable = speed_in.gnss_usable;

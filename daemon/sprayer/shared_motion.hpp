@@ -14,6 +14,8 @@
 #include <chrono>
 #include <cstdint>
 
+#include "daemon/sprayer/shared_fix.hpp"
+
 namespace weedspray::daemon {
 
 // One sample as the daemon received it (trivially copyable: a LatestValue slot).
@@ -23,6 +25,7 @@ struct SharedMotionSample {
   std::uint64_t sender_time_ns = 0;    // the owning board's clock when it measured them
   std::chrono::nanoseconds arrival{};  // this board's clock when the sample arrived
   std::uint64_t count = 0;             // samples received so far (0: none yet)
+  SharedFix fix;                       // the owning board's fix (mode none: it has none)
 };
 
 class SharedMotionTracker {
@@ -45,6 +48,11 @@ class SharedMotionTracker {
   [[nodiscard]] double distance_m() const noexcept { return distance_m_; }
   // How much older than the fastest recent sample the latest one arrived (s).
   [[nodiscard]] double extra_age_s() const noexcept { return extra_age_s_; }
+  // The last update() took a new sample (not a repeat of the one before, nor an overtaken one).
+  [[nodiscard]] bool took_sample() const noexcept { return took_sample_; }
+  // When the owning board's clock read `sender_time_ns`, on this board's clock: its stamp plus
+  // the clocks' offset with the shortest transit (the estimate that ages the samples).
+  [[nodiscard]] std::chrono::nanoseconds local_time(std::uint64_t sender_time_ns) const noexcept;
 
  private:
   std::chrono::nanoseconds timeout_;
@@ -59,6 +67,7 @@ class SharedMotionTracker {
   double distance_m_ = 0;
   bool fresh_ = false;
   bool had_sample_ = false;
+  bool took_sample_ = false;
 };
 
 }  // namespace weedspray::daemon

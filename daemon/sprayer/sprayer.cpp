@@ -173,9 +173,9 @@ std::string Sprayer::vision_failures() const {
 }
 
 void Sprayer::feed_shared_motion(double speed_m_per_s, double distance_m,
-                                 std::uint64_t sender_time_ns) noexcept {
+                                 std::uint64_t sender_time_ns, const SharedFix& fix) noexcept {
   shared_motion_.publish(
-      {speed_m_per_s, distance_m, sender_time_ns, io_.clock->now(), ++shared_motion_count_});
+      {speed_m_per_s, distance_m, sender_time_ns, io_.clock->now(), ++shared_motion_count_, fix});
 }
 
 void Sprayer::start() {

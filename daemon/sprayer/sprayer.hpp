@@ -79,10 +79,10 @@ class Sprayer {
   GnssSample gnss() const noexcept { return gnss_.read(); }
   io::GnssLinkStats gnss_link() const noexcept { return gnss_link_.read(); }
   // speed.source = "fleet": one sample of the owning board's speed (m/s), odometer (m) and
-  // clock (ns), stamped with this board's clock now. One caller at a time (the main thread's
-  // FeedSharedMotion); the control loop takes the latest.
-  void feed_shared_motion(double speed_m_per_s, double distance_m,
-                          std::uint64_t sender_time_ns) noexcept;
+  // clock (ns), with its GNSS fix when it has one, stamped with this board's clock now. One
+  // caller at a time (the main thread's FeedSharedMotion); the control loop takes the latest.
+  void feed_shared_motion(double speed_m_per_s, double distance_m, std::uint64_t sender_time_ns,
+                          const SharedFix& fix = {}) noexcept;
   SharedMotionSample shared_motion() const noexcept { return shared_motion_.read(); }
   // Wheel calibration from GNSS (control/wheel_calibration.hpp), run by the gpsd thread on
   // each fix with the wheel counter read as the fix arrives. Starting forgets an earlier
@@ -168,7 +168,8 @@ class Sprayer {
   io::LatestValue<PressureStatus> pressure_;
   io::LatestValue<ControlStatus> control_;
   io::LatestValue<io::TankLevelSample> tank_;
-  io::LatestValue<GnssSample> gnss_;
+  io::LatestValue<GnssSample> gnss_;  // its one writer: the gpsd thread, or the control loop's
+                                      // shared fix (gnss.source = "fleet")
   io::LatestValue<io::GnssLinkStats> gnss_link_;
   io::LatestValue<WheelCalibrationReport> wheel_calibration_;
   io::LatestValue<io::Stamped<double>> imu_yaw_rate_;  // deg/s clockwise, from imu_loop

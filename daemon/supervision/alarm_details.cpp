@@ -39,6 +39,10 @@ std::string gnss_detail(const AlarmMeasurements& m) {
   GroundSpeedInputs without_fix;
   without_fix.source = parse_speed_source(m.config.speed.source).value_or(SpeedSource::kWheel);
   without_fix.wheel_wired = m.wheel_wired;
+  if (m.config.gnss.source == "fleet") {
+    return fmt::format("no usable fix for {} s; board {} shares none (its fix or its samples lost)",
+                       m.config.gnss.lost_fix_timeout_s, m.config.fleet.speed_from);
+  }
   return fmt::format(
       "no usable fix for {} s; gpsd at {}:{} {}; speed from {}", m.config.gnss.lost_fix_timeout_s,
       m.config.gnss.host, m.config.gnss.port,

@@ -76,7 +76,7 @@ void AlarmWatch::evaluate(Nanos now, const PressureStatus& pressure, const Contr
                          config.dac.write_failures_tolerated);
   in.output_write_failed = !output_failures.empty();
   in.exit_watcher_lost = !from.exit_watch.running(now);
-  in.gnss_fix_lost = from.backends.gnss != nullptr && gnss_lost_fix_->lost(sprayer.gnss(), now);
+  in.gnss_fix_lost = from.backends.has_gnss() && gnss_lost_fix_->lost(sprayer.gnss(), now);
   // Not from a status older than the last ClearAlarms (the detector restarts on it).
   in.nozzle_flow_fault =
       control.nozzle_flow_fault >= 0 && control.nozzle_health_reset == from.operation.trip_reset();

@@ -138,14 +138,21 @@ if as_operator busctl --user call org.weedspray.Sprayer1 /org/weedspray/Sprayer1
   org.weedspray.Sprayer1 InjectSimFault s pump_stops@1 2>/dev/null; then
   fail "an operator could inject a simulated fault"
 fi
-# The fleet bridge (group weedspray) reads and feeds the ground speed shared between boards;
-# nobody else may feed one.
+# The fleet bridge (group weedspray) reads and feeds the ground speed and position shared
+# between boards; nobody else may feed them.
 passed_by_the_bus as_operator Motion
 passed_by_the_bus as_operator FeedSharedMotion ddt 1.5 10 1000
+passed_by_the_bus as_operator MotionWithFix
+passed_by_the_bus as_operator FeedSharedMotionWithFix ddtdddutx 1.5 10 1000 52 5 90 3 900 0
 as_nobody busctl --user call org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
   org.weedspray.Sprayer1 FeedSharedMotion ddt 1.5 10 1000 >"$T/err.txt" 2>&1 || true
 grep -Eq "AccessDenied|Access denied" "$T/err.txt" ||
   fail "nobody could feed a shared speed sample: $(cat "$T/err.txt")"
+as_nobody busctl --user call org.weedspray.Sprayer1 /org/weedspray/Sprayer1 \
+  org.weedspray.Sprayer1 FeedSharedMotionWithFix ddtdddutx 1.5 10 1000 52 5 90 3 900 0 \
+  >"$T/err.txt" 2>&1 || true
+grep -Eq "AccessDenied|Access denied" "$T/err.txt" ||
+  fail "nobody could feed a shared position sample: $(cat "$T/err.txt")"
 echo "ok: an operator may operate, not reload or calibrate"
 
 "$BUILD/daemon/sprayctl" --user start || fail "root cannot Start"

@@ -611,6 +611,18 @@ TEST(ConfigSchema, FleetPictureIntervalRange) {
   }
 }
 
+TEST(ConfigSchema, FleetGnssComesWithTheFleetSpeed) {
+  EXPECT_EQ(parse("").gnss.source, "gpsd");
+  const Config config = parse(
+      "[speed]\nsource = \"fleet\"\n[fleet]\nspeed_from = \"left\"\n[gnss]\nenabled = true\n"
+      "source = \"fleet\"\n");
+  EXPECT_EQ(config.gnss.source, "fleet");
+  const auto alone = parse_error({{"main.toml", "[gnss]\nenabled = true\nsource = \"fleet\"\n"}});
+  EXPECT_EQ(alone.key(), "gnss.source");
+  EXPECT_EQ(alone.line(), 3);
+  EXPECT_NE(std::string(alone.what()).find("speed.source"), std::string::npos) << alone.what();
+}
+
 TEST(ConfigSchema, FleetSpeedNeedsTheBoardItComesFrom) {
   const Config config = parse(
       "[speed]\nsource = \"fleet\"\nshared_timeout_s = 0.3\n[fleet]\nspeed_from = \"left\"\n");

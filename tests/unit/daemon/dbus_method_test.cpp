@@ -68,17 +68,21 @@ class RecordingHandler final : public CommandHandler {
     pump_test_s = seconds;
     return {};
   }
-  CommandResult motion(double& speed_m_per_s, double& distance_m, std::uint64_t& time_ns) override {
+  CommandResult motion(double& speed_m_per_s, double& distance_m, std::uint64_t& time_ns,
+                       SharedFix& fix) override {
     speed_m_per_s = 1.5;
     distance_m = 12.25;
     time_ns = 123456789;
+    fix = {52.5, 5.25, 90.0, io::GnssFixMode::k3D, 123000000, 1782311401000000000};
     return {};
   }
   CommandResult feed_shared_motion(double speed_m_per_s, double distance_m,
-                                   std::uint64_t sender_time_ns) override {
+                                   std::uint64_t sender_time_ns, const SharedFix& fix) override {
     shared_motion = {speed_m_per_s, distance_m, static_cast<double>(sender_time_ns)};
+    shared_fix = fix;
     return {};
   }
+  SharedFix shared_fix;
   std::array<double, 3> shared_motion{-1, -1, -1};
   void bus_lost() override {}
   std::array<double, 3> tested_valve{-1, -1, -1};
@@ -169,6 +173,28 @@ TEST_F(DbusMethodTest, ASharedMotionSampleReachesItsCommandWhole) {
   EXPECT_LT(call("FeedSharedMotion", "dd", 1.0, 2.0), 0) << "no sender time given";
   EXPECT_EQ(handler_.shared_motion[0], 2.5);
   EXPECT_GE(call("Motion"), 0);
+  EXPECT_EQ(handler_.shared_fix.mode, io::GnssFixMode::kNone) << "FeedSharedMotion has no fix";
+}
+
+TEST_F(DbusMethodTest, ASharedFixReachesItsCommandWhole) {
+  EXPECT_GE(
+      call("FeedSharedMotionWithFix", "ddtdddutx", 2.5, 104.75, std::uint64_t{9000000000}, 52.25,
+           5.5, 270.0, 3U, std::uint64_t{8900000000}, std::int64_t{1782311401000000000}),
+      0);
+  EXPECT_EQ(handler_.shared_motion, (std::array<double, 3>{2.5, 104.75, 9e9}));
+  EXPECT_DOUBLE_EQ(handler_.shared_fix.latitude_deg, 52.25);
+  EXPECT_DOUBLE_EQ(handler_.shared_fix.longitude_deg, 5.5);
+  EXPECT_DOUBLE_EQ(handler_.shared_fix.heading_deg, 270.0);
+  EXPECT_EQ(handler_.shared_fix.mode, io::GnssFixMode::k3D);
+  EXPECT_EQ(handler_.shared_fix.sender_time_ns, 8900000000U);
+  EXPECT_EQ(handler_.shared_fix.utc_ns, 1782311401000000000);
+  EXPECT_GE(call("FeedSharedMotionWithFix", "ddtdddutx", 1.0, 2.0, std::uint64_t{1}, 0.0, 0.0, 0.0,
+                 7U, std::uint64_t{1}, std::int64_t{0}),
+            0);
+  EXPECT_EQ(handler_.shared_fix.mode, io::GnssFixMode::kNone) << "an unknown mode is no fix";
+  EXPECT_LT(call("FeedSharedMotionWithFix", "ddt", 1.0, 2.0, std::uint64_t{1}), 0)
+      << "no fix given";
+  EXPECT_GE(call("MotionWithFix"), 0);
 }
 
 TEST_F(DbusMethodTest, ARefusalBecomesTheNamedError) {

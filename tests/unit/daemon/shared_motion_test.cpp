@@ -14,8 +14,8 @@ constexpr std::uint64_t kSenderEpochNs = 5'000'000'000'000;  // the owner's cloc
 
 SharedMotionSample motion_sample(double speed, double distance, std::chrono::nanoseconds sent,
                                  std::chrono::nanoseconds arrival, std::uint64_t count) {
-  return {speed, distance, kSenderEpochNs + static_cast<std::uint64_t>(sent.count()), arrival,
-          count};
+  return {speed,   distance, kSenderEpochNs + static_cast<std::uint64_t>(sent.count()),
+          arrival, count,    {}};
 }
 
 TEST(SharedMotion, NothingBeforeTheFirstSampleAndNoLossEither) {
