@@ -1,0 +1,93 @@
+# SPDX-License-Identifier: Apache-2.0
+"""docs/benchmarks.md is what tools/benchmarks/render.py writes, and the tools still work."""
+import json
+import os
+import pathlib
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+
+import benchmarks
+import render
+
+TOOLS = benchmarks.REPO / "tools" / "benchmarks"
+# A quick entry that needs no data set (bench-vision falls back to a synthetic field).
+QUICK_ENTRY = "vision-speed"
+
+
+def tool(name, *args):
+    return subprocess.run([sys.executable, str(TOOLS / name), *args], cwd=benchmarks.REPO,
+                          capture_output=True, text=True)
+
+
+class CommittedPage(unittest.TestCase):
+    def test_page_is_rendered_from_the_committed_results(self):
+        done = tool("render.py", "--check")
+        self.assertEqual(done.returncode, 0,
+                         "docs/benchmarks.md is stale or hand-edited:\n" + done.stdout[-4000:]
+                         + done.stderr)
+
+    def test_every_template_placeholder_names_a_manifest_entry(self):
+        manifest = benchmarks.load_manifest()
+        template = benchmarks.TEMPLATE.read_text()
+        for match in render.PLACEHOLDER.finditer(template):
+            words = match.group(1).split()
+            entry_id = words[1] if words[0] in ("run", "table") else match.group(1).split(":")[0]
+            self.assertIn(entry_id, manifest, match.group(0))
+
+
+class QuickEntryRunsAndRenders(unittest.TestCase):
+    def test_quick_entry_runs_and_its_result_renders(self):
+        manifest = benchmarks.load_manifest()
+        self.assertEqual(manifest[QUICK_ENTRY]["cost"], "quick")
+        with tempfile.TemporaryDirectory() as tmp:
+            results = pathlib.Path(tmp) / "results"
+            shutil.copytree(benchmarks.RESULTS, results)
+            os.remove(results / f"{QUICK_ENTRY}.json")
+            done = tool("run.py", "--only", QUICK_ENTRY, "--results-dir", str(results))
+            self.assertEqual(done.returncode, 0, done.stderr)
+            record = json.loads((results / f"{QUICK_ENTRY}.json").read_text())
+            for key in ("command", "commit", "date_utc", "machine", "wall_s", "result"):
+                self.assertIn(key, record)
+            self.assertGreater(record["result"]["pipeline_ms_median"], 0)
+            page = pathlib.Path(tmp) / "benchmarks.md"
+            done = tool("render.py", "--results-dir", str(results), "--out", str(page))
+            self.assertEqual(done.returncode, 0, done.stderr)
+            text = page.read_text()
+            self.assertNotIn("{{", text)
+            self.assertIn(f"`{QUICK_ENTRY}`, {record['date_utc']} UTC", text)
+            self.assertIn(f"median {record['result']['pipeline_ms_median']:.2f} ms", text)
+
+
+class Renderer(unittest.TestCase):
+    def render(self, template, result):
+        manifest = {"x": {"id": "x", "command": "true", "env": {}, "tables": {
+            "t": {"rows": "rows", "sort": "-v", "where": {"k": ["a", "b"]},
+                  "columns": [["k", "k"], ["v", "v", ".1f"]]}}}}
+        with tempfile.TemporaryDirectory() as tmp:
+            benchmarks.write_result(tmp, "x", {
+                "commit": "0" * 40, "date_utc": "2000-01-01 00:00", "wall_s": 1.0,
+                "machine": {"cpu": "cpu", "nproc": 2, "load_average_start": [0.5, 0, 0]},
+                "result": result})
+            return render.render(template, manifest, tmp)
+
+    def test_values_selectors_and_tables(self):
+        rows = [{"k": "a", "v": 1}, {"k": "b", "v": 2}, {"k": "c", "v": 3}]
+        page = self.render("{{x:rows[k=b].v|.2f}} {{x:rows.0.k}}\n{{table x t}}\n",
+                           {"rows": rows})
+        self.assertIn("2.00 a\n", page)
+        self.assertIn("| k | v |\n|---|---|\n| b | 2.0 |\n| a | 1.0 |\n", page)
+
+    def test_a_missing_value_fails_the_render(self):
+        with self.assertRaisesRegex(render.RenderError, "no 'nope'"):
+            self.render("{{x:nope}}", {"rows": []})
+        with self.assertRaisesRegex(render.RenderError, "no element"):
+            self.render("{{x:rows[k=z].v}}", {"rows": [{"k": "a"}]})
+        with self.assertRaisesRegex(render.RenderError, "no entry 'y'"):
+            self.render("{{run y}}", {})
+
+
+if __name__ == "__main__":
+    unittest.main()
