@@ -7,7 +7,8 @@ Placeholders in docs/benchmarks/page.md.in:
                       commit, on which machine and under which load its figures were measured
   {{table ID NAME}}   the table NAME of the entry's manifest `tables`, from its result
   {{ID:PATH}}         one value of the entry's result; {{ID:PATH|FMT}} formats it (Python's
-                      format spec, e.g. .3f). PATH is dot-separated keys and list indices; a
+                      format spec, e.g. .3f; `code`: in backticks; `range`: a [low, high]
+                      pair as low-high). PATH is dot-separated keys and list indices; a
                       part `key[a=x,b=y]` is the first element of list `key` whose fields a and b
                       print as x and y (`[a=x]` alone: of the result itself)
 
@@ -65,6 +66,10 @@ def show(value, fmt=""):
         return "-"
     if isinstance(value, bool):
         return "yes" if value else "no"
+    if fmt == "code":
+        return f"`{value}`"
+    if fmt == "range":  # [low, high], e.g. a confidence interval
+        return f"{value[0]:.3f}-{value[1]:.3f}"
     if fmt:
         return format(value, fmt)
     if isinstance(value, float):

@@ -67,7 +67,7 @@ def parse_output(entry, text):
 
 def run_entry(entry, results_dir, from_log=None):
     dirty = bool(git("status", "--porcelain", "--untracked-files=no", "--", ".",
-                     ":(exclude)docs/benchmarks"))
+                     ":(exclude)docs", ":(exclude)tools/benchmarks"))
     record = {
         "id": entry["id"],
         "command": entry["command"],
