@@ -66,7 +66,10 @@ class Renderer(unittest.TestCase):
     def render(self, template, result):
         manifest = {"x": {"id": "x", "command": "true", "env": {}, "tables": {
             "t": {"rows": "rows", "sort": "-v", "where": {"k": ["a", "b"]},
-                  "columns": [["k", "k"], ["v", "v", ".1f"]]}}}}
+                  "columns": [["k", "k"], ["v", "v", ".1f"]]},
+            "g": {"rows": "rows", "group_by": "k",
+                  "columns": [["k", "k"], ["n", "v", "", "count"], ["mean", "v", ".1f", "mean"],
+                              ["max", "v", "", "max"]]}}}}
         with tempfile.TemporaryDirectory() as tmp:
             benchmarks.write_result(tmp, "x", {
                 "commit": "0" * 40, "date_utc": "2000-01-01 00:00", "wall_s": 1.0,
@@ -80,6 +83,11 @@ class Renderer(unittest.TestCase):
                            {"rows": rows})
         self.assertIn("2.00 a\n", page)
         self.assertIn("| k | v |\n|---|---|\n| b | 2.0 |\n| a | 1.0 |\n", page)
+
+    def test_grouped_table_aggregates_each_group(self):
+        rows = [{"k": "a", "v": 1}, {"k": "b", "v": 4}, {"k": "a", "v": 3}]
+        page = self.render("{{table x g}}\n", {"rows": rows})
+        self.assertIn("| a | 2 | 2.0 | 3 |\n| b | 1 | 4.0 | 4 |\n", page)
 
     def test_a_missing_value_fails_the_render(self):
         with self.assertRaisesRegex(render.RenderError, "no 'nope'"):

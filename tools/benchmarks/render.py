@@ -110,10 +110,36 @@ def table(entry, name, record, where):
     columns = spec["columns"]
     lines = ["| " + " | ".join(c[0] for c in columns) + " |",
              "|" + "---|" * len(columns)]
+    if "group_by" in spec:
+        # One line per value of the field, in order of first appearance; each column then
+        # aggregates its group (its fourth item: first, count, mean, min, max, all).
+        groups = {}
+        for row in rows:
+            groups.setdefault(show(lookup(row, spec["group_by"], where)), []).append(row)
+        for group in groups.values():
+            cells = []
+            for column in columns:
+                values = [lookup(row, column[1], where) for row in group]
+                how = column[3] if len(column) > 3 else "first"
+                if how not in AGGREGATES:
+                    raise RenderError(f"{where}: unknown aggregate '{how}'")
+                cells.append(show(AGGREGATES[how](values), column[2] if len(column) > 2 else ""))
+            lines.append("| " + " | ".join(cells) + " |")
+        return "\n".join(lines)
     for row in rows:
         cells = [show(lookup(row, c[1], where), c[2] if len(c) > 2 else "") for c in columns]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+AGGREGATES = {
+    "first": lambda values: values[0],
+    "count": len,
+    "mean": lambda values: sum(values) / len(values),
+    "min": min,
+    "max": max,
+    "all": all,
+}
 
 
 def render(template_text, manifest, results_dir, template_name="page.md.in"):
