@@ -99,6 +99,8 @@ def table(entry, name, record, where):
     if spec is None:
         raise RenderError(f"{where}: {entry['id']} has no table '{name}' in the manifest")
     rows = lookup(record["result"], spec.get("rows", ""), where)
+    if isinstance(rows, dict):  # one row per key: fields `name` and `value`
+        rows = [{"name": name, "value": value} for name, value in rows.items()]
     if not isinstance(rows, list):
         raise RenderError(f"{where}: rows of {entry['id']}.{name} are not a list")
     for field, kept in spec.get("where", {}).items():
