@@ -16,6 +16,7 @@ import argparse
 import datetime
 import json
 import os
+import re
 import subprocess
 import sys
 import time
@@ -40,12 +41,26 @@ def cpu_model():
 
 
 def parse_output(entry, text):
-    """The command's stdout as data: one JSON document, JSON lines, or HIL figure lines."""
+    """The command's stdout as data: one JSON document, JSON lines, figures matched in text, or
+    HIL figure lines."""
     kind = entry["output"]
     if kind == "json":
         return json.loads(text)
     if kind == "json-lines":
         return [json.loads(line) for line in text.splitlines() if line.strip().startswith("{")]
+    if kind == "text":
+        # The manifest's patterns: name -> a regular expression whose one group is the figure.
+        figures = {}
+        for name, pattern in entry.get("patterns", {}).items():
+            match = re.search(pattern, text, re.M)
+            if not match:
+                raise ValueError(f"pattern {name} ({pattern}) not found")
+            value = match.group(1)
+            try:
+                figures[name] = int(value) if value.lstrip("-").isdigit() else float(value)
+            except ValueError:
+                figures[name] = value
+        return figures
     if kind == "hil-log":
         # WEEDSPRAY-HIL key=value figures; the last value of a key counts, as the VM test reads it.
         figures, steps, verdict = {}, {}, None
