@@ -11,6 +11,7 @@ import unittest
 
 import benchmarks
 import render
+import run
 
 TOOLS = benchmarks.REPO / "tools" / "benchmarks"
 # A quick entry that needs no data set (bench-vision falls back to a synthetic field).
@@ -96,6 +97,30 @@ class Renderer(unittest.TestCase):
             self.render("{{x:rows[k=z].v}}", {"rows": [{"k": "a"}]})
         with self.assertRaisesRegex(render.RenderError, "no entry 'y'"):
             self.render("{{run y}}", {})
+
+
+class OutputParsing(unittest.TestCase):
+    def test_text_output_takes_each_patterns_group(self):
+        entry = {"id": "x", "output": "text",
+                 "patterns": {"edges": r"placement: (\d+) edges", "p95": r"p95 ([0-9.]+) cm"}}
+        figures = run.parse_output(entry, "noise\nplacement: 62 edges, p95 1.42 cm\n")
+        self.assertEqual(figures, {"edges": 62, "p95": 1.42})
+        with self.assertRaisesRegex(ValueError, "edges"):
+            run.parse_output(entry, "no figures here\n")
+
+    def test_hil_log_keeps_figures_steps_and_verdict(self):
+        log = ("boot noise\nWEEDSPRAY-HIL kill9_unsafe_ms=4.2\n"
+               "WEEDSPRAY-HIL-STEP kill9_safe PASS: written 0\n"
+               "WEEDSPRAY-HIL kill9_unsafe_ms=5.0\nWEEDSPRAY-HIL-RESULT PASS steps=1 failed=0\n")
+        parsed = run.parse_output({"id": "hil", "output": "hil-log"}, log)
+        self.assertEqual(parsed["figures"], {"kill9_unsafe_ms": 5.0})
+        self.assertEqual(parsed["steps"], {"kill9_safe": "PASS"})
+        self.assertEqual(parsed["verdict"], "PASS steps=1 failed=0")
+
+    def test_json_lines_ignore_other_lines(self):
+        parsed = run.parse_output({"id": "m", "output": "json-lines"},
+                                  'starting\n{"a": 1}\n{"a": 2}\n')
+        self.assertEqual(parsed, [{"a": 1}, {"a": 2}])
 
 
 if __name__ == "__main__":

@@ -88,10 +88,19 @@ def provenance(entry, record):
             f"{source}.*")
 
 
-def command_block(entry):
+def command_block(entry, width=96):
+    """The command as a sh block, long ones continued before an option (the same command)."""
     env = " ".join(f"{k}={v}" for k, v in entry["env"].items())
     command = f"{env} {entry['command']}" if env else entry["command"]
-    return f"```sh\n{command}\n```"
+    lines = [""]
+    for i, part in enumerate(command.split(" --")):
+        part = part if i == 0 else "--" + part
+        if lines[-1] and len(lines[-1]) + 1 + len(part) > width:
+            lines[-1] += " \\"
+            lines.append("    " + part)
+        else:
+            lines[-1] = f"{lines[-1]} {part}" if lines[-1] else part
+    return "```sh\n" + "\n".join(lines) + "\n```"
 
 
 def table(entry, name, record, where):

@@ -40,6 +40,14 @@ def cpu_model():
     return "unknown"
 
 
+def number_or_text(value):
+    """A printed figure as a number when it is one, so the page can format it."""
+    try:
+        return int(value) if value.lstrip("-").isdigit() else float(value)
+    except ValueError:
+        return value
+
+
 def parse_output(entry, text):
     """The command's stdout as data: one JSON document, JSON lines, figures matched in text, or
     HIL figure lines."""
@@ -55,11 +63,7 @@ def parse_output(entry, text):
             match = re.search(pattern, text, re.M)
             if not match:
                 raise ValueError(f"pattern {name} ({pattern}) not found")
-            value = match.group(1)
-            try:
-                figures[name] = int(value) if value.lstrip("-").isdigit() else float(value)
-            except ValueError:
-                figures[name] = value
+            figures[name] = number_or_text(match.group(1))
         return figures
     if kind == "hil-log":
         # WEEDSPRAY-HIL key=value figures; the last value of a key counts, as the VM test reads it.
@@ -68,7 +72,7 @@ def parse_output(entry, text):
             if line.startswith("WEEDSPRAY-HIL "):
                 key, _, value = line[len("WEEDSPRAY-HIL "):].partition("=")
                 if value:
-                    figures[key.strip()] = value.strip()
+                    figures[key.strip()] = number_or_text(value.strip())
             elif line.startswith("WEEDSPRAY-HIL-STEP "):
                 name, _, rest = line[len("WEEDSPRAY-HIL-STEP "):].partition(" ")
                 steps[name] = rest.split(":", 1)[0]
