@@ -67,7 +67,7 @@ def show(value, fmt=""):
     if isinstance(value, bool):
         return "yes" if value else "no"
     if fmt == "code":
-        return f"`{value}`"
+        return f"`{value}`" if value != "" else "-"
     if fmt == "range":  # [low, high], e.g. a confidence interval
         return f"{value[0]:.3f}-{value[1]:.3f}"
     if fmt:
