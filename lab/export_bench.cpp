@@ -89,6 +89,8 @@ int main(int argc, char** argv) {
   app.add_option("--work", work, "scratch folder (replaced)")->capture_default_str();
   bool keep = false;
   app.add_flag("--keep", keep, "leave the log and the maps in --work (to look at them)");
+  bool json = false;
+  app.add_flag("--json", json, "print one JSON object instead of text");
   CLI11_PARSE(app, argc, argv);
 
   const fs::path dir = fs::path(work) / "log";
@@ -159,14 +161,26 @@ int main(int argc, char** argv) {
     log_bytes += e.file_size();
     ++log_files;
   }
-  std::printf(
-      "synthetic log: %.1f h x %d nozzles at %.0f records/s = %lld records, %.0f%% of nozzle "
-      "records spraying, %zu files, %.0f MB, written in %.1f s\n",
-      hours, nozzles, record_hz, static_cast<long long>(records),
-      100.0 * static_cast<double>(open_nozzle_records) / static_cast<double>(records * nozzles),
-      log_files, static_cast<double>(log_bytes) / 1e6,
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  const double spraying_pct =
+      100.0 * static_cast<double>(open_nozzle_records) / static_cast<double>(records * nozzles);
+  const double write_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (json) {
+    std::printf(
+        "{\"hours\": %.2f, \"nozzles\": %d, \"record_hz\": %.2f, \"records\": %lld, "
+        "\"spraying_pct\": %.1f, \"log_files\": %zu, \"log_mb\": %.1f, \"write_s\": %.2f, "
+        "\"exports\": [",
+        hours, nozzles, record_hz, static_cast<long long>(records), spraying_pct, log_files,
+        static_cast<double>(log_bytes) / 1e6, write_s);
+  } else {
+    std::printf(
+        "synthetic log: %.1f h x %d nozzles at %.0f records/s = %lld records, %.0f%% of nozzle "
+        "records spraying, %zu files, %.0f MB, written in %.1f s\n",
+        hours, nozzles, record_hz, static_cast<long long>(records), spraying_pct, log_files,
+        static_cast<double>(log_bytes) / 1e6, write_s);
+  }
 
+  const char* separator = "";
   for (const char* format : {"gpkg", "shp", "geojson"}) {
     std::vector<double> seconds;
     maps::ExportSummary summary;
@@ -197,6 +211,18 @@ int main(int argc, char** argv) {
     } else {
       bytes = fs::file_size(out);
     }
+    if (json) {
+      std::printf(
+          "%s{\"format\": \"%s\", \"runs\": %d, \"mean_s\": %.3f, \"sd_s\": %.3f, "
+          "\"worst_s\": %.3f, \"polygons\": %llu, \"cells\": %llu, \"volume_l\": %.1f, "
+          "\"area_ha\": %.3f, \"output_mb\": %.1f}",
+          separator, format, repeat, mean, sd, worst,
+          static_cast<unsigned long long>(summary.stretches),
+          static_cast<unsigned long long>(summary.cells), summary.volume_l, summary.area_m2 / 10000,
+          static_cast<double>(bytes) / 1e6);
+      separator = ", ";
+      continue;
+    }
     std::printf(
         "%-7s export: mean %.2f s, sd %.2f s, worst %.2f s over %d runs; %llu polygons, %llu "
         "cells, %.0f L on %.2f ha; %.0f MB\n",
@@ -204,6 +230,7 @@ int main(int argc, char** argv) {
         static_cast<unsigned long long>(summary.cells), summary.volume_l, summary.area_m2 / 10000,
         static_cast<double>(bytes) / 1e6);
   }
+  if (json) std::printf("]}\n");
   if (!keep) fs::remove_all(work);
   return 0;
 }

@@ -4,16 +4,17 @@
 # synthetic WxH field (soil with green blocks), spraying, and takes N snapshots 0.6 s apart
 # with `sprayctl snapshot`. Prints mean/sd/worst of: the call's wall time (waiting for the
 # camera's next frame + overlay + PNG + transfer), the daemon's overlay+PNG time on its
-# encoder thread (its debug log line), and the PNG size.
-#   tools/snapshot-timing.sh [--count N] [--size WxH] [--build DIR]
+# encoder thread (its debug log line), and the PNG size; --json: one JSON object instead.
+#   tools/snapshot-timing.sh [--count N] [--size WxH] [--build DIR] [--json]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-count=20 size=1280x800 build=build/default
+count=20 size=1280x800 build=build/default json=0
 while (($#)); do
   case "$1" in
     --count) count="$2"; shift ;;
     --size) size="$2"; shift ;;
     --build) build="$2"; shift ;;
+    --json) json=1 ;;
     *) sed -n '2,7p' "$0"; exit 2 ;;
   esac
   shift
@@ -51,10 +52,15 @@ for i in $(seq 1 "$count"); do
   "$build/daemon/sprayctl" --user snapshot "$tmp/s$i.png" >/dev/null
   echo "$(( ($(date +%s%N) - start) / 1000 )) $(stat -c %s "$tmp/s$i.png")" >>"$tmp/calls.txt"
 done
-/usr/bin/python3 - "$tmp/calls.txt" "$tmp/daemon.log" "$size" <<'PYEOF'
-import re, statistics as st, sys
+/usr/bin/python3 - "$tmp/calls.txt" "$tmp/daemon.log" "$size" "$json" <<'PYEOF'
+import json, re, statistics as st, sys
 calls = [tuple(map(int, l.split())) for l in open(sys.argv[1])]
 encode = [float(m.group(1)) for m in re.finditer(r"overlay \+ PNG ([0-9.]+) ms", open(sys.argv[2]).read())][1:]
+if sys.argv[4] == "1":
+    stats = lambda xs: {"mean": round(st.mean(xs), 2), "sd": round(st.pstdev(xs), 2), "worst": round(max(xs), 2), "n": len(xs)}
+    print(json.dumps({"frame": sys.argv[3], "snapshot_call_ms": stats([c[0] / 1000 for c in calls]),
+                      "overlay_png_ms": stats(encode), "png_kib": stats([c[1] / 1024 for c in calls])}))
+    sys.exit(0)
 def show(name, xs, unit):
     print(f"{name:28s} mean {st.mean(xs):8.1f}  sd {st.pstdev(xs):7.1f}  worst {max(xs):8.1f} {unit}  (n={len(xs)})")
 print(f"live view, {sys.argv[3]} frame, sim camera at 2 m/s:")
