@@ -12,12 +12,12 @@ namespace {
 
 using namespace std::chrono_literals;
 
-constexpr std::uint64_t kSenderEpochNs = 7'000'000'000'000;  // the owner's clock: its own epoch
-constexpr double kLat = 52.1;
-constexpr double kLon = 5.2;
+constexpr std::uint64_t kOwnerEpochNs = 7'000'000'000'000;  // the owner's clock: its own epoch
+constexpr double kOwnerLat = 52.1;
+constexpr double kOwnerLon = 5.2;
 
 std::uint64_t sender_ns(std::chrono::nanoseconds t) {
-  return kSenderEpochNs + static_cast<std::uint64_t>(t.count());
+  return kOwnerEpochNs + static_cast<std::uint64_t>(t.count());
 }
 
 // A motion sample sent at `sent` on the owner's clock with the owner's fix from `fix_at`.
@@ -25,7 +25,7 @@ SharedMotionSample sample_with_fix(double speed, double heading_deg, std::chrono
                                    std::chrono::nanoseconds fix_at,
                                    std::chrono::nanoseconds arrival, std::uint64_t count) {
   SharedMotionSample s{speed, 0.0, sender_ns(sent), arrival, count, {}};
-  s.fix = {kLat, kLon, heading_deg, io::GnssFixMode::k3D, sender_ns(fix_at), 0};
+  s.fix = {kOwnerLat, kOwnerLon, heading_deg, io::GnssFixMode::k3D, sender_ns(fix_at), 0};
   return s;
 }
 
@@ -35,7 +35,7 @@ void moved_by(const GnssSample& sample, std::chrono::nanoseconds now, double& no
   const auto at =
       antenna_at(sample.value, std::chrono::duration<double>(now - sample.sample_time).count());
   ASSERT_TRUE(at.has_value());
-  local_offset({kLat, kLon}, *at, north_m, east_m);
+  local_offset({kOwnerLat, kOwnerLon}, *at, north_m, east_m);
 }
 
 // The owner's fix is 0.3 s older than its motion sample; 0.2 s after the sample arrived the
