@@ -73,13 +73,15 @@ class Handler final : public weedspray::daemon::CommandHandler {
       return {weedspray::daemon::kErrorInvalidArgument, "out of range"};
     return {};
   }
-  CommandResult motion(double& speed_m_per_s, double& distance_m, std::uint64_t& time_ns) override {
+  CommandResult motion(double& speed_m_per_s, double& distance_m, std::uint64_t& time_ns,
+                       weedspray::daemon::SharedFix&) override {
     speed_m_per_s = 1;
     distance_m = 2;
     time_ns = 3;
     return {};
   }
-  CommandResult feed_shared_motion(double speed_m_per_s, double, std::uint64_t) override {
+  CommandResult feed_shared_motion(double speed_m_per_s, double, std::uint64_t,
+                                   const weedspray::daemon::SharedFix&) override {
     if (!(speed_m_per_s >= 0 && speed_m_per_s <= 50))
       return {weedspray::daemon::kErrorInvalidArgument, "out of range"};
     return {};
