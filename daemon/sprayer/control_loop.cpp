@@ -8,12 +8,15 @@
 #include "daemon/sprayer/loop_time.hpp"
 #include "daemon/sprayer/shared_position.hpp"
 #include "daemon/sprayer/sprayer.hpp"
+#include "daemon/sprayer/step_settings.hpp"
 
 namespace weedspray::daemon {
 
 using loop_time::from_seconds;
 using loop_time::seconds;
 using namespace std::chrono_literals;
+
+static_assert(control::kMaxCommandNozzles == io::kMaxValves);
 
 namespace {
 
@@ -49,9 +52,7 @@ void Sprayer::feed_nozzle_health(control::PhaseWindows& windows, Nanos now, bool
 }
 
 void Sprayer::control_loop(std::stop_token stop) noexcept {
-  // 500 Hz: a frame waits at most 2 ms to be scheduled, and at 2.5 m/s the vehicle moves
-  // 5 mm per cycle.
-  constexpr Nanos kPeriod = 2ms;
+  constexpr Nanos kPeriod = kControlLoopPeriod;  // 500 Hz (step_settings.hpp)
   constexpr Nanos kFlowWindow = 250ms;
   io::PeriodicLoop loop(*io_.clock, kPeriod, io_.clock->now(), &timing_.control_loop,
                         from_seconds(config_.alarms.timing_tolerance_ms / 1e3));
@@ -100,6 +101,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   std::array<double, io::kMaxValves> nozzle_speed{};
   std::array<double, io::kMaxValves> arc_extra_m{};  // nozzle's travel minus the centre line's
   std::array<double, io::kMaxValves> frame_odometer{};
+  std::array<double, io::kMaxValves> target_flow{};  // the rate law's flow per nozzle
   // One staggered phase (period / nozzles), the meter read a lag behind the valves.
   control::PhaseWindows health_windows(
       from_seconds(1.0 / (config_.pwm.frequency_hz *
@@ -118,7 +120,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       // The trim's correction is relative to the calibration it learned against: a new meter K
       // or nozzle line (sprayctl calibrate) starts it afresh.
       if (!same_calibration(trim_calibration, params, nozzles)) {
-        flow_trim_.reset();
+        nozzle_command_.reset_trim();
         trim_calibration = params;
       }
     }
@@ -253,11 +255,8 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
     // calibration in Idle) and the pressure sensor fresh.
     const bool calibrating = params.calibration_valves && params.pump_enabled &&
                              !params.valves_enabled && !pressure_stale;
-    const double compensation_pressure = params.pressure_compensation ? pressure.pressure_mpa : 0.0;
-
-    io::ValveCommand command;
-    command.valve_count = static_cast<std::uint32_t>(nozzles);
-    double open_sum = 0;
+    // The schedule judges a planned density at the pressure the last cycle's duties used.
+    const double compensation_pressure = nozzle_command_.outputs().compensation_pressure_mpa;
     for (std::size_t n = 0; n < nozzles; ++n) {
       const int owner = nozzle_owner_[n];
       double density = 0;
@@ -279,45 +278,39 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       status.density[n] = density;
       // A camera whose weed model fails closes its own nozzles until it processes frames again.
       const bool blind = owner >= 0 && cameras_[static_cast<std::size_t>(owner)].vision_failed;
-      double duty = 0;
-      if (calibrating) {
-        duty = params.calibration_duty_pct[n];
-      } else if (spray && !blind) {
-        const control::SprayDecision decision = control::spray_decision(
-            params.law, params.lines[n], density, nozzle_speed[n], compensation_pressure);
-        duty = decision.duty_pct;
-        if (!quantisers_.empty()) {
-          duty = control::clamp_duty_for_flow_pct(
-              params.law, quantisers_[n].quantise(std::clamp(decision.raw_duty_pct, 0.0, 100.0)),
-              decision.target_flow_l_per_min);
-        }
-      } else if (!quantisers_.empty()) {
-        quantisers_[n].reset();
-      }
-      command.duty_pct[n] = duty;
-      open_sum += duty / 100.0;
+      target_flow[n] = spray && !blind
+                           ? control::target_flow_l_per_min(params.law, density, nozzle_speed[n])
+                           : 0.0;
+    }
+    // The duties (control/nozzle_command_step.hpp): the lab's rig runs the same step at the
+    // same period, so `weedspray-lab experiment` measures this law, quantiser and trim.
+    control::NozzleCommandInputs command_in;
+    command_in.dt_s = dt;
+    command_in.spraying = spray;
+    command_in.trim = io_.flow != nullptr;
+    command_in.law = params.law;
+    command_in.pressure_compensation = params.pressure_compensation;
+    command_in.pressure_mpa = pressure.pressure_mpa;
+    command_in.setpoint_mpa = params.setpoint_mpa;
+    command_in.pulses = status.flow_pulses;
+    command_in.pulses_per_litre = params.flow_pulses_per_litre;
+    command_in.target_flow_l_per_min = std::span<const double>(target_flow.data(), nozzles);
+    command_in.lines = std::span<const control::NozzleLine>(params.lines.data(), nozzles);
+    const control::NozzleCommandOutputs& commanded = nozzle_command_.step(command_in);
+    io::ValveCommand command;
+    command.valve_count = static_cast<std::uint32_t>(nozzles);
+    double open_sum = 0;
+    for (std::size_t n = 0; n < nozzles; ++n) {
+      // A calibration holds the duties it asked for (spray is off then: the step closed all).
+      command.duty_pct[n] = calibrating ? params.calibration_duty_pct[n] : commanded.duty_pct[n];
+      open_sum += command.duty_pct[n] / 100.0;
     }
     status.open_fraction = nozzles > 0 ? open_sum / static_cast<double>(nozzles) : 0.0;
     if (open_sum > 0.0) status.valves_last_open = now;
-    // The flow trim (control/flow_trim_step.hpp): the lab's rig runs the same step, so
-    // `weedspray-lab experiment orthogonal` measures this trim.
-    control::FlowTrimStepInputs trim;
-    trim.dt_s = dt;
-    trim.spraying = io_.flow != nullptr && spray;
-    trim.pressure_mpa = pressure.pressure_mpa;
-    trim.setpoint_mpa = params.setpoint_mpa;
-    trim.compensation_pressure_mpa = compensation_pressure;
-    trim.pulses = status.flow_pulses;
-    trim.pulses_per_litre = params.flow_pulses_per_litre;
-    trim.duty_pct = std::span<double>(command.duty_pct.data(), nozzles);
-    trim.lines = std::span<const control::NozzleLine>(params.lines.data(), nozzles);
-    trim.min_duty_pct = params.law.min_duty_pct;
-    trim.max_duty_pct = params.law.max_duty_pct;
-    const control::FlowTrimStepOutputs& trimmed = flow_trim_.step(trim);
-    status.flow_trim_active = trimmed.active;
-    status.flow_trim_correction = trimmed.correction;
-    status.calibration_ratio = trimmed.calibration_ratio;
-    status.calibration_ratio_known = trimmed.calibration_ratio_known;
+    status.flow_trim_active = commanded.trim.active;
+    status.flow_trim_correction = commanded.trim.correction;
+    status.calibration_ratio = commanded.trim.calibration_ratio;
+    status.calibration_ratio_known = commanded.trim.calibration_ratio_known;
     command.issued_at = now;
     pwm_driver_->command(command);
     for (std::size_t n = 0; n < nozzles; ++n) status.duty_pct[n] = command.duty_pct[n];

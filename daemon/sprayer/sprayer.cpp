@@ -51,6 +51,7 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
       io_(backends),
       pressure_step_(std::make_unique<control::PressureLoopStep>(pressure_loop_config(config))),
       schedule_(std::make_unique<control::PwmSchedule>(pwm_config(config))),
+      nozzle_command_(nozzle_command_config(config)),
       estop_(std::make_unique<EstopGuard>(*backends.clock, backends.estop, backends.valves,
                                           backends.pump)) {
   // pressure.loop_hz goes down to 10 Hz: the watch waits three of the loop's periods, never less
@@ -96,20 +97,6 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
     health.alarm_hold_s = config.nozzle_health.alarm_hold_s;
     health.alarm_threshold = config.nozzle_health.alarm_threshold;
     nozzle_health_.emplace(health);
-  }
-  if (config.spray.quantiser_levels >= 2) {
-    std::vector<double> levels{0.0};
-    const int n = config.spray.quantiser_levels;
-    for (int i = 0; i < n; ++i) {
-      const double level = config.spray.duty_min_pct +
-                           (config.spray.duty_max_pct - config.spray.duty_min_pct) * i / (n - 1);
-      // duty_min_pct = 0 or duty_max_pct = 100: that level is the closed or open one already.
-      if (level > levels.back() && level < 100.0) levels.push_back(level);
-    }
-    levels.push_back(100.0);
-    for (std::size_t i = 0; i < nozzles; ++i) {
-      quantisers_.emplace_back(levels, config.spray.hysteresis_pct);
-    }
   }
   if (config.cameras.size() > kMaxCameras || config.cameras.size() != io_.cameras.size()) {
     throw std::invalid_argument("camera count: at most 8, one backend per [[camera]]");

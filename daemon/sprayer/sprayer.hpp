@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "control/flow_feedback.hpp"
-#include "control/flow_trim_step.hpp"
+#include "control/nozzle_command_step.hpp"
 #include "control/nozzle_health.hpp"
 #include "control/nozzle_scheduler.hpp"
 #include "control/odometry.hpp"
@@ -185,12 +185,11 @@ class Sprayer {
   std::unique_ptr<control::PwmSchedule> schedule_;
   std::unique_ptr<io::ValvePwmDriver<control::PwmSchedule>> pwm_driver_;
   std::optional<control::Odometry> odometry_;
-  // The meter against the lines at the commanded duties, in 1 s windows (whole PWM periods at
-  // whole Hz): the trim's (fast) and calibration_drift's (slow) ratio.
-  control::FlowTrimStep flow_trim_;
+  // The valve duties of each control cycle (law, quantiser, compensation, flow trim); the trim
+  // reads the meter against the lines in 1 s windows (whole PWM periods at whole Hz).
+  control::NozzleCommandStep nozzle_command_;
   std::unique_ptr<EstopGuard> estop_;  // its latch is read by the valve and pressure loops
   std::optional<control::NozzleHealth> nozzle_health_;  // [nozzle_health] enabled; control loop
-  std::vector<control::DutyQuantiser> quantisers_;
   std::array<CameraWorker, kMaxCameras> cameras_;
   InferenceGate inference_gate_;  // one weed-model inference at a time, in arrival order
   std::size_t camera_count_ = 0;

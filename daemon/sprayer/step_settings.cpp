@@ -58,6 +58,28 @@ control::PwmConfig pwm_config(const Config& config) {
   return pwm;
 }
 
+control::NozzleCommandConfig nozzle_command_config(const Config& config) {
+  control::NozzleCommandConfig c;
+  c.nozzles = static_cast<std::size_t>(config.boom.nozzles);
+  const int n = config.spray.quantiser_levels;
+  if (n >= 2) {
+    // Closed, n levels from duty_min_pct to duty_max_pct, open: at most 16 (n <= 14).
+    std::size_t count = 0;
+    c.quantiser_levels_pct[count++] = 0.0;
+    for (int i = 0; i < n; ++i) {
+      const double level = config.spray.duty_min_pct +
+                           (config.spray.duty_max_pct - config.spray.duty_min_pct) * i / (n - 1);
+      // duty_min_pct = 0 or duty_max_pct = 100: that level is the closed or open one already.
+      if (level > c.quantiser_levels_pct[count - 1] && level < 100.0)
+        c.quantiser_levels_pct[count++] = level;
+    }
+    c.quantiser_levels_pct[count++] = 100.0;
+    c.quantiser_level_count = count;
+    c.quantiser_hysteresis_pct = config.spray.hysteresis_pct;
+  }
+  return c;
+}
+
 const Config& default_settings() {
   static const Config defaults = default_config();
   return defaults;

@@ -5,6 +5,9 @@
 // runs the daemon's gains, loop rate and valve timing unless it says otherwise.
 #pragma once
 
+#include <chrono>
+
+#include "control/nozzle_command_step.hpp"
 #include "control/pressure_loop_step.hpp"
 #include "control/pwm_schedule.hpp"
 #include "daemon/config/config.hpp"
@@ -14,6 +17,13 @@ namespace weedspray::daemon {
 control::FuzzyPidConfig pressure_controller_config(const Config& config);
 control::PressureLoopConfig pressure_loop_config(const Config& config);
 control::PwmConfig pwm_config(const Config& config);
+// The valve duties' step: [boom] nozzles and the [spray] quantiser; the trim's defaults.
+control::NozzleCommandConfig nozzle_command_config(const Config& config);
+
+// The control loop's period: a frame waits at most this long to be scheduled, and at 2.5 m/s
+// the vehicle moves 5 mm per cycle. The lab's rig steps the valve duties at the same period.
+inline constexpr std::chrono::nanoseconds kControlLoopPeriod = std::chrono::milliseconds(2);
+
 // default_config(), built once per process (the schema's defaults).
 const Config& default_settings();
 

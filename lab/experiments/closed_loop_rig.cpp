@@ -32,12 +32,27 @@ PressureLoopConfig pressure_loop_config(const RigConfig& c) {
   return p;
 }
 
-FlowTrimStepConfig flow_trim_step_config(const RigConfig& c) {
-  FlowTrimStepConfig t;
-  t.trim = c.flow_trim;
-  t.window_s = c.flow_trim_window_s;
-  t.pressure_filter_s = c.compensation_filter_s;
-  return t;
+// The daemon's duty step for the rig's boom, with the rig's trim and filter settings.
+NozzleCommandConfig nozzle_command_config(const RigConfig& c) {
+  daemon::Config config = daemon::default_settings();
+  config.boom.nozzles = c.plant.nozzle_count;
+  NozzleCommandConfig command = daemon::nozzle_command_config(config);
+  if (!c.quantise) command.quantiser_level_count = 0;
+  command.trim.trim = c.flow_trim;
+  command.trim.window_s = c.flow_trim_window_s;
+  command.trim.pressure_filter_s = c.compensation_filter_s;
+  command.compensation_filter_s = c.compensation_filter_s;
+  return command;
+}
+
+// Without the law's clamp the duty is the line's, limited to 0..100 %.
+SprayLawConfig command_law(const RigConfig& c) {
+  if (c.duty_clamp) return *c.duty_clamp;
+  SprayLawConfig open;
+  open.min_duty_pct = 0.0;
+  open.max_duty_pct = 100.0;
+  open.low_duty_policy = LowDutyPolicy::kClose;
+  return open;
 }
 
 std::chrono::nanoseconds nanos(double s) {
@@ -87,16 +102,21 @@ double daemon_pwm_min_off_s() {
 double daemon_over_pressure_mpa() {
   return daemon::default_settings().alarms.over_pressure_mpa;
 }
+double daemon_control_loop_period_s() {
+  return std::chrono::duration<double>(daemon::kControlLoopPeriod).count();
+}
 
 ClosedLoopRig::ClosedLoopRig(const RigConfig& config)
     : config_(config),
       plant_(config.plant, config.seed),
       pressure_step_(pressure_loop_config(config)),
       pwm_(pwm_config(config)),
-      trim_step_(flow_trim_step_config(config)),
-      compensation_filter_(config.compensation_filter_s) {
+      command_step_(nozzle_command_config(config)),
+      boom_trim_pressure_(config.compensation_filter_s) {
   if (!(config.control_period_s > 0.0 && config.control_period_s <= 0.1))
     throw std::invalid_argument("RigConfig.control_period_s must be in (0, 0.1]");
+  if (!(config.command_period_s > 0.0 && config.command_period_s <= 0.1))
+    throw std::invalid_argument("RigConfig.command_period_s must be in (0, 0.1]");
   if (config.adc_bits < 8 || config.adc_bits > 24)
     throw std::invalid_argument("RigConfig.adc_bits must be in [8, 24]");
   for (const double delay : {config.converter_lead_s, config.converter_lag_s}) {
@@ -166,11 +186,12 @@ void ClosedLoopRig::set_pwm_duties() {
 }
 
 void ClosedLoopRig::apply_flow_requests(double dt_s) {
-  const int n = plant_.nozzle_count();
-  const double pressure = config_.fixes.pressure_compensation ? filtered_pressure_mpa_ : 0.0;
+  const auto n = static_cast<std::size_t>(plant_.nozzle_count());
+  // The model trim judges each request at the pressure the last duties were compensated with.
+  const double last_pressure = command_step_.outputs().compensation_pressure_mpa;
   std::array<NozzleLine, plant::kMaxNozzles> lines{};
-  for (int i = 0; i < n; ++i) {
-    const auto k = static_cast<std::size_t>(i);
+  std::array<double, plant::kMaxNozzles> flows{};
+  for (std::size_t k = 0; k < n; ++k) {
     // The spray-rate law owns the full-open rule (spray_rate_law.hpp); the rig only hands it
     // the calibrated full-open flow.
     lines[k] = lines_[k];
@@ -178,35 +199,32 @@ void ClosedLoopRig::apply_flow_requests(double dt_s) {
     // The model trim asks the line for what makes this nozzle deliver the request, but never
     // below a full opening the law chose (boom_trim.hpp).
     double flow = requested_flows_[k];
-    line_slopes_[k] = line_slope_l_per_min_per_pct(lines[k], pressure);
-    if (boom_trim_ && flow > 0.0 && raw_duty_for_flow_pct(lines[k], flow, pressure) < 100.0)
+    line_slopes_[k] = line_slope_l_per_min_per_pct(lines[k], last_pressure);
+    if (boom_trim_ && flow > 0.0 && raw_duty_for_flow_pct(lines[k], flow, last_pressure) < 100.0)
       flow = boom_trim_->flow_to_ask(flow, line_slopes_[k]);
-    double duty = flow > 0.0 ? raw_duty_for_flow_pct(lines[k], flow, pressure) : 0.0;
-    if (config_.duty_clamp) duty = clamp_duty_for_flow_pct(*config_.duty_clamp, duty, flow);
-    duties_[k] = std::clamp(duty, 0.0, 100.0);
+    flows[k] = flow;
+  }
+  // The daemon's step: the law's duties, then (a control tick, the trim on) the flow trim,
+  // which decides itself whether a window is usable (pressure off set-point, too little flow).
+  NozzleCommandInputs in;
+  in.dt_s = dt_s;
+  in.spraying = true;
+  in.trim = config_.fixes.flow_feedback && !boom_trim_ && dt_s > 0.0;
+  in.law = command_law(config_);
+  in.pressure_compensation = config_.fixes.pressure_compensation;
+  in.pressure_mpa = measured_pressure_mpa_;
+  in.setpoint_mpa = config_.setpoint_mpa;
+  in.pulses = plant_.flow_meter_pulses();
+  in.pulses_per_litre = config_.meter_pulses_per_l;
+  in.target_flow_l_per_min = std::span<const double>(flows.data(), n);
+  in.lines = std::span<const NozzleLine>(lines.data(), n);
+  const NozzleCommandOutputs& out = command_step_.step(in);
+  const double pressure = out.compensation_pressure_mpa;
+  for (std::size_t k = 0; k < n; ++k) {
+    duties_[k] = out.duty_pct[k];
     // What the law promises for the duty it chose (the model trim's reference): a clamp that
     // raised or lowered the duty changed the promise too.
-    promised_flows_[k] = promised_flow_l_per_min(lines[k], duties_[k], pressure);
-  }
-  // The daemon's flow trim on the law's duties (flow_trim_step.hpp): it decides itself
-  // whether a window is usable (pressure off set-point, too little flow).
-  if (config_.fixes.flow_feedback && !boom_trim_ && dt_s > 0.0) {
-    FlowTrimStepInputs trim;
-    trim.dt_s = dt_s;
-    trim.spraying = true;
-    trim.pressure_mpa = measured_pressure_mpa_;
-    trim.setpoint_mpa = config_.setpoint_mpa;
-    trim.compensation_pressure_mpa = pressure;
-    trim.pulses = plant_.flow_meter_pulses();
-    trim.pulses_per_litre = config_.meter_pulses_per_l;
-    trim.duty_pct = std::span<double>(duties_.data(), static_cast<std::size_t>(n));
-    trim.lines = std::span<const NozzleLine>(lines.data(), static_cast<std::size_t>(n));
-    trim.min_duty_pct = config_.duty_clamp ? config_.duty_clamp->min_duty_pct : 0.0;
-    trim.max_duty_pct = config_.duty_clamp ? config_.duty_clamp->max_duty_pct : 100.0;
-    trim_step_.step(trim);
-  }
-  for (int i = 0; i < n; ++i) {
-    const auto k = static_cast<std::size_t>(i);
+    promised_flows_[k] = promised_flow_l_per_min(lines[k], out.law_duty_pct[k], pressure);
     commanded_promise_[k] = promised_flow_l_per_min(lines[k], duties_[k], pressure);
   }
   set_pwm_duties();
@@ -217,14 +235,15 @@ void ClosedLoopRig::start() {
   plant_.set_pump(true);
   const double now = plant_.time_s();
   measured_pressure_mpa_ = read_pressure_mpa();
-  compensation_filter_.reset();
-  filtered_pressure_mpa_ = compensation_filter_.update(measured_pressure_mpa_, 0.0);
+  boom_trim_pressure_.reset();
+  boom_trim_pressure_.update(measured_pressure_mpa_, 0.0);
   pwm_start_s_ = now;
   pwm_.start(std::chrono::nanoseconds(0));
   started_ = true;
   pending_edge_ = pwm_.next_edge();
   last_edge_s_ = now;
   next_control_s_ = now;
+  next_command_s_ = now;
   sampled_pressure_mpa_ = measured_pressure_mpa_;
   next_sample_s_ = now + config_.control_period_s - config_.converter_lead_s;
   dac_due_s_ = -1.0;
@@ -337,7 +356,7 @@ void ClosedLoopRig::control_tick() {
   const double dt = config_.control_period_s;
   measured_pressure_mpa_ =
       config_.converter_lead_s > 0.0 ? sampled_pressure_mpa_ : read_pressure_mpa();
-  filtered_pressure_mpa_ = compensation_filter_.update(measured_pressure_mpa_, dt);
+  boom_trim_pressure_.update(measured_pressure_mpa_, dt);
   PressureLoopInputs in;
   in.pressure_mpa = measured_pressure_mpa_;
   in.sensor_ok = sensor_ok_;
@@ -354,8 +373,6 @@ void ClosedLoopRig::control_tick() {
     plant_.set_return_valve_volts(volts);
   }
   if (out.hold_valves && applied_mask_ != 0) valve_edge(0);
-
-  if (flows_requested_) apply_flow_requests(dt);
   if (boom_trim_) {
     // The model trim (lab only, boom_trim.hpp), fed a tick at a time: the lines' promise at
     // the duties just latched.
@@ -367,7 +384,7 @@ void ClosedLoopRig::control_tick() {
       if (duties_[k] > 0.0 && duties_[k] < 100.0) slope += line_slopes_[k];
     }
     const double pressure_error =
-        std::abs(filtered_pressure_mpa_ - config_.setpoint_mpa) / config_.setpoint_mpa;
+        std::abs(boom_trim_pressure_.value() - config_.setpoint_mpa) / config_.setpoint_mpa;
     const bool usable =
         flows_requested_ && pressure_error <= config_.flow_trim.max_pressure_error_fraction;
     BoomTrimWindow window;
@@ -382,7 +399,7 @@ void ClosedLoopRig::run_for(double duration_s) {
   const double end = plant_.time_s() + duration_s;
   while (true) {
     const double edge_t = next_edge_time_s();
-    double next = std::min({end, edge_t, next_control_s_});
+    double next = std::min({end, edge_t, next_control_s_, next_command_s_});
     if (config_.record_period_s > 0.0) next = std::min(next, next_record_s_);
     if (config_.converter_lead_s > 0.0) next = std::min(next, next_sample_s_);
     if (dac_due_s_ >= 0.0) next = std::min(next, dac_due_s_);
@@ -414,6 +431,12 @@ void ClosedLoopRig::run_for(double duration_s) {
     if (next_control_s_ <= now + kEps) {
       control_tick();
       next_control_s_ += config_.control_period_s;
+    }
+    // The control loop's tick: the duties for the latest reading (the daemon's control loop
+    // reads the pressure loop's last published sample).
+    if (next_command_s_ <= now + kEps) {
+      if (flows_requested_) apply_flow_requests(config_.command_period_s);
+      next_command_s_ += config_.command_period_s;
     }
     if (config_.record_period_s > 0.0 && next_record_s_ <= now + kEps) {
       trace_.push_back({now, plant_.line_pressure_mpa(), plant_.boom_pressure_mpa(),

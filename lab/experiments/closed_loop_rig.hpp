@@ -4,7 +4,8 @@
 //
 //   pressure sensor volts -> ADC counts -> 4-20 mA -> MPa (io/signal_conversion.hpp, with its
 //   fault rule) -> control::PressureLoopStep -> DAC -> return valve, pump
-//   requested flows -> (calibrated lines, sqrt(Pcal/P)) -> control::FlowTrimStep -> duties
+//   requested flows -> control::NozzleCommandStep (calibrated lines at sqrt(Pcal/P), the law's
+//   band, the flow trim) on the daemon's control-loop period -> duties
 //   -> PwmSchedule (the daemon's pwm_config) -> exact valve edges -> plant
 //   valve edges + meter -> control::PhaseWindows (kMeterLag) -> NozzleHealth
 //
@@ -26,6 +27,7 @@
 #include "control/calibration.hpp"
 #include "control/flow_feedback.hpp"
 #include "control/flow_trim_step.hpp"
+#include "control/nozzle_command_step.hpp"
 #include "control/nozzle_health.hpp"
 #include "control/phase_windows.hpp"
 #include "control/pressure_loop_step.hpp"
@@ -50,6 +52,7 @@ const PressureLoopConfig& daemon_pressure_loop_config();
 double daemon_pwm_min_on_s();
 double daemon_pwm_min_off_s();
 double daemon_over_pressure_mpa();
+double daemon_control_loop_period_s();
 
 // The fixes of the papers that can be switched off to show the raw machine.
 struct RigFixes {
@@ -68,8 +71,10 @@ struct RigConfig {
   PressureControlMode controller_mode = daemon_pressure_loop_config().mode;
   FuzzyPidConfig controller = daemon_pressure_loop_config().controller;
   double setpoint_mpa = 0.2;
-  // The pressure loop's period; the duties and the trim are stepped on the same tick.
+  // The pressure loop's period.
   double control_period_s = daemon_pressure_loop_config().period_s;
+  // The control loop's period: the duties and the trim are stepped on this tick.
+  double command_period_s = daemon_control_loop_period_s();
   double over_pressure_mpa = daemon_over_pressure_mpa();  // the pressure step trips above it
   // The daemon's converters' thread (io::AnalogIoWorker): the ADC is sampled this long before
   // each control tick and the DAC written this long after it. 0 = at the tick (ideal I/O).
@@ -90,6 +95,9 @@ struct RigConfig {
   double flow_trim_window_s = 1.0;  // meter reading averaged over this window (FlowTrim)
   // The spray law's duty clamp (< min -> 0, > max -> 100), applied to requested flows' duties.
   std::optional<SprayLawConfig> duty_clamp{};
+  // The daemon's duty quantiser ([spray] quantiser_levels, hysteresis_pct). Off by default:
+  // the experiments ask for exact flows and judge the plant and the trim, not the levels.
+  bool quantise = false;
   // Time constant of the pressure filter the compensation uses (noise would otherwise jitter
   // the duties): the trim's.
   double compensation_filter_s = PressureFilter::kTimeConstantS;
@@ -141,7 +149,7 @@ class ClosedLoopRig {
   void clear_trace() { trace_.clear(); }
   double time_s() const { return plant_.time_s(); }
   double measured_pressure_mpa() const { return measured_pressure_mpa_; }
-  double flow_trim_correction() const { return trim_step_.correction(); }
+  double flow_trim_correction() const { return command_step_.outputs().trim.correction; }
   std::array<double, plant::kMaxNozzles> commanded_duties_pct() const { return duties_; }
   const RigConfig& config() const { return config_; }
   // The detector (config.nozzle_health set), else nullptr.
@@ -165,7 +173,8 @@ class ClosedLoopRig {
   // The fit's windows: each nozzle's promised volume over step_s.
   void account_open_time(double step_s);
   void valve_edge(std::uint32_t mask);  // applies an edge's valve states
-  // The law's duties for the requested flows, then (dt_s > 0: a control tick) the flow trim.
+  // The daemon's duty step for the requested flows; dt_s > 0 (a control-loop tick) steps the
+  // flow trim too.
   void apply_flow_requests(double dt_s);
   void set_pwm_duties();
   struct PressureReading {
@@ -180,8 +189,8 @@ class ClosedLoopRig {
   plant::HydraulicPlant plant_;
   PressureLoopStep pressure_step_;
   PwmSchedule pwm_;
-  FlowTrimStep trim_step_;
-  PressureFilter compensation_filter_;
+  NozzleCommandStep command_step_;
+  PressureFilter boom_trim_pressure_;  // what the model trim judges the set-point by
   std::array<NozzleLine, plant::kMaxNozzles> lines_{};
   std::array<double, plant::kMaxNozzles> requested_flows_{};
   std::array<double, plant::kMaxNozzles> full_open_flows_{};
@@ -194,6 +203,7 @@ class ClosedLoopRig {
   PwmEdge pending_edge_{};
   std::uint32_t applied_mask_ = 0;
   double next_control_s_ = 0.0;
+  double next_command_s_ = 0.0;
   double next_sample_s_ = 0.0;  // converter_lead_s > 0: the next ADC sample
   double sampled_pressure_mpa_ = 0.0;
   double dac_due_s_ = -1.0;  // converter_lag_s > 0: when the pending DAC write lands (< 0: none)
@@ -202,7 +212,6 @@ class ClosedLoopRig {
   double pwm_start_s_ = 0.0;
   double measured_pressure_mpa_ = 0.0;
   bool sensor_ok_ = true;
-  double filtered_pressure_mpa_ = 0.0;
   std::vector<TraceSample> trace_;
   std::optional<NozzleHealth> health_;
   std::optional<BoomTrim> boom_trim_;

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // The lab's rig runs the daemon's control steps: a rule that lives only in a step
 // (control::PressureLoopStep's over-pressure trip) acts in the rig, and a step's setting
-// (control::FlowTrimStep's correction bounds) moves an experiment's figure.
+// (control::FlowTrimStep's correction bounds) moves an experiment's figure; the valves get the
+// duties of the daemon's duty step (control::NozzleCommandStep), quantiser included.
 #include "lab/experiments/closed_loop_rig.hpp"
 
 #include <gtest/gtest.h>
@@ -50,6 +51,40 @@ TEST(ClosedLoopRig, TheFlowTrimStepsSettingsMoveTheOrthogonalFigure) {
   // The wear ramps in over each measured run, so the trim takes out part of it (3.6 against
   // 4.7 % mean error when this was written).
   EXPECT_GT(pinned.mean_error_pct, trimmed.mean_error_pct + 0.5);
+}
+
+TEST(ClosedLoopRig, TheValvesGetTheDaemonsDutyStepWithItsQuantiser) {
+  // A flow whose line duty lies between two of the daemon's default levels (20, 30, ... 80 %).
+  const NozzleLine line;
+  const double flow = line.slope_l_per_min_per_pct * 44.0 + line.intercept_l_per_min;
+  const auto delivered = [&](bool quantise, double& duty) {
+    RigConfig config;
+    config.quantise = quantise;
+    config.fixes.flow_feedback = false;
+    config.fixes.pressure_compensation = false;
+    config.record_period_s = 0.0;
+    ClosedLoopRig rig(config);
+    rig.request_flows(std::vector<double>(4, flow));
+    rig.start();
+    const auto volume_l = [&] {
+      double sum = 0.0;
+      for (int i = 0; i < 4; ++i) sum += rig.plant().nozzle_delivered_l(i);
+      return sum;
+    };
+    rig.run_for(2.0);
+    const double start_l = volume_l();
+    rig.run_for(10.0);
+    duty = rig.commanded_duties_pct()[0];
+    return volume_l() - start_l;
+  };
+  double exact_duty = 0.0;
+  double level_duty = 0.0;
+  const double exact_l = delivered(false, exact_duty);
+  const double level_l = delivered(true, level_duty);
+  EXPECT_NEAR(exact_duty, 44.0, 1e-9);
+  EXPECT_DOUBLE_EQ(level_duty, 40.0);
+  // Four nozzles 4 % of duty apart for 10 s: about 0.01 L less.
+  EXPECT_LT(level_l, exact_l - 0.005);
 }
 
 }  // namespace

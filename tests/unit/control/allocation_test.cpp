@@ -11,6 +11,7 @@
 
 #include "control/flow_feedback.hpp"
 #include "control/fuzzy_pid.hpp"
+#include "control/nozzle_command_step.hpp"
 #include "control/nozzle_scheduler.hpp"
 #include "control/odometry.hpp"
 #include "control/pressure_controller.hpp"
@@ -62,6 +63,13 @@ TEST(Allocation, PerCycleFunctionsDoNotAllocate) {
   DutyQuantiser quantiser(levels, 2.0);
   const std::vector<double> frame(8, 40.0);
   const std::vector<double> duties{10, 20, 30, 40, 50, 60, 70, 80};
+  NozzleCommandConfig command_config;
+  command_config.nozzles = 8;
+  command_config.quantiser_levels_pct = {0, 20, 40, 60, 80, 100};
+  command_config.quantiser_level_count = 6;
+  NozzleCommandStep command(command_config);
+  const std::vector<double> target_flows{0.0, 0.3, 0.35, 0.4, 0.45, 0.5, 0.55, 0.6};
+  const std::vector<NozzleLine> lines(8);
 
   const long before = g_allocations.load();
   double y = 0.0;
@@ -80,6 +88,17 @@ TEST(Allocation, PerCycleFunctionsDoNotAllocate) {
     if (trim_windows.tick(0.01, tick, 8500.0, window)) trim.update(window);
     trimmed_duty_pct(NozzleLine{}, d.duty_pct, trim.correction(), 0.4);
     quantiser.quantise(duty + d.duty_pct * 0.01);
+    NozzleCommandInputs in;
+    in.dt_s = 0.002;
+    in.spraying = i % 500 < 400;
+    in.trim = true;
+    in.pressure_mpa = 0.4 + y * 0.01;
+    in.setpoint_mpa = 0.4;
+    in.pulses = static_cast<std::uint64_t>(i) * 3;
+    in.pulses_per_litre = 8500.0;
+    in.target_flow_l_per_min = target_flows;
+    in.lines = lines;
+    command.step(in);
   }
   EXPECT_EQ(g_allocations.load() - before, 0);
   // The counter really counts.
