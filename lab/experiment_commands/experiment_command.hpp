@@ -28,11 +28,12 @@ struct ExperimentOptions {
   std::string stems_file;
   std::string weed_source = "truth";
   std::string model;
-  double decision_threshold = -1.0;    // < 0: the daemon's spray.decision_threshold default
-  std::string health_judge = "cusum";  // blockage: NozzleHealth's judge (band | cusum)
-  std::string duties = "field";        // blockage: the requested duties (field | iid)
-  std::optional<double> blockage;      // blockage: its flow lost; unset: BlockageOptions
-  std::string change_parts = "all";    // orthogonal --plants: which part of the change
+  double decision_threshold = -1.0;      // < 0: the daemon's spray.decision_threshold default
+  std::string health_judge = "recheck";  // blockage: recheck | band | cusum (NozzleHealth)
+  std::string duties = "field";          // blockage: the requested duties (field | iid)
+  std::optional<double> blockage;        // blockage: its flow lost; unset: BlockageOptions
+  bool blocked_at_start = false;         // blockage: blocked before the job, no healthy part
+  std::string change_parts = "all";      // orthogonal --plants: which part of the change
   // step: the pressure loop's timing; unset: 5 / 0 / 0 ms for one machine, the daemon's
   // (10 / 2.5 / 1 ms) for --plants.
   std::optional<double> control_period_ms;

@@ -106,8 +106,10 @@ void add_experiment_commands(CLI::App& app) {
                   "(wear, ageing, the blockage), or none (as made)")
       ->check(CLI::IsMember({"all", "common", "nozzle", "none"}));
   cmd->add_option("--health-judge", options->health_judge,
-                  "blockage: the nozzle health detector's judge (control/nozzle_health.hpp)")
-      ->check(CLI::IsMember({"band", "cusum"}));
+                  "blockage: the nozzle health judge: recheck (the default: each nozzle held "
+                  "open alone on the headlands, control/nozzle_recheck.hpp; field duties only) "
+                  "or band / cusum (passive, on the spraying, control/nozzle_health.hpp)")
+      ->check(CLI::IsMember({"band", "cusum", "recheck"}));
   cmd->add_option("--duties", options->duties,
                   "blockage: the nozzles' requested duties: field (a field's weed patches, "
                   "closures, headlands and speed, sim/field/field_duty_process.hpp) or iid (each "
@@ -116,6 +118,8 @@ void add_experiment_commands(CLI::App& app) {
   cmd->add_option("--blockage", options->blockage,
                   "blockage: the share of the blocked nozzle's flow lost (default 0.2)")
       ->check(CLI::Range(0.01, 0.99));
+  cmd->add_flag("--blocked-at-start", options->blocked_at_start,
+                "blockage: the nozzle is blocked before the job starts (no healthy part)");
   cmd->callback([options] {
     try {
       const int rc = run_experiment(*options);

@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
-// A nozzle blocked while spraying, found from the line flow meter.
+// A nozzle blocked while spraying (or from the job's start), found from the line flow meter:
+// by a passive judge on the spraying or by the re-check on the headlands.
 #include <algorithm>
 #include <cmath>
 #include <functional>
 #include <optional>
 #include <random>
 #include <span>
+#include <stdexcept>
 #include <vector>
 
 #include "lab/experiments/experiments.hpp"
@@ -49,6 +51,97 @@ struct ShareRecord {
   }
 };
 
+// Seconds from `t_s` to the end of the first headland that starts after it (one headland
+// cycle: the next headland whatever the phase, and its end); 0 without headlands.
+double to_end_of_next_headland_s(const sim::FieldDutyOptions& field, double t_s) {
+  const double every = field.headland_every_s;
+  const double length = field.headland_s;
+  if (!(every > 0) || !(length > 0)) return 0.0;
+  const double first = every - length;  // the first headland's start
+  const double start = first + std::ceil((t_s - first) / every) * every;
+  return start + length - t_s;
+}
+
+// control::NozzleRecheck driven around the rig from outside: the rig runs in short slices, the
+// re-check is stepped between them with the meter's count and the measured pressure, its duties
+// are commanded while it holds a nozzle open (every other valve closed) and the field's
+// requests put back the moment it lets go; each reading rescales that nozzle's line.
+class HeadlandRecheck {
+ public:
+  HeadlandRecheck(const BlockageOptions& options, std::span<const NozzleLine> lines,
+                  std::span<const double> full, double pulses_per_litre)
+      : recheck_(recheck_config(options, lines.size())),
+        lines_(lines.begin(), lines.end()),
+        full_(full.begin(), full.end()),
+        pulses_per_litre_(pulses_per_litre),
+        setpoint_mpa_(options.pressure_mpa),
+        tolerance_mpa_(options.pressure_tolerance_mpa),
+        slice_s_(options.recheck_slice_s) {
+    for (std::size_t i = 0; i < lines_.size(); ++i) lines_[i].full_open_flow_l_per_min = full_[i];
+  }
+
+  // Runs the rig `seconds`: the window is the field's headland for the whole next slice.
+  // `respray` asks for the field's flows again when the override ends.
+  template <typename Respray>
+  void run(ClosedLoopRig& rig, const sim::FieldDutyProcess& field, double seconds,
+           Respray&& respray) {
+    const double end = rig.time_s() + seconds;
+    while (rig.time_s() < end - 1e-9) {
+      const double now = rig.time_s();
+      const double slice = std::min(slice_s_, end - now);
+      RecheckInput in;
+      in.now_s = now;
+      in.window = field.headland_at(now) && field.headland_at(now + slice);
+      in.pressure_ok = std::abs(rig.measured_pressure_mpa() - setpoint_mpa_) <= tolerance_mpa_;
+      in.meter_pulses = rig.plant().flow_meter_pulses();
+      in.pulses_per_litre = pulses_per_litre_;
+      in.pressure_mpa = rig.measured_pressure_mpa();
+      const bool was_overriding = recheck_.overriding();
+      const int was_nozzle = recheck_.current_nozzle();
+      recheck_.step(in, lines_);
+      if (recheck_.overriding()) {
+        if (!was_overriding || recheck_.current_nozzle() != was_nozzle) {
+          rescale(rig);
+          rig.command_duties(recheck_.duties());
+        }
+      } else if (was_overriding) {
+        rescale(rig);
+        respray();
+      }
+      rig.run_for(slice);
+    }
+  }
+
+  const NozzleRecheck& recheck() const { return recheck_; }
+  bool overriding() const { return recheck_.overriding(); }
+
+ private:
+  static NozzleRecheckConfig recheck_config(const BlockageOptions& options, std::size_t nozzles) {
+    NozzleRecheckConfig config = options.recheck_config;
+    config.nozzles = nozzles;
+    return config;
+  }
+  // Each nozzle's calibrated line and full-open flow times its last reading.
+  void rescale(ClosedLoopRig& rig) const {
+    std::vector<NozzleLine> scaled(lines_.size());
+    std::vector<double> full(full_.size());
+    for (std::size_t i = 0; i < lines_.size(); ++i) {
+      scaled[i] = scaled_line(lines_[i], recheck_.scale(i));
+      full[i] = full_[i] * recheck_.scale(i);
+    }
+    rig.set_nozzle_lines(scaled);
+    rig.set_full_open_flows(full);
+  }
+
+  NozzleRecheck recheck_;
+  std::vector<NozzleLine> lines_;  // as calibrated: the re-check reads against these
+  std::vector<double> full_;
+  double pulses_per_litre_;
+  double setpoint_mpa_;
+  double tolerance_mpa_;
+  double slice_s_;
+};
+
 BlockageMachine blockage_once(const Machine& machine, std::uint64_t fleet_seed, int index,
                               const BlockageOptions& options) {
   CalibrationOptions cal_options;
@@ -81,25 +174,42 @@ BlockageMachine blockage_once(const Machine& machine, std::uint64_t fleet_seed, 
   out.blocked_nozzle = std::uniform_int_distribution<int>(0, rig.plant().nozzle_count() - 1)(rng);
   std::optional<sim::FieldDutyProcess> field;
   if (options.duties == BlockageDuties::kField) field.emplace(full.size(), rng(), options.field);
+  std::optional<HeadlandRecheck> recheck;
+  if (options.recheck && field) recheck.emplace(options, lines, full, cal.meter.pulses_per_litre);
   std::vector<double> shares(full.size());
+  std::vector<double> flows(full.size());
   auto redraw = [&] {
     if (field) {
       field_demand_at(*field, rig.time_s(), shares);
     } else {
       for (double& s : shares) s = share(rng);
     }
-    std::vector<double> flows(full.size());
     for (std::size_t i = 0; i < full.size(); ++i) flows[i] = shares[i] * full[i];
-    rig.request_flows(flows);
+    // While the re-check holds a nozzle open nothing else is sprayed: it asks again on letting go.
+    if (!recheck || !recheck->overriding()) rig.request_flows(flows);
   };
+  auto respray = [&] { rig.request_flows(flows); };
+  auto advance = [&](double seconds) {
+    if (recheck) {
+      recheck->run(rig, *field, seconds, respray);
+    } else {
+      rig.run_for(seconds);
+    }
+  };
+  auto named = [&] {
+    return recheck ? recheck->recheck().alarmed_nozzle() : rig.nozzle_health()->alarmed_nozzle();
+  };
+  if (options.blocked_at_start)
+    rig.plant().set_nozzle_blockage(out.blocked_nozzle, options.blockage);
   redraw();
   ShareRecord record;
   record.add({}, shares);
   rig.start();
   const NozzleHealth& health = *rig.nozzle_health();
-  const double healthy_end = options.health.baseline_s + options.healthy_s;
+  const double healthy_end =
+      options.blocked_at_start ? 0.0 : options.health.baseline_s + options.healthy_s;
   while (rig.time_s() < healthy_end - 1e-9) {
-    rig.run_for(options.redraw_s);
+    advance(options.redraw_s);
     const std::vector<double> previous = shares;
     redraw();
     record.add(previous, shares);
@@ -107,20 +217,35 @@ BlockageMachine blockage_once(const Machine& machine, std::uint64_t fleet_seed, 
       for (int i = 0; i < rig.plant().nozzle_count(); ++i)
         out.healthy_worst_deviation = std::max(
             out.healthy_worst_deviation, std::abs(health.ratio(static_cast<std::size_t>(i)) - 1.0));
+    out.false_alarm = out.false_alarm || named() >= 0;
+    if (recheck)
+      for (std::size_t i = 0; i < full.size(); ++i)
+        out.healthy_reading_deviation =
+            std::max(out.healthy_reading_deviation, std::abs(recheck->recheck().ratio(i) - 1.0));
   }
   out.closed_share = record.closed_share();
   out.share_lag_correlation = record.lag_correlation();
   out.healthy_max_evidence = rig.health_max_evidence();
-  out.false_alarm = health.alarmed_nozzle() >= 0;
+  if (recheck) out.healthy_rechecks = static_cast<int>(recheck->recheck().completed());
   if (out.false_alarm) return out;
-  rig.plant().set_nozzle_blockage(out.blocked_nozzle, options.blockage);
+  if (!options.blocked_at_start)
+    rig.plant().set_nozzle_blockage(out.blocked_nozzle, options.blockage);
   const double blocked_at = rig.time_s();
+  out.limit_s = options.detect_limit_s;
+  if (field)
+    out.limit_s = std::max(out.limit_s, to_end_of_next_headland_s(options.field, blocked_at));
+  const double blocked_read_before =
+      recheck ? recheck->recheck().measured_at_s(static_cast<std::size_t>(out.blocked_nozzle))
+              : 0.0;
   const double step = 0.05;
   double next_redraw = blocked_at + options.redraw_s;
-  while (rig.time_s() < blocked_at + 3.0 * options.detect_limit_s) {
-    rig.run_for(step);
-    if (health.alarmed_nozzle() >= 0) {
-      out.named_nozzle = health.alarmed_nozzle();
+  const double record_end =
+      blocked_at + std::max(3.0 * options.detect_limit_s,
+                            out.limit_s + (field ? options.field.headland_every_s : 0.0));
+  while (rig.time_s() < record_end) {
+    advance(step);
+    if (named() >= 0) {
+      out.named_nozzle = named();
       out.detect_s = rig.time_s() - blocked_at;
       break;
     }
@@ -129,31 +254,44 @@ BlockageMachine blockage_once(const Machine& machine, std::uint64_t fleet_seed, 
       next_redraw += options.redraw_s;
     }
   }
+  if (recheck) {
+    const auto blocked = static_cast<std::size_t>(out.blocked_nozzle);
+    if (recheck->recheck().measured_at_s(blocked) != blocked_read_before)
+      out.blocked_ratio = recheck->recheck().ratio(blocked);
+  }
   return out;
 }
 
 }  // namespace
 
 BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet, const BlockageOptions& options) {
+  if (options.recheck && options.duties != BlockageDuties::kField)
+    throw std::invalid_argument(
+        "the headland re-check needs headlands: field duties (or a passive judge for iid)");
   BlockageFleetResult r;
   const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
   std::vector<double> detect;
   std::vector<double> scatter;
   std::vector<double> evidence;
+  std::vector<double> readings;
   for (std::size_t i = 0; i < machines.size(); ++i) {
     const BlockageMachine m = blockage_once(machines[i], fleet.seed, static_cast<int>(i), options);
     r.false_alarms += m.false_alarm ? 1 : 0;
     scatter.push_back(m.healthy_worst_deviation);
     evidence.push_back(m.healthy_max_evidence);
+    if (options.recheck) readings.push_back(m.healthy_reading_deviation);
     const bool right = m.named_nozzle == m.blocked_nozzle && m.detect_s >= 0.0;
     if (right) detect.push_back(m.detect_s);
-    if (right && m.detect_s <= options.detect_limit_s) ++r.named_within_limit;
+    if (right && m.detect_s <= m.limit_s) ++r.named_within_limit;
     r.machines.push_back(m);
   }
   r.detect_s = spread_of(detect);
   r.healthy_worst_deviation = spread_of(scatter);
   r.healthy_max_evidence = spread_of(evidence);
-  r.healthy_minutes = static_cast<double>(machines.size()) * options.healthy_s / 60.0;
+  r.healthy_reading_deviation = spread_of(readings);
+  r.healthy_minutes = options.blocked_at_start
+                          ? 0.0
+                          : static_cast<double>(machines.size()) * options.healthy_s / 60.0;
   return r;
 }
 

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "control/nozzle_recheck.hpp"
 #include "control/spray_rate_law.hpp"
 #include "lab/experiments/closed_loop_rig.hpp"
 #include "lab/experiments/machines.hpp"
@@ -406,7 +407,19 @@ RippleFleetResult run_ripple_fleet(const FleetOptions& fleet, const RippleOption
 // set every redraw_s as a share of its calibrated full-open flow, staggered PWM, online trim
 // on) for baseline + healthy_s with no fault (any alarm = a false alarm), then one drawn nozzle
 // is blocked by `blockage` and the time until the detector names a nozzle is measured (up to
-// detect_limit_s x 3). The shares (`duties`):
+// detect_limit_s x 3, at least two headland cycles). With blocked_at_start the nozzle is
+// blocked before the job starts (no healthy part): a judge that learns its baseline in the job
+// takes the blockage for the nozzle's normal. The judge (`recheck`):
+//   off: the passive detector of the rig (health: band or CUSUM on the phase windows);
+//   on:  control::NozzleRecheck on the headlands (the window: the field's headland for the whole
+//     next slice and the pump on; the pressure within pressure_tolerance_mpa of the set-point
+//     for reading), driven around the rig in slices of recheck_slice_s: while it holds a nozzle
+//     open every other valve is closed, and each nozzle's line is rescaled by its reading.
+//     It needs headlands: with kIid duties run_blockage_fleet throws std::invalid_argument.
+// A nozzle counts as named within the limit when the right one is named within detect_limit_s
+// of the blockage or, on field duties, by the end of the first headland that starts after it
+// (one headland cycle): the passive judges have 60 s of spraying, the re-check its headland.
+// The shares (`duties`):
 //   kField: a field's demand (sim::FieldDutyProcess with `field`, seeded per machine) at its
 //     ground speed: correlated over seconds, shared across the boom, nozzles closed where there
 //     is little to spray, every nozzle off on the headlands;
@@ -418,16 +431,31 @@ struct BlockageOptions {
   double frequency_hz = 3.0;
   double blockage = 0.2;
   double healthy_s = 600.0;
-  double detect_limit_s = 10.0;
+  double detect_limit_s = 60.0;
   double redraw_s = 1.0;
   BlockageDuties duties = BlockageDuties::kField;
   sim::FieldDutyOptions field{};
   NozzleHealthConfig health{};
+  bool blocked_at_start = false;
+  bool recheck = true;  // needs headlands: kField (run_blockage_fleet throws otherwise)
+  NozzleRecheckConfig recheck_config{};
+  double pressure_tolerance_mpa = 0.02;
+  double recheck_slice_s = 0.01;
 };
 struct BlockageMachine {
   int blocked_nozzle = -1;
-  int named_nozzle = -1;     // -1: none named
-  double detect_s = -1.0;    // from the blockage to the alarm; < 0: none in the record
+  int named_nozzle = -1;   // -1: none named
+  double detect_s = -1.0;  // from the blockage to the alarm; < 0: none in the record
+  // The limit this machine's naming is judged against: detect_limit_s or, on field duties, the
+  // end of the first headland after the blockage, whichever is later [s after the blockage].
+  double limit_s = 0.0;
+  // recheck: whole-boom re-checks completed in the healthy part, and the blocked nozzle's last
+  // reading (metered / calibrated; 1 if never read after the blockage).
+  int healthy_rechecks = 0;
+  double blocked_ratio = 1.0;
+  // recheck: the largest |reading - 1| of any nozzle in the healthy part (the readings' scatter
+  // on a healthy machine: what the alarm limit must clear).
+  double healthy_reading_deviation = 0.0;
   bool false_alarm = false;  // an alarm during the healthy part
   // The shares requested during the healthy part: the fraction of nozzle-redraws closed (0),
   // and the correlation of a nozzle's share with its share one redraw later (pooled over the
@@ -443,11 +471,12 @@ struct BlockageMachine {
 };
 struct BlockageFleetResult {
   std::vector<BlockageMachine> machines;
-  int named_within_limit = 0;  // the blocked nozzle named within detect_limit_s
+  int named_within_limit = 0;  // the blocked nozzle named within its machine's limit_s
   int false_alarms = 0;
   Spread detect_s;  // over the machines that named the right nozzle
   Spread healthy_worst_deviation;
   Spread healthy_max_evidence;
+  Spread healthy_reading_deviation;  // recheck
   double healthy_minutes = 0.0;
 };
 BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet,

@@ -209,6 +209,7 @@ TEST(FleetBlockage, ABlockedNozzleIsNamedAndAHealthyMinuteIsQuiet) {
   // The detector on the duties that separate the nozzles best: on field-like ones this
   // machine's blocked nozzle is not named within the limit.
   options.duties = BlockageDuties::kIid;
+  options.recheck = false;
   const BlockageFleetResult r = run_blockage_fleet({1, 1, false}, options);
   ASSERT_EQ(r.machines.size(), 1U);
   EXPECT_FALSE(r.machines[0].false_alarm);
@@ -224,6 +225,54 @@ TEST(FleetBlockage, ABlockedNozzleIsNamedAndAHealthyMinuteIsQuiet) {
   EXPECT_EQ(r.named_within_limit, 1);
 }
 
+// The headland re-check on field duties (the default): each nozzle held open alone on the
+// headlands and read against its calibration. A nozzle 10 % off is named by the end of the
+// first headland after it happened, and the healthy part's re-check (the headland at
+// 105-120 s) names nothing.
+BlockageOptions recheck_options() {
+  BlockageOptions options;
+  EXPECT_TRUE(options.recheck);
+  options.healthy_s = 150.0;
+  options.blockage = 0.1;
+  return options;
+}
+
+TEST(FleetBlockage, TheHeadlandReCheckNamesANozzleTenPercentOffByTheNextHeadland) {
+  const BlockageOptions options = recheck_options();
+  EXPECT_EQ(options.duties, BlockageDuties::kField);
+  const BlockageFleetResult r = run_blockage_fleet({1, 2, false}, options);
+  ASSERT_EQ(r.machines.size(), 2U);
+  for (const BlockageMachine& m : r.machines) {
+    std::printf(
+        "blocked %d, named %d after %.2f s (limit %.1f s), reading %.3f, healthy "
+        "re-checks %d, their largest |reading - 1| %.3f\n",
+        m.blocked_nozzle, m.named_nozzle, m.detect_s, m.limit_s, m.blocked_ratio,
+        m.healthy_rechecks, m.healthy_reading_deviation);
+    EXPECT_FALSE(m.false_alarm);
+    EXPECT_GE(m.healthy_rechecks, 1);
+    EXPECT_LT(m.healthy_reading_deviation, 0.05);
+    EXPECT_EQ(m.named_nozzle, m.blocked_nozzle);
+    EXPECT_NEAR(m.blocked_ratio, 0.9, 0.03);
+  }
+  EXPECT_EQ(r.named_within_limit, 2);
+}
+
+// A nozzle already blocked when the job starts: the re-check reads it against its calibration
+// and names it at the first headland; a judge that learns its baseline in the job (the passive
+// CUSUM) takes the blockage for that nozzle's normal and names nothing.
+TEST(FleetBlockage, ANozzleBlockedFromTheStartIsNamedAtTheFirstHeadland) {
+  BlockageOptions options = recheck_options();
+  options.blocked_at_start = true;
+  const BlockageMachine m = run_blockage_fleet({1, 1, false}, options).machines.at(0);
+  const double first_headland_end = options.field.headland_every_s;
+  EXPECT_EQ(m.named_nozzle, m.blocked_nozzle);
+  EXPECT_GT(m.detect_s, first_headland_end - options.field.headland_s);
+  EXPECT_LE(m.detect_s, first_headland_end);
+  options.recheck = false;
+  const BlockageMachine passive = run_blockage_fleet({1, 1, false}, options).machines.at(0);
+  EXPECT_NE(passive.named_nozzle, passive.blocked_nozzle);
+}
+
 // The duties the experiment sprays: field-like ones (the default) stay close from one second to
 // the next and close nozzles (patches too thin to spray, the headland at 105-120 s); the
 // i.i.d. redraw does neither. Both runs stop at the healthy part's end (no detection measured).
@@ -234,6 +283,7 @@ TEST(FleetBlockage, FieldDutiesAreCorrelatedAndCloseNozzlesIidDutiesNeither) {
   options.detect_limit_s = 0.0;
   const BlockageMachine field = run_blockage_fleet({1, 1, false}, options).machines.at(0);
   options.duties = BlockageDuties::kIid;
+  options.recheck = false;
   const BlockageMachine iid = run_blockage_fleet({1, 1, false}, options).machines.at(0);
   std::printf("field: closed %.2f, lag-1 r %.2f; iid: closed %.2f, lag-1 r %.2f\n",
               field.closed_share, field.share_lag_correlation, iid.closed_share,
