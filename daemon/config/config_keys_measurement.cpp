@@ -61,6 +61,27 @@ void append_measurement_keys(std::vector<KeySpec<Config>>& keys) {
      "cusum: ...named once its evidence (log-likelihood ratio) exceeds this: higher, fewer false "
      "alarms and later names (24: about 1 false alarm in 10^5 machine-minutes on the lab's "
      "fleet)"},
+    {WS_KEY(nozzle_health, recheck), true, 0, 1, "",
+     "off crop or stopped (nothing to spray for recheck_clear_s, no crop seen under the boom or "
+     "the vehicle stopped), hold each nozzle open alone and read it against its calibrated "
+     "held-open flow (sprayctl calibrate nozzles): its line is rescaled by the reading, a "
+     "nozzle off by recheck_warn_pct is named in the journal and on the bus, one off by "
+     "recheck_alarm_pct raises nozzle_flow_fault; runs only once every nozzle has a metered "
+     "held-open flow and the flow meter is wired"},
+    {WS_KEY(nozzle_health, recheck_clear_s), 2.0, 0.1, 60, "s",
+     "nothing to spray (and no crop under the boom, or stopped) for this long opens the window"},
+    {WS_KEY(nozzle_health, recheck_settle_s), 1.0, 0.2, 10, "s",
+     "each nozzle held open alone this long before it is read (valve, line, pressure loop)"},
+    {WS_KEY(nozzle_health, recheck_measure_s), 2.0, 0.5, 30, "s",
+     "then read against the meter this long"},
+    {WS_KEY(nozzle_health, recheck_interval_s), 60.0, 0, 3600, "s",
+     "a whole-boom re-check starts at most this often (0: at every window)"},
+    {WS_KEY(nozzle_health, recheck_warn_pct), 5.0, 1, 50, "%",
+     "a nozzle whose reading is off its calibration by this much is named as a warning"},
+    {WS_KEY(nozzle_health, recheck_alarm_pct), 10.0, 2, 90, "%",
+     "...and by this much raises nozzle_flow_fault naming it"},
+    {WS_KEY(nozzle_health, recheck_stopped_m_per_s), 0.05, 0, 1, "m/s",
+     "below this ground speed the vehicle counts as stopped (a re-check may run over crop)"},
     // [wheel]
     {WS_KEY(wheel, source), std::string("pulses"), 0, 0, "",
      "speed from the Hall wheel sensor, or a fixed speed", {"pulses", "fixed"}},

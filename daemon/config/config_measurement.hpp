@@ -28,6 +28,14 @@ struct NozzleHealthSection {
   double alarm_fraction;
   double alarm_hold_s;
   double alarm_threshold;
+  bool recheck;
+  double recheck_clear_s;
+  double recheck_settle_s;
+  double recheck_measure_s;
+  double recheck_interval_s;
+  double recheck_warn_pct;
+  double recheck_alarm_pct;
+  double recheck_stopped_m_per_s;
 };
 
 struct WheelSection {

@@ -175,6 +175,11 @@ class Rules {
              "pwm.frequency_hz");
       }
     }
+    if (c.nozzle_health.recheck &&
+        c.nozzle_health.recheck_warn_pct >= c.nozzle_health.recheck_alarm_pct) {
+      fail("nozzle_health.recheck_alarm_pct", "must be above nozzle_health.recheck_warn_pct",
+           "nozzle_health.recheck_warn_pct");
+    }
     const auto& sweep = c.calibration.duties_pct;
     if (sweep.empty() || std::all_of(sweep.begin(), sweep.end(),
                                      [&](double duty) { return duty == sweep.front(); })) {

@@ -101,7 +101,10 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   std::array<double, io::kMaxValves> nozzle_speed{};
   std::array<double, io::kMaxValves> arc_extra_m{};  // nozzle's travel minus the centre line's
   std::array<double, io::kMaxValves> frame_odometer{};
-  std::array<double, io::kMaxValves> target_flow{};  // the rate law's flow per nozzle
+  std::array<double, io::kMaxValves> target_flow{};                // the rate law's flow per nozzle
+  std::array<control::NozzleLine, io::kMaxValves> scaled_lines{};  // rescaled by the re-check
+  RecheckWindow recheck_window;
+  bool was_enabled = false;
   // One staggered phase (period / nozzles), the meter read a lag behind the valves.
   control::PhaseWindows health_windows(
       from_seconds(1.0 / (config_.pwm.frequency_hz *
@@ -121,6 +124,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
       // or nozzle line (sprayctl calibrate) starts it afresh.
       if (!same_calibration(trim_calibration, params, nozzles)) {
         nozzle_command_.reset_trim();
+        if (recheck_) recheck_->reset();  // a new reference: every nozzle read afresh
         trim_calibration = params;
       }
     }
@@ -282,11 +286,23 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
                            ? control::target_flow_l_per_min(params.law, density, nozzle_speed[n])
                            : 0.0;
     }
+    // The headland re-check (control/nozzle_recheck.hpp) may hold one nozzle open alone and
+    // rescales each nozzle's line by its last reading.
+    std::span<const control::NozzleLine> command_lines(params.lines.data(), nozzles);
+    bool recheck_holds = false;
+    if (recheck_) {
+      const bool started = params.valves_enabled && !was_enabled;
+      if (started) recheck_->reset();  // a new job: re-check at its first window
+      recheck_holds = step_recheck(recheck_window, now, spray, target_flow, pressure, params,
+                                   status, scaled_lines);
+      command_lines = std::span<const control::NozzleLine>(scaled_lines.data(), nozzles);
+    }
+    was_enabled = params.valves_enabled;
     // The duties (control/nozzle_command_step.hpp): the lab's rig runs the same step at the
     // same period, so `weedspray-lab experiment` measures this law, quantiser and trim.
     control::NozzleCommandInputs command_in;
     command_in.dt_s = dt;
-    command_in.spraying = spray;
+    command_in.spraying = spray && !recheck_holds;
     command_in.trim = io_.flow != nullptr;
     command_in.law = params.law;
     command_in.pressure_compensation = params.pressure_compensation;
@@ -295,14 +311,17 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
     command_in.pulses = status.flow_pulses;
     command_in.pulses_per_litre = params.flow_pulses_per_litre;
     command_in.target_flow_l_per_min = std::span<const double>(target_flow.data(), nozzles);
-    command_in.lines = std::span<const control::NozzleLine>(params.lines.data(), nozzles);
+    command_in.lines = command_lines;
     const control::NozzleCommandOutputs& commanded = nozzle_command_.step(command_in);
     io::ValveCommand command;
     command.valve_count = static_cast<std::uint32_t>(nozzles);
     double open_sum = 0;
     for (std::size_t n = 0; n < nozzles; ++n) {
-      // A calibration holds the duties it asked for (spray is off then: the step closed all).
-      command.duty_pct[n] = calibrating ? params.calibration_duty_pct[n] : commanded.duty_pct[n];
+      // A calibration holds the duties it asked for (spray is off then: the step closed all);
+      // so does a re-check (the step was told not to spray).
+      command.duty_pct[n] = calibrating     ? params.calibration_duty_pct[n]
+                            : recheck_holds ? recheck_->duties()[n]
+                                            : commanded.duty_pct[n];
       open_sum += command.duty_pct[n] / 100.0;
     }
     status.open_fraction = nozzles > 0 ? open_sum / static_cast<double>(nozzles) : 0.0;

@@ -129,6 +129,14 @@ struct ControlStatus {
   int nozzle_flow_fault = -1;
   bool nozzle_flow_fault_low = false;
   std::uint64_t nozzle_health_reset = 0;  // the LiveParams::trip_reset the detector restarted at
+  // The headland re-check (control/nozzle_recheck.hpp): each nozzle's last held-open reading
+  // against its calibration (1 until read), the nozzles past its warning and alarm limits (-1:
+  // none), whether it holds the valves now and how many whole-boom re-checks completed.
+  std::array<double, io::kMaxValves> recheck_ratio{};
+  int recheck_warned = -1;
+  int recheck_alarmed = -1;
+  bool recheck_holding = false;
+  std::uint64_t rechecks = 0;
   // The online flow trim (control/flow_feedback.hpp): the factor on the modulated nozzles'
   // flows, and whether its last window moved it (false: held, e.g. too few valves open).
   double flow_trim_correction = 1.0;

@@ -98,6 +98,16 @@ Sprayer::Sprayer(const Config& config, Backends& backends)
     health.alarm_threshold = config.nozzle_health.alarm_threshold;
     nozzle_health_.emplace(health);
   }
+  if (config.nozzle_health.recheck && io_.flow != nullptr) {
+    control::NozzleRecheckConfig recheck;
+    recheck.nozzles = nozzles;
+    recheck.settle_s = config.nozzle_health.recheck_settle_s;
+    recheck.measure_s = config.nozzle_health.recheck_measure_s;
+    recheck.interval_s = config.nozzle_health.recheck_interval_s;
+    recheck.warn_fraction = config.nozzle_health.recheck_warn_pct / 100.0;
+    recheck.alarm_fraction = config.nozzle_health.recheck_alarm_pct / 100.0;
+    recheck_.emplace(recheck);
+  }
   if (config.cameras.size() > kMaxCameras || config.cameras.size() != io_.cameras.size()) {
     throw std::invalid_argument("camera count: at most 8, one backend per [[camera]]");
   }

@@ -20,6 +20,7 @@
 #include "control/flow_feedback.hpp"
 #include "control/nozzle_command_step.hpp"
 #include "control/nozzle_health.hpp"
+#include "control/nozzle_recheck.hpp"
 #include "control/nozzle_scheduler.hpp"
 #include "control/odometry.hpp"
 #include "control/phase_windows.hpp"
@@ -156,6 +157,16 @@ class Sprayer {
   void control_loop(std::stop_token stop) noexcept;
   void feed_nozzle_health(control::PhaseWindows& windows, Nanos now, bool spraying,
                           std::uint64_t pulses, double pulses_per_litre) noexcept;
+  // When the boom last became clear for a re-check (nothing to spray; no crop or stopped).
+  struct RecheckWindow {
+    Nanos clear_since{-1};
+  };
+  // One control cycle of the headland re-check (daemon/sprayer/recheck.cpp): whether it holds
+  // the valves now; each nozzle's line rescaled by its reading into `scaled_lines`.
+  bool step_recheck(RecheckWindow& window, Nanos now, bool spray,
+                    std::span<const double> target_flow, const PressureStatus& pressure,
+                    const LiveParams& params, ControlStatus& status,
+                    std::array<control::NozzleLine, io::kMaxValves>& scaled_lines) noexcept;
   void camera_loop(std::stop_token stop, CameraWorker& worker) noexcept;
   void tank_loop(std::stop_token stop) noexcept;
   void imu_loop(std::stop_token stop) noexcept;
@@ -189,6 +200,8 @@ class Sprayer {
   // reads the meter against the lines in 1 s windows (whole PWM periods at whole Hz).
   control::NozzleCommandStep nozzle_command_;
   std::unique_ptr<EstopGuard> estop_;  // its latch is read by the valve and pressure loops
+  // [nozzle_health] recheck with the meter wired; control loop.
+  std::optional<control::NozzleRecheck> recheck_;
   std::optional<control::NozzleHealth> nozzle_health_;  // [nozzle_health] enabled; control loop
   std::array<CameraWorker, kMaxCameras> cameras_;
   InferenceGate inference_gate_;  // one weed-model inference at a time, in arrival order

@@ -111,6 +111,14 @@ constexpr std::array<AlarmCatalogEntry, kAlarmCount> kCatalog = {{
      "Check the owning board's daemon and bridge, the broker and this board's bridge "
      "(`systemctl status weedspray-fleet`; the journal says when the broker connection "
      "closed). Once `SpeedSource` reads \"fleet\" again, clear the alarms and start."},
+    {"f3c2511bf1674c00bded4c9903d9cae5",
+     "The headland re-check held a nozzle open alone and read it off its calibrated held-open "
+     "flow by nozzle_health.recheck_warn_pct or more (a partly blocked, worn or damaged tip); "
+     "its line has been rescaled by the reading, so the dose holds meanwhile. Off by "
+     "nozzle_health.recheck_alarm_pct it is nozzle_flow_fault too. The warning clears when "
+     "the nozzle reads within its calibration again.",
+     "Look at the named nozzle at the next stop: clean its tip and strainer or replace it, then "
+     "run `sprayctl calibrate nozzles` (its new calibration is the new reference)."},
 }};
 
 }  // namespace

@@ -34,6 +34,16 @@ std::string shared_speed_detail(const AlarmMeasurements& m) {
                      m.config.fleet.speed_from, silent, m.config.speed.shared_timeout_s);
 }
 
+// The re-check's nozzle n (-1: none any more) and its reading against its calibration.
+std::string recheck_detail(int n, const AlarmMeasurements& m) {
+  if (n < 0) return "no nozzle off its calibration any more";
+  const double ratio = m.control.recheck_ratio[static_cast<std::size_t>(n)];
+  return fmt::format(
+      "nozzle {}: {:.3f} ({:+.1f} %) of its calibrated held-open flow at the headland re-check; "
+      "its line rescaled",
+      n, ratio, (ratio - 1.0) * 100.0);
+}
+
 // What the control loop uses without a fix (it switched on its own, at the same timeout).
 std::string gnss_detail(const AlarmMeasurements& m) {
   GroundSpeedInputs without_fix;
@@ -87,12 +97,15 @@ std::string alarm_detail(AlarmId id, const AlarmMeasurements& m) {
     case AlarmId::kGnssFixLost:
       return gnss_detail(m);
     case AlarmId::kNozzleFlowFault: {
+      if (m.control.recheck_alarmed >= 0) return recheck_detail(m.control.recheck_alarmed, m);
       const int n = m.control.nozzle_flow_fault;
       const double ratio = n >= 0 ? m.control.nozzle_flow_ratio[static_cast<std::size_t>(n)] : 1.0;
       return fmt::format("nozzle {}: {}, its flow {:.2f} of its baseline", n,
                          m.control.nozzle_flow_fault_low ? "blocked" : "over (worn or stuck open)",
                          ratio);
     }
+    case AlarmId::kNozzleOffCalibration:
+      return recheck_detail(m.control.recheck_warned, m);
     case AlarmId::kCalibrationDrift:
       return calibration_drift_detail(m);
     case AlarmId::kRecordsDiskFull:

@@ -78,8 +78,10 @@ void AlarmWatch::evaluate(Nanos now, const PressureStatus& pressure, const Contr
   in.exit_watcher_lost = !from.exit_watch.running(now);
   in.gnss_fix_lost = from.backends.has_gnss() && gnss_lost_fix_->lost(sprayer.gnss(), now);
   // Not from a status older than the last ClearAlarms (the detector restarts on it).
-  in.nozzle_flow_fault =
-      control.nozzle_flow_fault >= 0 && control.nozzle_health_reset == from.operation.trip_reset();
+  in.nozzle_flow_fault = (control.nozzle_flow_fault >= 0 &&
+                          control.nozzle_health_reset == from.operation.trip_reset()) ||
+                         control.recheck_alarmed >= 0;
+  in.nozzle_off_calibration = control.recheck_warned >= 0;
   in.calibration_ratio = control.calibration_ratio;
   in.estop_latched = sprayer.estop().latched;
   in.records_at_risk = from.records.at_risk();

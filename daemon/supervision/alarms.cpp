@@ -27,6 +27,7 @@ constexpr std::array<std::string_view, kAlarmCount> kNames = {
     "records_disk_full",
     "exit_watcher_lost",
     "shared_speed_lost",
+    "nozzle_off_calibration",
 };
 
 double seconds(std::chrono::nanoseconds t) {
@@ -66,8 +67,9 @@ bool is_fault(AlarmId id) noexcept {
 }
 
 bool clears_itself(AlarmId id) noexcept {
-  // The records catch up by themselves once space returns: nothing for the user to clear.
-  return id == AlarmId::kRecordsDiskFull;
+  // The records catch up by themselves once space returns, and a nozzle read within its
+  // calibration at the next re-check is fine again: nothing for the user to clear.
+  return id == AlarmId::kRecordsDiskFull || id == AlarmId::kNozzleOffCalibration;
 }
 
 bool AlarmEvaluator::fault_latched() const noexcept {
@@ -158,6 +160,9 @@ AlarmMask AlarmEvaluator::evaluate(const AlarmInputs& in) {
   // A fault at once (its timeout is the hold): the control loop has already closed the valves,
   // and spraying on a board that no longer knows where it is must wait for the operator.
   set(AlarmId::kSharedSpeedLost, in.shared_speed_lost, false);
+  // A warning: the re-check has already rescaled the nozzle's line, so the rate law asks it for
+  // the flow it gives; the user should look at it before it gets worse.
+  set(AlarmId::kNozzleOffCalibration, in.nozzle_off_calibration, false);
 
   AlarmMask raised = 0;
   present_ = 0;

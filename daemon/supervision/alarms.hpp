@@ -21,22 +21,23 @@ enum class AlarmId : std::uint8_t {
   kNoFlow,               // pump on, valves open, pressure normal, no flow (pump, meter or tank)
   kTankLow,
   kTankEmpty,
-  kModbusSilent,       // the tank sensor stopped answering
-  kCameraLost,         // no frame for alarms.camera_stall_s
-  kVisionTooSlow,      // frames do not cover the ground at this speed, or arrive too late
-  kControlOverruns,    // control loops missing their deadlines
-  kVisionModelFailed,  // a camera's weed model fails at run time: that camera's nozzles closed
-  kOutputWriteFailed,  // a valve/pump/return-valve/alarm output refused a write (line named)
-  kGnssFixLost,        // GNSS enabled, no usable fix for gnss.lost_fix_timeout_s
-  kNozzleFlowFault,    // one nozzle's flow off its baseline ([nozzle_health]; nozzle named)
-  kCalibrationDrift,   // the flow trim has held the boom off its calibration: recalibrate
-  kFlowValvesClosed,   // flow with every valve commanded closed: a leaking or stuck-open valve
-  kEstop,              // the emergency-stop circuit opened: outputs held safe until reset
-  kRecordsDiskFull,    // as-applied lines not written, or free space under log.min_free_mb
-  kExitWatcherLost,    // the process that writes the outputs safe after a kill -9 is gone
-  kSharedSpeedLost,    // speed.source = "fleet": the owning board's samples stopped
+  kModbusSilent,          // the tank sensor stopped answering
+  kCameraLost,            // no frame for alarms.camera_stall_s
+  kVisionTooSlow,         // frames do not cover the ground at this speed, or arrive too late
+  kControlOverruns,       // control loops missing their deadlines
+  kVisionModelFailed,     // a camera's weed model fails at run time: that camera's nozzles closed
+  kOutputWriteFailed,     // a valve/pump/return-valve/alarm output refused a write (line named)
+  kGnssFixLost,           // GNSS enabled, no usable fix for gnss.lost_fix_timeout_s
+  kNozzleFlowFault,       // one nozzle's flow off its baseline ([nozzle_health]; nozzle named)
+  kCalibrationDrift,      // the flow trim has held the boom off its calibration: recalibrate
+  kFlowValvesClosed,      // flow with every valve commanded closed: a leaking or stuck-open valve
+  kEstop,                 // the emergency-stop circuit opened: outputs held safe until reset
+  kRecordsDiskFull,       // as-applied lines not written, or free space under log.min_free_mb
+  kExitWatcherLost,       // the process that writes the outputs safe after a kill -9 is gone
+  kSharedSpeedLost,       // speed.source = "fleet": the owning board's samples stopped
+  kNozzleOffCalibration,  // the headland re-check read a nozzle off its calibration (named)
 };
-inline constexpr std::size_t kAlarmCount = 20;
+inline constexpr std::size_t kAlarmCount = 21;
 
 using AlarmMask = std::uint32_t;
 constexpr AlarmMask alarm_bit(AlarmId id) noexcept {
@@ -77,7 +78,10 @@ struct AlarmInputs {
   bool output_write_failed = false;  // an output write failed since the last evaluation
   bool exit_watcher_lost = false;    // hardware mode: no exit watcher runs (one could not start)
   bool gnss_fix_lost = false;        // see gnss_fix_lost() (daemon/sprayer/ground_speed.hpp)
-  bool nozzle_flow_fault = false;    // the nozzle health detector names a nozzle
+  bool nozzle_flow_fault = false;    // the nozzle health detector or the re-check names a nozzle
+  // The headland re-check's last reading of some nozzle is off its calibration by
+  // nozzle_health.recheck_warn_pct (its next reading within it clears the warning).
+  bool nozzle_off_calibration = false;
   // The line meter's flow over what the calibrated nozzles promise at the commanded duties,
   // averaged (control::CalibrationRatio; 1 = as calibrated, and while not yet known).
   double calibration_ratio = 1.0;

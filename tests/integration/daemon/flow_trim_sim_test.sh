@@ -39,15 +39,7 @@ start_sim_daemon
 [ "$(prop MeteredOverCalibrated)" = "0" ] || fail "MeteredOverCalibrated before spraying: $(prop MeteredOverCalibrated)"
 
 # 2. Calibrated, then spraying.
-call StartCatchTest d 2
-for _ in $(seq 1 80); do
-  prop Calibration | grep -q '^"awaiting_volume"' && break
-  sleep 0.1
-done
-litres=$(sed -n 's/.*sim: the catch test delivered \([0-9.]*\) L.*/\1/p' "$T/daemon.log" | tail -n1)
-[ -n "$litres" ] || fail "no catch test volume in the log: $(prop Calibration)"
-"$SPRAYCTL" --user calibrate meter --volume "$litres" >/dev/null || fail "calibrate meter"
-"$SPRAYCTL" --user calibrate nozzles >"$T/nozzles.txt" || fail "calibrate nozzles: $(cat "$T/nozzles.txt")"
+calibrate_sim_machine
 call Start
 wait_state Spraying 5
 record() { echo "t=$1 s FlowTrim $(prop FlowTrim) active $(prop FlowTrimActive) MeteredOverCalibrated $(prop MeteredOverCalibrated) Alarms $(prop Alarms)" >>"$T/trim.txt"; }

@@ -4,8 +4,8 @@
 # the daemon and the bus the script started ($DAEMON_PID, $BUS_PID) and whatever the script
 # adds to EXIT_HOOKS (commands, run after the daemon is killed), fail() with the tails of the
 # logs in FAIL_LOGS (default: $T/daemon.log), start_private_bus, prop/call/wait_state on the
-# sprayer's object, start_sim_daemon and stop_daemon; resumed_sim and wait_log for a daemon
-# without a bus.
+# sprayer's object, start_sim_daemon and stop_daemon, calibrate_sim_machine; resumed_sim and
+# wait_log for a daemon without a bus.
 # usage: . private_bus_lib.sh NAME   ($T is /tmp/weedspray-NAME-test.XXXXXX; KEEP=1 keeps it)
 T=$(mktemp -d "/tmp/weedspray-$1-test.XXXXXX")
 DAEMON_PID=
@@ -113,4 +113,17 @@ wait_state() {  # wait_state STATE SECONDS
     sleep 0.1
   done
   fail "State is '$state', expected $1"
+}
+calibrate_sim_machine() {  # a 2 s catch test with the volume the plant delivered, then the nozzles
+  call StartCatchTest d 2
+  for _ in $(seq 1 80); do
+    prop Calibration | grep -q '^"awaiting_volume"' && break
+    sleep 0.1
+  done
+  local litres
+  litres=$(sed -n 's/.*sim: the catch test delivered \([0-9.]*\) L.*/\1/p' "$T/daemon.log" | tail -n1)
+  [ -n "$litres" ] || fail "no catch test volume in the log: $(prop Calibration)"
+  "$BUILD/daemon/sprayctl" --user calibrate meter --volume "$litres" >/dev/null || fail "calibrate meter"
+  "$BUILD/daemon/sprayctl" --user calibrate nozzles >"$T/nozzles.txt" ||
+    fail "calibrate nozzles: $(cat "$T/nozzles.txt")"
 }

@@ -300,11 +300,29 @@ TEST(Alarms, ALostSharedSpeedIsAFaultAtOnceAndStaysUntilCleared) {
 }
 
 // Only records_disk_full clears itself: the others wait for ClearAlarms.
-TEST(Alarms, OnlyRecordsDiskFullClearsItself) {
+TEST(Alarms, OnlyRecordsDiskFullAndNozzleOffCalibrationClearThemselves) {
   for (std::size_t i = 0; i < kAlarmCount; ++i) {
     const auto id = static_cast<AlarmId>(i);
-    EXPECT_EQ(clears_itself(id), id == AlarmId::kRecordsDiskFull) << alarm_name(id);
+    EXPECT_EQ(clears_itself(id),
+              id == AlarmId::kRecordsDiskFull || id == AlarmId::kNozzleOffCalibration)
+        << alarm_name(id);
   }
+}
+
+// The re-check's warning: raised while its last reading of a nozzle is off, cleared by the
+// next reading within the calibration; never a fault.
+TEST(Alarms, NozzleOffCalibrationIsAWarningTheNextGoodReadingClears) {
+  AlarmEvaluator alarms(thresholds());
+  EXPECT_EQ(alarm_name(AlarmId::kNozzleOffCalibration), "nozzle_off_calibration");
+  auto in = healthy(1s);
+  EXPECT_EQ(alarms.evaluate(in), 0U);
+  in.nozzle_off_calibration = true;
+  EXPECT_EQ(alarms.evaluate(at(in, 2s)), alarm_bit(AlarmId::kNozzleOffCalibration));
+  EXPECT_FALSE(alarms.fault_latched());
+  in.nozzle_off_calibration = false;
+  EXPECT_EQ(alarms.evaluate(at(in, 3s)), 0U);
+  EXPECT_EQ(alarms.cleared_by_itself(), alarm_bit(AlarmId::kNozzleOffCalibration));
+  EXPECT_EQ(alarms.active(), 0U);
 }
 
 // The meter and the calibrated nozzles more than 5 % apart for 30 s (the defaults) ask for a
