@@ -76,9 +76,10 @@ void append_measurement_keys(std::vector<KeySpec<Config>>& keys) {
      "then read against the meter this long"},
     {WS_KEY(nozzle_health, recheck_interval_s), 60.0, 0, 3600, "s",
      "a whole-boom re-check starts at most this often (0: at every window)"},
-    {WS_KEY(nozzle_health, recheck_warn_pct), 5.0, 1, 50, "%",
-     "a nozzle whose reading is off its calibration by this much is named as a warning"},
-    {WS_KEY(nozzle_health, recheck_alarm_pct), 10.0, 2, 90, "%",
+    {WS_KEY(nozzle_health, recheck_warn_pct), 5.0, 2, 50, "%",
+     "a nozzle whose reading is off its calibration by this much is named as a warning (both "
+     "limits less 1.5 %, the reading's own uncertainty)"},
+    {WS_KEY(nozzle_health, recheck_alarm_pct), 10.0, 3, 90, "%",
      "...and by this much raises nozzle_flow_fault naming it"},
     {WS_KEY(nozzle_health, recheck_stopped_m_per_s), 0.05, 0, 1, "m/s",
      "below this ground speed the vehicle counts as stopped (a re-check may run over crop)"},
