@@ -43,7 +43,38 @@ NozzleCommandStep::NozzleCommandStep(const NozzleCommandConfig& config)
       quantisers_(make_quantisers(quantiser_levels(config), config.quantiser_hysteresis_pct,
                                   std::make_index_sequence<kMaxCommandNozzles>{})),
       compensation_filter_(config.compensation_filter_s),
-      trim_(config.trim) {}
+      pwm_period_s_(config.pwm_period_s),
+      cycle_s_(config.cycle_s),
+      phase_offset_s_(config.phase_offset_s),
+      trim_(config.trim) {
+  if (!(std::isfinite(config.pwm_period_s) && config.pwm_period_s >= 0.0))
+    throw std::invalid_argument("NozzleCommandConfig.pwm_period_s must be >= 0");
+  if (!(std::isfinite(config.cycle_s) && config.cycle_s >= 0.0))
+    throw std::invalid_argument("NozzleCommandConfig.cycle_s must be >= 0");
+  chosen_period_.fill(-1);
+}
+
+double NozzleCommandStep::alternating_duty_pct(std::size_t n, const NozzleCommandInputs& in,
+                                               double target, double pressure) noexcept {
+  const NozzleLine& line = in.lines[n];
+  const double top_pct = in.law.max_duty_pct;
+  if (!(pwm_period_s_ > 0.0) || in.schedule_time_s < 0.0 ||
+      !(line.full_open_flow_l_per_min > 0.0) || !(top_pct > 0.0 && top_pct < 100.0))
+    return -1.0;
+  const double top = flow_for_duty_l_per_min(line, top_pct, pressure);
+  const double open = held_open_flow_l_per_min(line, pressure);
+  if (!(target > top && target < open)) return -1.0;
+  // The period the valve latches next: the one under the next cycle.
+  const auto period = static_cast<std::int64_t>(
+      std::floor((in.schedule_time_s + cycle_s_ - phase_offset_s_[n]) / pwm_period_s_));
+  if (period != chosen_period_[n]) {
+    chosen_period_[n] = period;
+    open_credit_[n] += (target - top) / (open - top);
+    chosen_open_[n] = open_credit_[n] >= 0.5;
+    if (chosen_open_[n]) open_credit_[n] -= 1.0;
+  }
+  return chosen_open_[n] ? 100.0 : top_pct;
+}
 
 const NozzleCommandOutputs& NozzleCommandStep::step(const NozzleCommandInputs& in) noexcept {
   const double filtered = compensation_filter_.update(in.pressure_mpa, in.dt_s);
@@ -51,15 +82,25 @@ const NozzleCommandOutputs& NozzleCommandStep::step(const NozzleCommandInputs& i
   out_.compensation_pressure_mpa = pressure;
   const std::size_t nozzles =
       std::min({nozzles_, in.target_flow_l_per_min.size(), in.lines.size()});
+  out_.alternating_mask = 0;
   for (std::size_t n = 0; n < nozzles; ++n) {
     const double target = in.target_flow_l_per_min[n];
     double duty = 0.0;
-    if (in.spraying && target > 0.0) {
+    const double alternating =
+        in.spraying && target > 0.0 ? alternating_duty_pct(n, in, target, pressure) : -1.0;
+    if (alternating >= 0.0) {
+      duty = alternating;
+      out_.alternating_mask |= std::uint32_t{1} << n;
+    } else if (in.spraying && target > 0.0) {
       const double raw = raw_duty_for_flow_pct(in.lines[n], target, pressure);
       duty = quantised_ ? quantisers_[n].quantise(std::clamp(raw, 0.0, 100.0)) : raw;
       duty = clamp_duty_for_flow_pct(in.law, duty, target);
     } else if (quantised_) {
       quantisers_[n].reset();
+    }
+    if (alternating < 0.0) {  // out of the band above: the next stretch starts afresh
+      open_credit_[n] = 0.0;
+      chosen_period_[n] = -1;
     }
     out_.law_duty_pct[n] = duty;
     out_.duty_pct[n] = duty;

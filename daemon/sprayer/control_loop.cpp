@@ -104,6 +104,7 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
   std::array<double, io::kMaxValves> target_flow{};                // the rate law's flow per nozzle
   std::array<control::NozzleLine, io::kMaxValves> scaled_lines{};  // rescaled by the re-check
   RecheckWindow recheck_window;
+  io::ValvePwmStats pwm_grid;  // the valve thread's schedule start
   bool was_enabled = false;
   // One staggered phase (period / nozzles), the meter read a lag behind the valves.
   control::PhaseWindows health_windows(
@@ -312,6 +313,10 @@ void Sprayer::control_loop(std::stop_token stop) noexcept {
     command_in.pulses_per_litre = params.flow_pulses_per_litre;
     command_in.target_flow_l_per_min = std::span<const double>(target_flow.data(), nozzles);
     command_in.lines = command_lines;
+    // The PWM grid's time, for flows above the band (alternating whole periods); a busy slot
+    // keeps the last read (the schedule's start moves only when the valves restart).
+    (void)pwm_driver_->try_stats(pwm_grid);
+    command_in.schedule_time_s = pwm_grid.expired ? -1.0 : seconds(now - pwm_grid.schedule_start);
     const control::NozzleCommandOutputs& commanded = nozzle_command_.step(command_in);
     io::ValveCommand command;
     command.valve_count = static_cast<std::uint32_t>(nozzles);

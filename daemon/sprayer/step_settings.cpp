@@ -61,6 +61,12 @@ control::PwmConfig pwm_config(const Config& config) {
 control::NozzleCommandConfig nozzle_command_config(const Config& config) {
   control::NozzleCommandConfig c;
   c.nozzles = static_cast<std::size_t>(config.boom.nozzles);
+  // The valves' PWM grid, from the schedule the valve thread runs.
+  const control::PwmSchedule schedule(pwm_config(config));
+  c.pwm_period_s = std::chrono::duration<double>(schedule.period()).count();
+  for (std::size_t n = 0; n < c.nozzles; ++n)
+    c.phase_offset_s[n] = std::chrono::duration<double>(schedule.phase_offset(n)).count();
+  c.cycle_s = std::chrono::duration<double>(kControlLoopPeriod).count();
   const int n = config.spray.quantiser_levels;
   if (n >= 2) {
     // Closed, n levels from duty_min_pct to duty_max_pct, open: at most 16 (n <= 14).

@@ -13,15 +13,20 @@
 namespace weedspray::lab::experiments {
 namespace {
 
-// The daemon's valve schedule (order, immediate start/stop) for the rig's boom and timing.
-PwmConfig pwm_config(const RigConfig& c) {
+// The daemon's configuration with the rig's boom and valve timing.
+daemon::Config daemon_config(const RigConfig& c) {
   daemon::Config config = daemon::default_settings();
   config.boom.nozzles = c.plant.nozzle_count;
   config.pwm.frequency_hz = c.pwm_frequency_hz;
   config.pwm.staggered = c.fixes.staggered;
   config.pwm.min_on_s = c.pwm_min_on_s;
   config.pwm.min_off_s = c.pwm_min_off_s;
-  return daemon::pwm_config(config);
+  return config;
+}
+
+// The daemon's valve schedule (order, immediate start/stop) for the rig's boom and timing.
+PwmConfig pwm_config(const RigConfig& c) {
+  return daemon::pwm_config(daemon_config(c));
 }
 
 PressureLoopConfig pressure_loop_config(const RigConfig& c) {
@@ -34,9 +39,9 @@ PressureLoopConfig pressure_loop_config(const RigConfig& c) {
 
 // The daemon's duty step for the rig's boom, with the rig's trim and filter settings.
 NozzleCommandConfig nozzle_command_config(const RigConfig& c) {
-  daemon::Config config = daemon::default_settings();
-  config.boom.nozzles = c.plant.nozzle_count;
-  NozzleCommandConfig command = daemon::nozzle_command_config(config);
+  NozzleCommandConfig command = daemon::nozzle_command_config(daemon_config(c));
+  command.cycle_s = c.command_period_s;
+  if (!c.alternate_periods) command.pwm_period_s = 0.0;
   if (!c.quantise) command.quantiser_level_count = 0;
   command.trim.trim = c.flow_trim;
   command.trim.window_s = c.flow_trim_window_s;
@@ -218,6 +223,7 @@ void ClosedLoopRig::apply_flow_requests(double dt_s) {
   in.pulses_per_litre = config_.meter_pulses_per_l;
   in.target_flow_l_per_min = std::span<const double>(flows.data(), n);
   in.lines = std::span<const NozzleLine>(lines.data(), n);
+  in.schedule_time_s = started_ ? plant_.time_s() - pwm_start_s_ : -1.0;
   const NozzleCommandOutputs& out = command_step_.step(in);
   const double pressure = out.compensation_pressure_mpa;
   for (std::size_t k = 0; k < n; ++k) {

@@ -98,6 +98,9 @@ struct RigConfig {
   // The daemon's duty quantiser ([spray] quantiser_levels, hysteresis_pct). Off by default:
   // the experiments ask for exact flows and judge the plant and the trim, not the levels.
   bool quantise = false;
+  // Flows between the band's top and the held-open flow alternate whole PWM periods (the
+  // daemon's step); false: held open, as a plain clamp does.
+  bool alternate_periods = true;
   // Time constant of the pressure filter the compensation uses (noise would otherwise jitter
   // the duties): the trim's.
   double compensation_filter_s = PressureFilter::kTimeConstantS;

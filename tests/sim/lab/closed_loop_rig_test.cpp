@@ -87,5 +87,47 @@ TEST(ClosedLoopRig, TheValvesGetTheDaemonsDutyStepWithItsQuantiser) {
   EXPECT_LT(level_l, exact_l - 0.005);
 }
 
+TEST(ClosedLoopRig, AFlowAboveTheBandIsSprayedByAlternatingPeriods) {
+  // A calibrated machine asked for 96 % of each nozzle's metered held-open flow, the daemon's
+  // band (20-80 %): no duty gives it, so whole periods alternate held open and 80 %.
+  CalibrationOptions cal_options;
+  cal_options.pressure_mpa = 0.2;
+  cal_options.frequency_hz = 3.0;
+  const CalibrationResult& cal = cached_calibration(cal_options);
+  const std::vector<double> full = calibrated_full_flows(cal);
+  std::vector<NozzleLine> lines;
+  for (const auto& n : cal.nozzles) lines.push_back(n.fitted);
+  std::vector<double> asked;
+  for (const double f : full) asked.push_back(0.96 * f);
+  const auto delivered_over_asked = [&](bool alternate) {
+    RigConfig config;
+    config.setpoint_mpa = 0.2;
+    config.pwm_frequency_hz = 3.0;
+    config.meter_pulses_per_l = cal.meter.pulses_per_litre;
+    config.fixes.flow_feedback = false;
+    config.duty_clamp = SprayLawConfig{};
+    config.alternate_periods = alternate;
+    config.record_period_s = 0.0;
+    ClosedLoopRig rig(config);
+    rig.set_nozzle_lines(lines);
+    rig.set_full_open_flows(full);
+    rig.request_flows(asked);
+    rig.start();
+    rig.run_for(3.0);
+    double start_l = 0.0;
+    for (int i = 0; i < 4; ++i) start_l += rig.plant().nozzle_delivered_l(i);
+    rig.run_for(30.0);
+    double litres = -start_l;
+    for (int i = 0; i < 4; ++i) litres += rig.plant().nozzle_delivered_l(i);
+    double asked_l = 0.0;
+    for (const double q : asked) asked_l += q * 30.0 / 60.0;
+    return litres / asked_l;
+  };
+  const double alternating = delivered_over_asked(true);
+  const double held_open = delivered_over_asked(false);
+  EXPECT_NEAR(alternating, 1.0, 0.015);
+  EXPECT_GT(held_open, 1.03);  // held open: the nozzles' whole flow
+}
+
 }  // namespace
 }  // namespace weedspray::lab::experiments

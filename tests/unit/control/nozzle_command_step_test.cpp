@@ -127,6 +127,46 @@ TEST(NozzleCommandStep, TheTrimScalesModulatedDutiesAgainstTheMeter) {
   EXPECT_DOUBLE_EQ(step.step(in).trim.correction, 1.0);
 }
 
+// A flow between the band's top and the held-open flow: whole PWM periods alternate between
+// held open and the band's top, so the flow promised over time is the target; without the
+// grid the valve is held open (the old clamp) and sprays the held-open flow.
+TEST(NozzleCommandStep, AFlowAboveTheBandAlternatesWholePeriodsToItsMean) {
+  NozzleCommandConfig config = three_nozzles();
+  config.pwm_period_s = 0.2;  // 5 Hz
+  config.phase_offset_s = {0.0, 0.2 / 3.0, 0.4 / 3.0};
+  Boom boom;
+  for (auto& line : boom.lines) line.full_open_flow_l_per_min = 0.60;
+  const double top = flow_for_duty_l_per_min(boom.lines[0], 80.0, 0.4);  // 0.5314
+  const double target = top + 0.3 * (0.60 - top);
+  boom.flows = {target, 0.0, 0.0};
+  const auto mean_flow = [&](bool grid, std::uint32_t& alternating) {
+    NozzleCommandStep step(config);
+    double litres = 0.0;
+    double duty_changes = 0.0;
+    double last_duty = -1.0;
+    const int cycles = static_cast<int>(20.0 / kCycleS);
+    for (int i = 0; i < cycles; ++i) {
+      NozzleCommandInputs in = inputs(boom, 0.4);
+      in.schedule_time_s = grid ? i * kCycleS : -1.0;
+      const NozzleCommandOutputs& out = step.step(in);
+      alternating |= out.alternating_mask;
+      litres += promised_flow_l_per_min(boom.lines[0], out.duty_pct[0], 0.4) * kCycleS;
+      if (out.duty_pct[0] != last_duty) duty_changes += 1.0;
+      last_duty = out.duty_pct[0];
+      EXPECT_TRUE(out.duty_pct[0] == 100.0 || (grid && out.duty_pct[0] == 80.0)) << out.duty_pct[0];
+    }
+    // The level changes only at period starts: at most one change per period.
+    EXPECT_LE(duty_changes, 20.0 / 0.2 + 1.0);
+    return litres / (cycles * kCycleS);
+  };
+  std::uint32_t alternating = 0;
+  EXPECT_NEAR(mean_flow(true, alternating), target, 0.002 * target);
+  EXPECT_EQ(alternating, 1U);
+  alternating = 0;
+  EXPECT_NEAR(mean_flow(false, alternating), 0.60, 1e-9);
+  EXPECT_EQ(alternating, 0U);
+}
+
 TEST(NozzleCommandStep, RefusesABadNozzleCount) {
   NozzleCommandConfig config;
   config.nozzles = 0;
