@@ -139,7 +139,9 @@ void append_operation_keys(std::vector<KeySpec<Config>>& keys) {
     {WS_KEY(spray, duty_min_pct), 20.0, 0, 100, "%",
      "below this duty the valve stays closed"},
     {WS_KEY(spray, duty_max_pct), 80.0, 0, 100, "%",
-     "above this duty the valve is held fully open"},
+     "above this duty the valve is held fully open; with the nozzle's held-open flow metered "
+     "(calibrate nozzles), a flow between this duty's and the held-open one alternates whole "
+     "PWM periods held open and at this duty, so that their mean is the flow"},
     {WS_KEY(spray, quantiser_levels), 7, 0, 14, "",
      "duty levels from duty_min_pct to duty_max_pct (plus closed and open); 0 = off, else 2..14"},
     {WS_KEY(spray, hysteresis_pct), 2.0, 0, 20, "%",
