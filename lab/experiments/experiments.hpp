@@ -486,4 +486,17 @@ BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet,
 // per process (several tests of one binary, or both savings runs, calibrate once).
 const CalibrationResult& cached_calibration(const CalibrationOptions& options);
 
+// A machine calibrated as made at a set-point and PWM frequency (cached_calibration): the rig's
+// configuration for it (set-point, frequency, the calibrated meter K-factor, no trace; the
+// other settings the rig's defaults), its fitted lines and held-open flows.
+struct CalibratedMachine {
+  RigConfig config;
+  std::vector<NozzleLine> lines;
+  std::vector<double> full_flows;  // calibrated_full_flows()
+};
+CalibratedMachine calibrate_as_made(std::uint64_t seed, const plant::PlantParams& plant,
+                                    double pressure_mpa, double frequency_hz);
+// A rig on m.config with its lines and held-open flows set.
+ClosedLoopRig calibrated_rig(const CalibratedMachine& m);
+
 }  // namespace weedspray::lab::experiments
