@@ -22,16 +22,7 @@ using loop_time::seconds;
 LiveParams live_params_from(const Config& config) {
   LiveParams p;
   p.setpoint_mpa = config.pressure.setpoint_mpa;
-  p.law.nominal_flow_l_per_min = config.spray.nominal_flow_l_per_min;
-  p.law.nozzle_width_m = config.boom.nozzle_width_m;
-  p.law.nominal_speed_m_per_s = config.spray.nominal_speed_m_per_s;
-  p.law.max_density = config.spray.max_density;
-  p.law.decision_threshold = config.spray.decision_threshold;
-  p.law.min_duty_pct = config.spray.duty_min_pct;
-  p.law.max_duty_pct = config.spray.duty_max_pct;
-  p.law.low_duty_policy = config.spray.low_duty_policy == "close"
-                              ? control::LowDutyPolicy::kClose
-                              : control::LowDutyPolicy::kRaiseToMin;
+  p.law = spray_law_config(config);
   control::NozzleLine line;
   line.slope_l_per_min_per_pct = config.spray.calibration_slope_l_per_min_per_pct;
   line.intercept_l_per_min = config.spray.calibration_offset_l_per_min;

@@ -86,6 +86,21 @@ control::NozzleCommandConfig nozzle_command_config(const Config& config) {
   return c;
 }
 
+control::SprayLawConfig spray_law_config(const Config& config) {
+  control::SprayLawConfig law;
+  law.nominal_flow_l_per_min = config.spray.nominal_flow_l_per_min;
+  law.nozzle_width_m = config.boom.nozzle_width_m;
+  law.nominal_speed_m_per_s = config.spray.nominal_speed_m_per_s;
+  law.max_density = config.spray.max_density;
+  law.decision_threshold = config.spray.decision_threshold;
+  law.min_duty_pct = config.spray.duty_min_pct;
+  law.max_duty_pct = config.spray.duty_max_pct;
+  law.low_duty_policy = config.spray.low_duty_policy == "close"
+                            ? control::LowDutyPolicy::kClose
+                            : control::LowDutyPolicy::kRaiseToMin;
+  return law;
+}
+
 const Config& default_settings() {
   static const Config defaults = default_config();
   return defaults;

@@ -50,6 +50,7 @@ int run_orthogonal_command(const ExperimentOptions& o);
 int run_dose_command(const ExperimentOptions& o);
 int run_blockage_command(const ExperimentOptions& o);
 int run_savings_command(const ExperimentOptions& o);
+int run_field_dose_command(const ExperimentOptions& o);
 
 // ---------- figures ----------
 

@@ -30,6 +30,7 @@ constexpr std::array kExperimentCommands{
     ExperimentCommand{"calibrate", run_calibrate_command},
     ExperimentCommand{"savings", run_savings_command},
     ExperimentCommand{"blockage", run_blockage_command},
+    ExperimentCommand{"field-dose", run_field_dose_command},
 };
 
 int run_experiment(const ExperimentOptions& o) {

@@ -144,28 +144,12 @@ class HeadlandRecheck {
 
 BlockageMachine blockage_once(const Machine& machine, std::uint64_t fleet_seed, int index,
                               const BlockageOptions& options) {
-  CalibrationOptions cal_options;
-  cal_options.seed = machine.seed;
-  cal_options.pressure_mpa = options.pressure_mpa;
-  cal_options.frequency_hz = options.frequency_hz;
-  cal_options.plant = machine.params;
-  const CalibrationResult& cal = cached_calibration(cal_options);
-
-  RigConfig config;
-  config.seed = machine.seed;
-  config.plant = machine.params;
-  config.setpoint_mpa = options.pressure_mpa;
-  config.pwm_frequency_hz = options.frequency_hz;
-  config.record_period_s = 0.0;
-  config.fixes = {true, true, true};
-  config.meter_pulses_per_l = cal.meter.pulses_per_litre;
-  config.nozzle_health = options.health;
-  ClosedLoopRig rig(config);
-  std::vector<NozzleLine> lines;
-  for (const auto& n : cal.nozzles) lines.push_back(n.fitted);
-  rig.set_nozzle_lines(lines);
-  const std::vector<double> full = calibrated_full_flows(cal);
-  rig.set_full_open_flows(full);
+  CalibratedMachine calibrated =
+      calibrate_as_made(machine.seed, machine.params, options.pressure_mpa, options.frequency_hz);
+  calibrated.config.nozzle_health = options.health;
+  ClosedLoopRig rig = calibrated_rig(calibrated);
+  const std::vector<NozzleLine>& lines = calibrated.lines;
+  const std::vector<double>& full = calibrated.full_flows;
 
   std::seed_seq seq{static_cast<std::uint32_t>(fleet_seed), static_cast<std::uint32_t>(index), 3U};
   std::mt19937_64 rng(seq);
@@ -175,7 +159,8 @@ BlockageMachine blockage_once(const Machine& machine, std::uint64_t fleet_seed, 
   std::optional<sim::FieldDutyProcess> field;
   if (options.duties == BlockageDuties::kField) field.emplace(full.size(), rng(), options.field);
   std::optional<HeadlandRecheck> recheck;
-  if (options.recheck && field) recheck.emplace(options, lines, full, cal.meter.pulses_per_litre);
+  if (options.recheck && field)
+    recheck.emplace(options, lines, full, calibrated.config.meter_pulses_per_l);
   std::vector<double> shares(full.size());
   std::vector<double> flows(full.size());
   auto redraw = [&] {

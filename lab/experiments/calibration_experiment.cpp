@@ -136,6 +136,33 @@ CalibrationFleetResult run_calibration_fleet(const FleetOptions& fleet,
   return {spread_of(meter), spread_of(full), spread_of(line), spread_of(r2, true)};
 }
 
+CalibratedMachine calibrate_as_made(std::uint64_t seed, const plant::PlantParams& plant,
+                                    double pressure_mpa, double frequency_hz) {
+  CalibrationOptions cal_options;
+  cal_options.seed = seed;
+  cal_options.pressure_mpa = pressure_mpa;
+  cal_options.frequency_hz = frequency_hz;
+  cal_options.plant = plant;
+  const CalibrationResult& cal = cached_calibration(cal_options);
+  CalibratedMachine m;
+  m.config.plant = plant;
+  m.config.seed = seed;
+  m.config.setpoint_mpa = pressure_mpa;
+  m.config.pwm_frequency_hz = frequency_hz;
+  m.config.record_period_s = 0.0;
+  m.config.meter_pulses_per_l = cal.meter.pulses_per_litre;
+  for (const auto& n : cal.nozzles) m.lines.push_back(n.fitted);
+  m.full_flows = calibrated_full_flows(cal);
+  return m;
+}
+
+ClosedLoopRig calibrated_rig(const CalibratedMachine& m) {
+  ClosedLoopRig rig(m.config);
+  rig.set_nozzle_lines(m.lines);
+  rig.set_full_open_flows(m.full_flows);
+  return rig;
+}
+
 std::vector<double> calibrated_full_flows(const CalibrationResult& calibration) {
   std::vector<double> flows;
   for (const auto& n : calibration.nozzles) flows.push_back(n.full_open_l_per_min);

@@ -482,8 +482,91 @@ struct BlockageFleetResult {
 BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet,
                                        const BlockageOptions& options = {});
 
+// ---------- field dose: the boom-total L/ha over a field run, what rate controllers are judged on
+// Each machine is calibrated as made at the daemon's operating point ([pressure] set-point,
+// [pwm] frequency), changed (the drawn change: wear, ageing, blockage, meter drift, supply
+// ramp), then sprays a field (sim::FieldDutyProcess seeded per machine: correlated patches
+// shared across the boom, closures, headlands, ground speed +-speed_swing) for run_s with the
+// daemon's rate law: every request_period_s each nozzle is asked for its share of its
+// calibrated full-open flow times the ground speed factor (the volume per area is kept), the
+// duties in the daemon's band (duty_min/duty_max, low-duty policy) and the online trim on or
+// off. The field's ground speed replaces the drawn change's speed ramp.
+//   target L/ha:  the requested flow integrated over time / the area sprayed (ground speed x
+//                 nozzle width x time with the nozzle asked to spray), summed over the boom;
+//   applied L/ha: the plant's TRUE delivered volume over the same area.
+// The band moves some requests by policy, not by error: a request under the line's flow at
+// duty_min is raised to it (raise_to_min), one over the line's flow at duty_max is held open.
+// The law's volume is what the band decided (those requests replaced by the line's flow at
+// duty_min / the held-open flow); the error against it is the controller's alone.
+// The field this experiment sprays by default: sim::FieldDutyOptions with the shares kept
+// inside the valves' band (field_dose_experiment.cpp says why).
+sim::FieldDutyOptions field_dose_default_field();
+// The daemon's spray law from its default configuration (daemon::spray_law_config).
+SprayLawConfig field_dose_daemon_law();
+struct FieldDoseOptions {
+  double pressure_mpa = 0.4;  // the daemon's [pressure] setpoint_mpa
+  double frequency_hz = 5.0;  // the daemon's [pwm] frequency_hz
+  double run_s = 600.0;
+  double request_period_s = 0.25;
+  double settle_s = 3.0;  // pressure start-up with the boom closed, before the field
+  sim::FieldDutyOptions field = field_dose_default_field();
+  SprayLawConfig law = field_dose_daemon_law();
+};
+struct FieldDoseRun {
+  double area_ha = 0.0;
+  double target_l = 0.0;     // requested
+  double law_l = 0.0;        // what the band decided
+  double delivered_l = 0.0;  // TRUE
+  double target_l_per_ha = 0.0;
+  double applied_l_per_ha = 0.0;
+  double error_pct = 0.0;      // (delivered - target) / target x 100
+  double law_error_pct = 0.0;  // (delivered - law) / law x 100
+  // Of the nozzle-time asked to spray: raised to duty_min, held open above duty_max [%].
+  double raised_share_pct = 0.0;
+  double held_open_share_pct = 0.0;
+  // The band as shares of the held-open flow on this machine's calibrated lines: the largest
+  // nozzle's line flow at duty_min, the smallest one's at duty_max.
+  double band_low_share = 0.0;
+  double band_high_share = 0.0;
+};
+struct FieldDoseMachine {
+  FieldDoseRun trim_on, trim_off;
+  MachineChange change{};
+};
+struct FieldDoseRow {
+  Spread error_pct;  // signed; worst = the largest in size, with its sign
+  Spread abs_error_pct;
+  Spread law_error_pct;  // signed, as error_pct
+  Spread raised_share_pct;
+  Spread held_open_share_pct;
+  Spread applied_l_per_ha;
+};
+struct FieldDoseFleetResult {
+  FieldDoseRow trim_on, trim_off;
+  std::vector<FieldDoseMachine> machines;
+};
+// One machine, one field (field_seed), one trim setting.
+FieldDoseRun run_field_dose(const Machine& machine, const MachineChange& change,
+                            std::uint64_t field_seed, bool trim, const FieldDoseOptions& options);
+// Every machine with the trim on and off on the same field; fleet.changed = false: as made.
+FieldDoseFleetResult run_field_dose_fleet(const FleetOptions& fleet,
+                                          const FieldDoseOptions& options = {});
+
 // Calibration runs are deterministic for given options, so the spray experiments share one
 // per process (several tests of one binary, or both savings runs, calibrate once).
 const CalibrationResult& cached_calibration(const CalibrationOptions& options);
+
+// A machine calibrated as made at a set-point and PWM frequency (cached_calibration): the rig's
+// configuration for it (set-point, frequency, the calibrated meter K-factor, no trace; the
+// other settings the rig's defaults), its fitted lines and held-open flows.
+struct CalibratedMachine {
+  RigConfig config;
+  std::vector<NozzleLine> lines;
+  std::vector<double> full_flows;  // calibrated_full_flows()
+};
+CalibratedMachine calibrate_as_made(std::uint64_t seed, const plant::PlantParams& plant,
+                                    double pressure_mpa, double frequency_hz);
+// A rig on m.config with its lines and held-open flows set.
+ClosedLoopRig calibrated_rig(const CalibratedMachine& m);
 
 }  // namespace weedspray::lab::experiments

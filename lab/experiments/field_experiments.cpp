@@ -17,38 +17,12 @@
 namespace weedspray::lab::experiments {
 namespace {
 
-struct CalibratedMachine {
-  RigConfig config;
-  std::vector<NozzleLine> lines;
-  std::vector<double> full_flows;
-};
-
+// Calibrated as made, the duties in the law's band.
 CalibratedMachine calibrate(std::uint64_t seed, double pressure_mpa, double frequency_hz,
                             const SprayLawConfig& law, const plant::PlantParams& plant = {}) {
-  CalibrationOptions cal_options;
-  cal_options.seed = seed;
-  cal_options.pressure_mpa = pressure_mpa;
-  cal_options.frequency_hz = frequency_hz;
-  cal_options.plant = plant;
-  const CalibrationResult& cal = cached_calibration(cal_options);
-  CalibratedMachine m;
-  m.config.plant = plant;
-  m.config.seed = seed;
-  m.config.setpoint_mpa = pressure_mpa;
-  m.config.pwm_frequency_hz = frequency_hz;
-  m.config.record_period_s = 0.0;
-  m.config.meter_pulses_per_l = cal.meter.pulses_per_litre;
+  CalibratedMachine m = calibrate_as_made(seed, plant, pressure_mpa, frequency_hz);
   m.config.duty_clamp = law;
-  for (const auto& n : cal.nozzles) m.lines.push_back(n.fitted);
-  m.full_flows = calibrated_full_flows(cal);
   return m;
-}
-
-ClosedLoopRig make_rig(const CalibratedMachine& m) {
-  ClosedLoopRig rig(m.config);
-  rig.set_nozzle_lines(m.lines);
-  rig.set_full_open_flows(m.full_flows);
-  return rig;
 }
 
 }  // namespace
@@ -62,7 +36,7 @@ DoseResult run_dose(const DoseOptions& options) {
   DoseResult result;
   std::vector<double> x, y;
   for (double density : options.densities) {
-    ClosedLoopRig rig = make_rig(m);
+    ClosedLoopRig rig = calibrated_rig(m);
     const double q = target_flow_l_per_min(law, density, options.speed_m_per_s);
     rig.request_flows(std::vector<double>(m.full_flows.size(), q));
     if (options.change) apply_change(rig.plant(), *options.change);
@@ -202,7 +176,7 @@ SavingsRun run_savings_variable(const std::vector<std::array<double, 4>>& zone_d
   auto frame_odometer = [&](std::size_t f) {
     return start + 2.0 * length * static_cast<double>(f) - footprint.near_m;
   };
-  ClosedLoopRig rig = make_rig(m);
+  ClosedLoopRig rig = calibrated_rig(m);
   rig.request_flows(std::vector<double>(nozzles, 0.0));
   rig.start();
   std::size_t next_frame = 0;
@@ -272,7 +246,7 @@ SavingsResult run_savings(const std::vector<std::array<double, 4>>& zone_densiti
   const double uniform_q = target_flow_l_per_min(law, law.max_density, options.speed_m_per_s);
   std::array<double, 4> uniform_per_nozzle{};
   {
-    ClosedLoopRig rig = make_rig(m);
+    ClosedLoopRig rig = calibrated_rig(m);
     rig.request_flows(std::vector<double>(nozzles, uniform_q));
     rig.start();
     rig.run_for(kStartUpS);

@@ -203,6 +203,27 @@ TEST(FleetDose, OnEveryMachineTheTrimKeepsTheDoseLine) {
   EXPECT_GT(r.trim_on.r2.worst, 0.999);
 }
 
+// The boom-total dose over a field (speed swing, patches, a headland) on drawn machines, each
+// calibrated as made, then changed (wear, valve ageing, meter drift, supply ramp): within 2 %
+// of the requested L/ha with the trim on, and on every machine further off with it off.
+TEST(FleetFieldDose, TheTrimKeepsTheBoomTotalDoseWithinTwoPercent) {
+  FieldDoseOptions options;
+  options.run_s = 120.0;  // one headland (105-120 s) and a share of the speed swing
+  const FieldDoseFleetResult r = run_field_dose_fleet({1, 3, true}, options);
+  ASSERT_EQ(r.machines.size(), 3U);
+  for (const FieldDoseMachine& m : r.machines) {
+    std::printf("field dose: trim on %+.2f %%, off %+.2f %% (drift %+.2f %%, raised %.1f %%)\n",
+                m.trim_on.error_pct, m.trim_off.error_pct, m.change.meter_drift * 100.0,
+                m.trim_on.raised_share_pct);
+    EXPECT_LE(std::abs(m.trim_on.error_pct), 2.0);
+    EXPECT_GT(std::abs(m.trim_off.error_pct), std::abs(m.trim_on.error_pct) + 1.0);
+    EXPECT_GT(m.trim_on.area_ha, 0.0);
+    EXPECT_NEAR(m.trim_on.target_l_per_ha, m.trim_off.target_l_per_ha, 1e-9);  // one field
+  }
+  EXPECT_LE(r.trim_on.abs_error_pct.worst, 2.0);
+  EXPECT_GT(r.trim_off.abs_error_pct.mean, 2.0 * r.trim_on.abs_error_pct.mean);
+}
+
 TEST(FleetBlockage, ABlockedNozzleIsNamedAndAHealthyMinuteIsQuiet) {
   BlockageOptions options;
   options.healthy_s = 60.0;
