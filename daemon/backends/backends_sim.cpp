@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <spdlog/spdlog.h>
+
 #include "control/nozzle_scheduler.hpp"
 #include "daemon/backends/backends.hpp"
 #include "daemon/config/vision_config.hpp"
@@ -18,6 +20,7 @@
 #include "io/sim/replay_camera.hpp"
 #include "io/sim/simulated_machine.hpp"
 #include "sim/plant/hydraulic_plant.hpp"
+#include "sim/plant/machine_draw.hpp"
 
 #ifndef WEEDSPRAY_DEFAULT_SIM_IMAGES
 #define WEEDSPRAY_DEFAULT_SIM_IMAGES "/usr/share/weedspray/images"
@@ -35,6 +38,39 @@ double sim_speed_m_per_s(const SimSection& sim, double t_s) {
   return sim.speed_min_m_per_s + span * (0.5 - 0.5 * std::cos(2 * std::numbers::pi * phase));
 }
 
+namespace {
+
+// One line saying which machine the simulation runs and what it is made of (its nozzles' true
+// flow coefficients and valve timing): what a calibration should find, and how a drawn machine
+// differs from the ideal bench.
+std::string describe_sim_machine(const SimSection& sim, std::uint64_t plant_seed,
+                                 const sim::plant::HydraulicPlant& plant) {
+  const sim::plant::PlantParams& p = plant.params();
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(3);
+  if (sim.machine == "drawn") {
+    out << "drawn machine " << sim.machine_index << " of fleet " << sim.machine_seed;
+  } else {
+    out << "ideal bench";
+  }
+  out << " (plant seed " << plant_seed << "): pump " << p.pump.open_flow_l_per_min
+      << " L/min open, " << p.pump.shutoff_pressure_mpa << " MPa shut-off, " << p.pump.supply_volts
+      << " V supply; meter K error " << 100.0 * p.flow_meter.k_factor_error
+      << " %; nozzle k (L/min/sqrt MPa)";
+  for (int i = 0; i < plant.nozzle_count(); ++i) {
+    out << " " << plant.nozzle_truth(i).k_l_per_min_sqrt_mpa;
+  }
+  out << "; valve open/close delays (ms)";
+  for (int i = 0; i < plant.nozzle_count(); ++i) {
+    const auto& truth = plant.nozzle_truth(i);
+    out << " " << 1000.0 * truth.open_delay_s << "/" << 1000.0 * truth.close_delay_s;
+  }
+  return out.str();
+}
+
+}  // namespace
+
 Backends make_sim_backends(const Config& config, const Options& options) {
   if (config.boom.nozzles > sim::plant::kMaxNozzles) {
     throw std::runtime_error(
@@ -47,7 +83,17 @@ Backends make_sim_backends(const Config& config, const Options& options) {
   b.clock = clock.get();
   b.owned.push_back(clock);
 
+  // The machine: drawn from the realistic spreads, or the ideal bench; then what the
+  // configuration says of the boom, the scales and the wheel, which the daemon's view of its
+  // machine depends on.
   io::sim::SimulatedMachineConfig machine_config;
+  machine_config.seed = static_cast<std::uint64_t>(config.sim.seed);
+  if (config.sim.machine == "drawn") {
+    const sim::plant::Machine drawn = sim::plant::draw_machine(
+        static_cast<std::uint64_t>(config.sim.machine_seed), config.sim.machine_index);
+    machine_config.plant = drawn.params;
+    machine_config.seed = drawn.seed;
+  }
   auto& plant = machine_config.plant;
   plant.nozzle_count = config.boom.nozzles;
   plant.wheel.nominal_pulses_per_m = config.wheel.pulses_per_metre;
@@ -57,9 +103,11 @@ Backends make_sim_backends(const Config& config, const Options& options) {
   plant.pressure_sensor.shunt_ohms = config.adc.shunt_ohms;
   plant.tank.capacity_l = 200.0;  // a field-sized tank so a long simulation does not run dry
   plant.tank.initial_level_l = 200.0;
-  machine_config.seed = static_cast<std::uint64_t>(config.sim.seed);
   auto machine = std::make_shared<io::sim::SimulatedMachine>(machine_config, *clock);
   b.owned.push_back(machine);
+  machine->with_plant([&](sim::plant::HydraulicPlant& p) {
+    spdlog::info("sim: {}", describe_sim_machine(config.sim, machine_config.seed, p));
+  });
 
   auto valves = std::make_shared<io::sim::SimulatedValveBank>(*machine);
   auto pump = std::make_shared<io::sim::SimulatedPumpRelay>(*machine);

@@ -95,11 +95,25 @@ void append_supervision_keys(std::vector<KeySpec<Config>>& keys) {
      "as the [[camera]] sees it (its frame size and ground_mm_per_px), consecutive images "
      "resampled and laid edge to edge; 0 = each image is one frame as it is, of unknown ground "
      "scale (the weed model then takes it squeezed to the model's own input size)"},
-    {WS_KEY(sim, seed), 1, 0, INT_MAX, "", "random seed of the simulation"},
+    {WS_KEY(sim, seed), 1, 0, INT_MAX, "",
+     "random seed of the ideal bench's plant (its nozzle spread and sensor noise); a drawn "
+     "machine brings its own"},
     {WS_KEY(sim, wheel_slip_pct), 0.0, -20, 45, "%",
      "the simulated wheel sensor turns this much more than the ground it covers (a driven "
      "wheel spinning > 0, a trailed wheel skidding < 0): its pulses per ground metre are "
      "wheel.pulses_per_metre x (1 + slip), what sprayctl calibrate-wheel measures"},
+    {WS_KEY(sim, machine), std::string("drawn"), 0, 0, "",
+     "the simulated hydraulic machine: drawn = a realistic one drawn by machine_seed and "
+     "machine_index from documented spreads (pump, supply voltage, hose, air chamber, valve "
+     "delays, the meter's K error, each nozzle's flow and valve timing, sensor noise), the same "
+     "machine for the same pair, as the lab's --plants experiments draw them; ideal = the ideal "
+     "bench (one pressure node, smooth pump, linear meter, constant valves). The wheel's slip is "
+     "wheel_slip_pct in both; the boom, meter, wheel and sensor scales are the configured ones",
+     {"drawn", "ideal"}},
+    {WS_KEY(sim, machine_seed), 1, 0, INT_MAX, "",
+     "the fleet the drawn machine comes from (the lab's --seed)"},
+    {WS_KEY(sim, machine_index), 0, 0, 1000000, "",
+     "which machine of that fleet (the lab's --plants machines are 0, 1, ...)"},
     // [fleet]
     {WS_KEY(fleet, enabled), false, 0, 1, "",
      "weedspray-fleet joins this board to the machine over an MQTT broker: it publishes the "

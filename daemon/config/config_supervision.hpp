@@ -44,8 +44,11 @@ struct SimSection {
   double speed_period_s;
   std::string images_dir;   // "" = the bundled field images
   double images_mm_per_px;  // 0 = each image is a frame as it is, of unknown ground scale
-  int seed;
-  double wheel_slip_pct;  // the simulated wheel's slip (calibrate-wheel's truth)
+  int seed;                 // the ideal bench's plant seed (a drawn machine brings its own)
+  double wheel_slip_pct;    // the simulated wheel's slip (calibrate-wheel's truth)
+  std::string machine;      // drawn|ideal
+  int machine_seed;         // the drawn machine: machine machine_index of the fleet machine_seed
+  int machine_index;
 };
 
 // The fleet bridge (weedspray-fleet, a program of its own; the daemon ignores these keys): the

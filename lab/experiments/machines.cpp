@@ -7,64 +7,21 @@
 #include <random>
 
 namespace weedspray::lab::experiments {
-namespace {
-
-std::mt19937_64 machine_rng(std::uint64_t seed, int index, std::uint64_t stream) {
-  std::seed_seq seq{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32),
-                    static_cast<std::uint32_t>(index), static_cast<std::uint32_t>(stream)};
-  return std::mt19937_64(seq);
-}
-
-double uniform(std::mt19937_64& rng, double lo, double hi) {
-  return std::uniform_real_distribution<double>(lo, hi)(rng);
-}
-
-}  // namespace
-
-Machine draw_machine(std::uint64_t seed, int index) {
-  auto rng = machine_rng(seed, index, 1);
-  Machine m;
-  plant::PlantParams& p = m.params;
-  p = plant::realistic_plant_params();
-  p.pump.open_flow_l_per_min *= uniform(rng, 0.9, 1.1);
-  p.pump.shutoff_pressure_mpa *= uniform(rng, 0.9, 1.1);
-  p.pump.rated_rpm = uniform(rng, 1500.0, 2500.0);
-  p.pump.load_speed_sag = uniform(rng, 0.1, 0.3);
-  p.pump.supply_volts = uniform(rng, 23.0, 27.0);
-  const double hose = uniform(rng, 2.0, 5.0) / 3.0;  // relative to the 3 m default
-  p.boom.inertance_mpa_s2_per_l *= hose;
-  p.boom.friction_mpa_per_l_per_s_sq *= hose;
-  p.line.air_chamber_precharge_mpa = 0.2 * uniform(rng, 0.5, 0.9);
-  const double delays = uniform(rng, 0.8, 1.25);
-  p.nozzle.open_delay_s *= delays;
-  p.nozzle.close_delay_s *= delays;
-  p.flow_meter.k_factor_error = uniform(rng, -0.02, 0.02);
-  p.wheel.slip = uniform(rng, -0.03, 0.05);
-  m.seed = rng();
-  return m;
-}
-
-std::vector<Machine> draw_machines(std::uint64_t seed, int count, int first_index) {
-  std::vector<Machine> machines;
-  for (int i = 0; i < count; ++i) machines.push_back(draw_machine(seed, first_index + i));
-  return machines;
-}
-
 MachineChange draw_change(const Machine& machine, std::uint64_t seed, int index) {
-  auto rng = machine_rng(seed, index, 2);
+  auto rng = plant::machine_rng(seed, index, 2);
   MachineChange c;
   const int n = machine.params.nozzle_count;
   for (int i = 0; i < n; ++i) {
-    c.nozzle_wear[static_cast<std::size_t>(i)] = uniform(rng, 0.0, 0.04);
-    c.valve_ageing[static_cast<std::size_t>(i)] = uniform(rng, 1.0, 1.3);
+    c.nozzle_wear[static_cast<std::size_t>(i)] = plant::draw_uniform(rng, 0.0, 0.04);
+    c.valve_ageing[static_cast<std::size_t>(i)] = plant::draw_uniform(rng, 1.0, 1.3);
   }
   c.blocked_nozzle = std::uniform_int_distribution<int>(0, n - 1)(rng);
-  c.blockage = uniform(rng, 0.0, 0.05);
-  c.meter_drift = uniform(rng, -0.01, 0.01);
+  c.blockage = plant::draw_uniform(rng, 0.0, 0.05);
+  c.meter_drift = plant::draw_uniform(rng, -0.01, 0.01);
   c.supply_volts_start = machine.params.pump.supply_volts;
-  c.supply_volts_end = c.supply_volts_start + uniform(rng, -1.5, 0.5);
-  c.speed_start_m_per_s = uniform(rng, 0.8, 1.2);
-  c.speed_end_m_per_s = uniform(rng, 0.8, 1.2);
+  c.supply_volts_end = c.supply_volts_start + plant::draw_uniform(rng, -1.5, 0.5);
+  c.speed_start_m_per_s = plant::draw_uniform(rng, 0.8, 1.2);
+  c.speed_end_m_per_s = plant::draw_uniform(rng, 0.8, 1.2);
   return c;
 }
 

@@ -1,22 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
-// Machine variation for the --plants experiments: N sprayers drawn from documented spreads
-// around realistic_plant_params(), and the change each one goes through between its calibration
-// and the test (wear, a partial blockage, valve ageing, meter drift, supply voltage and ground
-// speed changing during the run). Pure and deterministic for (seed, index).
+// Machine variation for the --plants experiments: N sprayers drawn from the documented spreads of
+// sim/plant/machine_draw.hpp, and the change each one goes through between its calibration and
+// the test (wear, a partial blockage, valve ageing, meter drift, supply voltage and ground speed
+// changing during the run). Pure and deterministic for (seed, index).
 //
-// Spreads (each: source, or "invented" with the range swept):
-//   pump open flow            x U(0.9, 1.1)      24 V diaphragm pump class 5-8 L/min (spread
-//                                                 between units of one model: invented)
-//   pump shut-off pressure    x U(0.9, 1.1)      invented
-//   pump rated speed          U(1500, 2500) rpm  invented (class 1500-3000 rpm)
-//   pump load speed sag       U(0.1, 0.3)        invented (PM motor droop at stall)
-//   supply voltage as made    U(23, 27) V        24 V lead-acid system: 23-28.8 V charging
-//   feed hose length          U(2, 5) m          inertance and friction scale with it
-//   air chamber precharge     U(0.5, 0.9) x 0.2 MPa  dampers precharged 60-80 % (+-10 %)
-//   nozzle k, valve delays    per nozzle, PlantParams spreads (ISO 5682, valve datasheets)
-//   valve base delays         x U(0.8, 1.25)     invented (coil and spring between batches)
-//   meter K error as made     U(-0.02, 0.02)     LWGY class +-1 % of reading, twice for wear
-//   wheel slip                U(-0.03, 0.05)     invented (trailed / driven ground wheel)
 // Changes after calibration:
 //   nozzle wear               each x U(1.00, 1.04)  TeeJet wear tables: brass tips +10 % flow
 //                                                   in ~50 h; invented share of a season
@@ -34,13 +21,14 @@
 
 #include "lab/experiments/vocabulary.hpp"
 #include "sim/plant/hydraulic_plant.hpp"
+#include "sim/plant/machine_draw.hpp"
 
 namespace weedspray::lab::experiments {
 
-struct Machine {
-  plant::PlantParams params{};
-  std::uint64_t seed = 1;  // the plant's own seed (nozzle spread, valve delays, noise)
-};
+// The drawn machines live with the plant model (the daemon's simulation runs them too).
+using plant::draw_machine;
+using plant::draw_machines;
+using plant::Machine;
 
 struct MachineChange {
   std::array<double, plant::kMaxNozzles> nozzle_wear{};
@@ -60,9 +48,6 @@ struct MachineChange {
 // parts: the meter's drift and the supply and speed ramps (one for the whole boom).
 enum class ChangeParts { kAll, kCommon, kPerNozzle, kNone };
 
-// Machine `index` of the fleet `seed`. Different (seed, index) pairs give independent machines.
-Machine draw_machine(std::uint64_t seed, int index);
-std::vector<Machine> draw_machines(std::uint64_t seed, int count, int first_index = 0);
 // The change machine `index` goes through after its calibration.
 MachineChange draw_change(const Machine& machine, std::uint64_t seed, int index);
 // No change: the machine as it was calibrated.

@@ -14,7 +14,7 @@
 // ran on (one pressure node, smooth pump, linear meter, constant valves); every realism effect
 // defaults to "off" there so those figures stay reproducible. realistic_plant_params()
 // turns them all on at documented values; the --plants experiments draw machines around it
-// (lab/experiments/machines.hpp). Each realistic value names its source, or says
+// (sim/plant/machine_draw.hpp). Each realistic value names its source, or says
 // "invented" with the range the machine draws sweep.
 //
 // Units: SI unless the name says otherwise; pressures are gauge pressures in MPa, flows in

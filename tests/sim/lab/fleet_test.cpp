@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
-// Experiments over drawn machines: machine draws, the online flow trim after a
-// change, staggered PWM with a pulsing pump, and the fairly tuned controllers on machines they
-// were not tuned on. Each test would fail with the fix it covers switched off (trim disabled,
-// stagger off, fuzzy corrections zeroed).
+// Experiments over drawn machines (the draws themselves: tests/sim/plant/machine_draw_test.cpp):
+// the spread figure, the online flow trim after a change, staggered PWM with a pulsing pump, and
+// the fairly tuned controllers on machines they were not tuned on. Each test would fail with the
+// fix it covers switched off (trim disabled, stagger off, fuzzy corrections zeroed).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -15,22 +15,6 @@
 
 namespace weedspray::lab::experiments {
 namespace {
-
-TEST(Machines, DrawsAreReproducibleAndDiffer) {
-  const Machine a = draw_machine(7, 0);
-  EXPECT_EQ(a.params, draw_machine(7, 0).params);
-  EXPECT_EQ(a.seed, draw_machine(7, 0).seed);
-  EXPECT_FALSE(a.params == draw_machine(7, 1).params);
-  EXPECT_FALSE(a.params == draw_machine(8, 0).params);
-  // Drawn inside the documented spreads, on the realistic plant.
-  for (const Machine& m : draw_machines(3, 10)) {
-    EXPECT_GE(m.params.pump.rated_rpm, 1500.0);
-    EXPECT_LE(m.params.pump.rated_rpm, 2500.0);
-    EXPECT_LE(std::abs(m.params.flow_meter.k_factor_error), 0.02);
-    EXPECT_GT(m.params.boom.inertance_mpa_s2_per_l, 0.0);
-    EXPECT_EQ(m.params.pump.chambers, 3);
-  }
-}
 
 TEST(Machines, SpreadIsMeanSampleSdAndWorst) {
   const std::vector<double> v{1.0, 2.0, 3.0, 6.0};
