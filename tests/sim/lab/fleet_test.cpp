@@ -149,6 +149,26 @@ SprayRunOptions first_machine(bool blocked) {
   return options;
 }
 
+// One nozzle's own change (8 % blocked; another 4 % worn) found without the user: the headland
+// re-check holds each nozzle open alone, reads it against its calibrated held-open flow and
+// rescales its line, so the modulated runs ask the changed nozzle for the duty that gives its
+// share. Without the rescale the row is the trim alone (the blocked nozzle trimmed as one of a
+// boom).
+TEST(FleetOrthogonal, HeadlandRecheckFindsOneNozzlesOwnChange) {
+  SprayRunOptions options = first_machine(true);
+  options.run_s = 10.0;
+  options.change->nozzle_wear[2] = 0.04;
+  const OrthogonalResult trimmed = run_orthogonal(options);
+  options.headland_recheck = true;
+  const OrthogonalResult rechecked = run_orthogonal(options);
+  std::printf("trimmed %.2f / %.2f %%, re-checked %.2f / %.2f %% (mean / max below 100 %%)\n",
+              trimmed.mean_error_pct, trimmed.max_error_modulated_pct, rechecked.mean_error_pct,
+              rechecked.max_error_modulated_pct);
+  EXPECT_GT(trimmed.max_error_modulated_pct, 4.0);
+  EXPECT_LT(rechecked.max_error_modulated_pct, 0.6 * trimmed.max_error_modulated_pct);
+  EXPECT_LT(rechecked.mean_error_pct, 0.6 * trimmed.mean_error_pct);
+}
+
 // The held-open floor prices one nozzle's own change from the plant's truth: nothing on the
 // machine as made; with one nozzle 8 % blocked, the L16 runs that hold it open beside healthy
 // nozzles cost any controller that keeps them open about half of it (the pressure balances the
