@@ -146,7 +146,8 @@ struct SprayRunOptions {
   // ...as a model (BoomTrim: common gain and valve timing) or FlowTrim, 1 / the metered ratio
   // (the daemon's).
   bool model_trim = false;
-  // Calibrate after `change`, not before it (a user recalibrating the changed machine).
+  // Calibrate after `change`, not before it (a user recalibrating the changed machine); the
+  // requested volume stays the calibration as made (the job's target).
   bool recalibrated = false;
   // Also fit each nozzle's ratio from the phase windows (PhaseWindowFit; orthogonal only).
   bool identify_nozzles = false;

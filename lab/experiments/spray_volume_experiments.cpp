@@ -5,7 +5,11 @@
 // "Requested" volume of a nozzle at duty d = d/100 x its full-open flow x run time. With the
 // fixes the machine only knows its calibration, so the full-open flow it aims at is the
 // calibrated line at 100 %; raw, there is no calibration and the reference is the nozzle's
-// true full-open flow at the set-point. Either way the delivered volume is the TRUE one.
+// true full-open flow at the set-point. Either way the delivered volume is the TRUE one. A
+// machine recalibrated after its change aims with the new calibration but is judged against
+// the one as made, like every other row: the dose the job was set for does not move because
+// a nozzle wore (judged against its own recalibration, a worn nozzle's extra flow would count
+// as asked for).
 #include <algorithm>
 #include <cmath>
 #include <span>
@@ -23,7 +27,11 @@ struct PreparedMachine {
   RigConfig config;
   double pulses_per_litre = 0.0;  // the calibrated meter's
   std::vector<NozzleLine> lines;
-  std::vector<double> full_flows;  // requested reference per nozzle [L/min]
+  std::vector<double> full_flows;  // the full-open flow the machine knows per nozzle [L/min]
+  // The requested reference per nozzle [L/min]: the flow a nozzle at 100 % is asked for and
+  // judged against. The machine's knowledge but for a recalibration, which moves what the machine
+  // knows and never the target: the job's dose was set by the calibration as made.
+  std::vector<double> reference_flows;
 };
 
 PreparedMachine prepare_machine(const SprayRunOptions& options) {
@@ -38,6 +46,7 @@ PreparedMachine prepare_machine(const SprayRunOptions& options) {
     const plant::HydraulicPlant probe(m.config.plant, options.seed);  // as made
     for (int i = 0; i < probe.nozzle_count(); ++i)
       m.full_flows.push_back(probe.nozzle_full_open_flow_l_per_min(i, options.pressure_mpa));
+    m.reference_flows = m.full_flows;
     return m;
   }
   CalibrationOptions cal_options;
@@ -54,6 +63,11 @@ PreparedMachine prepare_machine(const SprayRunOptions& options) {
   m.pulses_per_litre = cal.meter.pulses_per_litre;
   for (const auto& n : cal.nozzles) m.lines.push_back(n.fitted);
   m.full_flows = calibrated_full_flows(cal);
+  m.reference_flows = m.full_flows;
+  if (options.recalibrated) {
+    cal_options.change.reset();
+    m.reference_flows = calibrated_full_flows(cached_calibration(cal_options));
+  }
   return m;
 }
 
@@ -74,7 +88,7 @@ RunOutcome spray_run(const PreparedMachine& m, std::span<const double> duty_pct,
   } else {
     rig.set_nozzle_lines(m.lines);
     rig.set_full_open_flows(m.full_flows);
-    for (std::size_t i = 0; i < n; ++i) flows[i] = duty_pct[i] / 100.0 * m.full_flows[i];
+    for (std::size_t i = 0; i < n; ++i) flows[i] = duty_pct[i] / 100.0 * m.reference_flows[i];
     rig.request_flows(flows);
   }
   if (options.change) apply_change(rig.plant(), *options.change);
@@ -108,7 +122,7 @@ RunOutcome spray_run(const PreparedMachine& m, std::span<const double> duty_pct,
     DutyPoint p;
     p.duty_pct = duty_pct[i];
     p.commanded_duty_pct = duties[i];
-    p.requested_l = duty_pct[i] / 100.0 * m.full_flows[i] * options.run_s / 60.0;
+    p.requested_l = duty_pct[i] / 100.0 * m.reference_flows[i] * options.run_s / 60.0;
     p.delivered_l = rig.plant().nozzle_delivered_l(static_cast<int>(i)) - v0[i];
     p.error_pct =
         p.requested_l > 0 ? std::abs(p.delivered_l - p.requested_l) / p.requested_l * 100.0 : 0.0;
@@ -192,7 +206,7 @@ double orthogonal_held_open_floor_pct(const SprayRunOptions& options) {
     for (std::size_t i = 0; i < row.size(); ++i) {
       if (row[i] < 100.0) continue;
       const double ratio =
-          changed.nozzle_open_flow_now_l_per_min(static_cast<int>(i), p) / m.full_flows[i];
+          changed.nozzle_open_flow_now_l_per_min(static_cast<int>(i), p) / m.reference_flows[i];
       lo = lo == 0.0 ? ratio : std::min(lo, ratio);
       hi = std::max(hi, ratio);
     }
@@ -215,7 +229,8 @@ double orthogonal_common_floor_pct(const SprayRunOptions& options) {
   const double drift = options.change ? options.change->meter_drift : 0.0;
   std::vector<double> ratio(n);
   for (std::size_t i = 0; i < n; ++i)
-    ratio[i] = changed.nozzle_open_flow_now_l_per_min(static_cast<int>(i), p) / m.full_flows[i];
+    ratio[i] =
+        changed.nozzle_open_flow_now_l_per_min(static_cast<int>(i), p) / m.reference_flows[i];
   // The scale k in [lo, hi] (steps of 1e-4) minimising the summed |r (1 + drift) k - 1| of
   // `among` (what the meter shows), and the summed TRUE error |r k - 1| at that k.
   const auto true_error_at_best = [&](const std::vector<double>& among, double lo, double hi) {

@@ -127,12 +127,15 @@ TEST(FleetOrthogonal, RecalibratingAfterTheChangeFindsOneNozzlesOwnChange) {
   const OrthogonalResult trimmed = run_orthogonal(options);
   options.recalibrated = true;
   const OrthogonalResult recalibrated = run_orthogonal(options);
-  EXPECT_GT(trimmed.max_error_pct, 5.0);  // the blocked nozzle held open, or trimmed as a boom
-  EXPECT_LT(recalibrated.max_error_pct, 0.6 * trimmed.max_error_pct);
+  EXPECT_GT(trimmed.max_error_modulated_pct, 5.0);  // the blocked nozzle trimmed as a boom
+  // Against the target as made, the blocked nozzle asked for its full flow stays held open and
+  // short by its blockage whatever the calibration (the held-open floor): the recalibration's
+  // worth is in the modulated runs.
+  EXPECT_LT(recalibrated.max_error_modulated_pct, 0.6 * trimmed.max_error_modulated_pct);
   EXPECT_LT(recalibrated.mean_error_pct, trimmed.mean_error_pct);
-  std::printf("trimmed %.2f / %.2f %%, recalibrated %.2f / %.2f %% (mean / max)\n",
-              trimmed.mean_error_pct, trimmed.max_error_pct, recalibrated.mean_error_pct,
-              recalibrated.max_error_pct);
+  std::printf("trimmed %.2f / %.2f %%, recalibrated %.2f / %.2f %% (mean / max below 100 %%)\n",
+              trimmed.mean_error_pct, trimmed.max_error_modulated_pct, recalibrated.mean_error_pct,
+              recalibrated.max_error_modulated_pct);
 }
 
 // The first drawn machine as made, and the same with one nozzle 8 % blocked.
