@@ -99,6 +99,7 @@ struct CalibrationResult {
   double true_pulses_per_litre = 0.0;
   double meter_k_error_pct = 0.0;  // (nominal label - true) / true * 100 as the catch test saw
   double meter_calibration_error_pct = 0.0;  // (calibrated - true) / true * 100
+  double jug_error_pct = 0.0;  // the catch-test jug's reading error drawn for this machine
   std::vector<NozzleCalibration> nozzles;
 };
 struct CalibrationOptions {
@@ -111,6 +112,10 @@ struct CalibrationOptions {
   double measure_s = 20.0;
   plant::PlantParams plant{};  // the machine calibrated (PlantParams{} = the ideal bench)
   std::optional<MachineChange> change{};  // applied before calibrating: a recalibration
+  // The catch test's collected volume is read off a jug, off by a fraction drawn uniform in
+  // +-jug_error_limit per machine (from `seed`; the same jug when it recalibrates): a user's
+  // graduated jug reads within about +-0.8 %. 0: the plant's true volume.
+  double jug_error_limit = 0.008;
 };
 CalibrationResult run_calibration(const CalibrationOptions& options);
 
