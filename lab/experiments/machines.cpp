@@ -41,6 +41,11 @@ Machine draw_machine(std::uint64_t seed, int index) {
   p.flow_meter.k_factor_error = uniform(rng, -0.02, 0.02);
   p.wheel.slip = uniform(rng, -0.03, 0.05);
   m.seed = rng();
+  // The pressure transmitter's own error, from a stream of its own (the draws above stay).
+  auto sensor_rng = machine_rng(seed, index, 3);
+  p.pressure_sensor.offset_fraction = uniform(sensor_rng, -0.005, 0.005);
+  p.pressure_sensor.span_error = uniform(sensor_rng, -0.01, 0.01);
+  p.pressure_sensor.drift_per_hour = uniform(sensor_rng, -0.001, 0.001);
   return m;
 }
 

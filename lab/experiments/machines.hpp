@@ -17,6 +17,9 @@
 //   valve base delays         x U(0.8, 1.25)     invented (coil and spring between batches)
 //   meter K error as made     U(-0.02, 0.02)     LWGY class +-1 % of reading, twice for wear
 //   wheel slip                U(-0.03, 0.05)     invented (trailed / driven ground wheel)
+//   pressure transmitter      offset U(-0.5, 0.5) % of span, span U(-1, 1) %, offset drift
+//                             U(-0.1, 0.1) % of span per hour: 0.25-0.5 % FS class datasheets
+//                             (drift invented); the controller converts by the label
 // Changes after calibration:
 //   nozzle wear               each x U(1.00, 1.04)  TeeJet wear tables: brass tips +10 % flow
 //                                                   in ~50 h; invented share of a season
