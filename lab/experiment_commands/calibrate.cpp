@@ -54,12 +54,13 @@ int run_calibrate_command(const ExperimentOptions& o) {
       .add("meter_k_error_pct", Json::number(r.meter_k_error_pct, "%.4f"))
       .add("meter_pulses_per_litre", Json::number(r.meter.pulses_per_litre, "%.2f"))
       .add("true_pulses_per_litre", Json::number(r.true_pulses_per_litre, "%.2f"))
-      .add("meter_calibration_error_pct", Json::number(r.meter_calibration_error_pct, "%.4f"));
+      .add("meter_calibration_error_pct", Json::number(r.meter_calibration_error_pct, "%.4f"))
+      .add("jug_error_pct", Json::number(r.jug_error_pct, "%.4f"));
   report.line(
       "catch test: label 8500 pulses/L, measured %.1f, true %.1f (label error %.2f %%, "
-      "calibration error %.3f %%)",
+      "calibration error %.3f %%, the jug read %+.3f %%)",
       r.meter.pulses_per_litre, r.true_pulses_per_litre, r.meter_k_error_pct,
-      r.meter_calibration_error_pct);
+      r.meter_calibration_error_pct, r.jug_error_pct);
   report.line("nozzle lines q = A s + b at %.2f MPa, %.0f Hz (each nozzle alone, one meter)",
               options.pressure_mpa, options.frequency_hz);
   Table nozzles = nozzle_table();

@@ -40,13 +40,22 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
         std::tuple{"model_trim", "ON: model (BoomTrim, lab only)", &r.model_trim},
         std::tuple{"trim_off", "OFF", &r.trim_off},
         std::tuple{"recalibrated", "ON (the daemon's), recalibrated after the change",
-                   &r.recalibrated}}) {
+                   &r.recalibrated},
+        std::tuple{"headland_recheck",
+                   "ON (the daemon's), each nozzle re-checked alone at a headland after the change",
+                   &r.headland_recheck}}) {
     table.section(key, std::string("online flow trim ") + name)
         .row("mean_error_pct", "mean error [%]", row->mean_error_pct, "%12.3f")
         .row("max_error_pct", "max error [%]", row->max_error_pct, "%12.3f")
         .row("max_error_below_100_pct", "  ...below 100 % duty [%]", row->max_error_modulated_pct,
              "%12.3f")
-        .row("pressure_band_mpa", "pressure band [MPa]", row->pressure_band_mpa, "%12.4f");
+        .row("pressure_band_mpa", "pressure band [MPa]", row->pressure_band_mpa, "%12.4f")
+        .member("per_nozzle_error_pct",
+                Json::object()
+                    .add("mean", Json::number(row->per_nozzle_mean_error_pct, "%.6g"))
+                    .add("p95", Json::number(row->per_nozzle_p95_error_pct, "%.6g")),
+                format_text("%-34s%12.3f   p95 %.3f", "every nozzle-run: mean error [%]",
+                            row->per_nozzle_mean_error_pct, row->per_nozzle_p95_error_pct));
   }
   // Text only below: their JSON follows in its own order.
   table.section("", "floor of any controller holding 100 % open at one pressure (plant truth)")

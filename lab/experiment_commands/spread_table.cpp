@@ -38,7 +38,13 @@ SpreadTable& SpreadTable::row(const std::string& key, const std::string& label,
   for (const double value : {spread.mean, spread.sd, spread.worst})
     line += format_cell(text_format, value);
   lines_.push_back(std::move(line));
-  if (!key.empty()) json_rows_.push_back({section_, key, spread});
+  if (!key.empty()) json_rows_.push_back({section_, key, spread_json(spread)});
+  return *this;
+}
+
+SpreadTable& SpreadTable::member(const std::string& key, Json value, const std::string& text) {
+  lines_.push_back(text);
+  if (!key.empty()) json_rows_.push_back({section_, key, std::move(value)});
   return *this;
 }
 
@@ -47,13 +53,13 @@ void SpreadTable::report_to(Report& report) const {
   for (std::size_t i = 0; i < json_rows_.size();) {
     const std::string& section = json_rows_[i].section;
     if (section.empty()) {
-      report.json().add(json_rows_[i].key, spread_json(json_rows_[i].spread));
+      report.json().add(json_rows_[i].key, json_rows_[i].value);
       ++i;
       continue;
     }
     Json object = Json::object();
     for (; i < json_rows_.size() && json_rows_[i].section == section; ++i)
-      object.add(json_rows_[i].key, spread_json(json_rows_[i].spread));
+      object.add(json_rows_[i].key, json_rows_[i].value);
     report.json().add(section, std::move(object));
   }
 }

@@ -27,6 +27,8 @@ class SpreadTable {
   // key empty: text only. text_format: one value, 12 wide, e.g. "%12.3f".
   SpreadTable& row(const std::string& key, const std::string& label,
                    const lab::experiments::Spread& spread, const std::string& text_format);
+  // A text line `text` and, key not empty, the JSON member `key`: `value` in the section.
+  SpreadTable& member(const std::string& key, Json value, const std::string& text);
   // A text line only (no row, no section).
   SpreadTable& note(const std::string& text);
 
@@ -37,7 +39,7 @@ class SpreadTable {
   struct JsonRow {
     std::string section;  // empty: the top level
     std::string key;
-    lab::experiments::Spread spread;
+    Json value;
   };
   std::vector<std::string> lines_;
   std::vector<JsonRow> json_rows_;

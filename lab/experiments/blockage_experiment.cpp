@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "lab/experiments/experiments.hpp"
+#include "lab/experiments/rig_recheck.hpp"
 #include "lab/experiments/vocabulary.hpp"
 
 namespace weedspray::lab::experiments {
@@ -62,85 +63,10 @@ double to_end_of_next_headland_s(const sim::FieldDutyOptions& field, double t_s)
   return start + length - t_s;
 }
 
-// control::NozzleRecheck driven around the rig from outside: the rig runs in short slices, the
-// re-check is stepped between them with the meter's count and the measured pressure, its duties
-// are commanded while it holds a nozzle open (every other valve closed) and the field's
-// requests put back the moment it lets go; each reading rescales that nozzle's line.
-class HeadlandRecheck {
- public:
-  HeadlandRecheck(const BlockageOptions& options, std::span<const NozzleLine> lines,
-                  std::span<const double> full, double pulses_per_litre)
-      : recheck_(recheck_config(options, lines.size())),
-        lines_(lines.begin(), lines.end()),
-        full_(full.begin(), full.end()),
-        pulses_per_litre_(pulses_per_litre),
-        setpoint_mpa_(options.pressure_mpa),
-        tolerance_mpa_(options.pressure_tolerance_mpa),
-        slice_s_(options.recheck_slice_s) {
-    for (std::size_t i = 0; i < lines_.size(); ++i) lines_[i].full_open_flow_l_per_min = full_[i];
-  }
-
-  // Runs the rig `seconds`: the window is the field's headland for the whole next slice.
-  // `respray` asks for the field's flows again when the override ends.
-  template <typename Respray>
-  void run(ClosedLoopRig& rig, const sim::FieldDutyProcess& field, double seconds,
-           Respray&& respray) {
-    const double end = rig.time_s() + seconds;
-    while (rig.time_s() < end - 1e-9) {
-      const double now = rig.time_s();
-      const double slice = std::min(slice_s_, end - now);
-      RecheckInput in;
-      in.now_s = now;
-      in.window = field.headland_at(now) && field.headland_at(now + slice);
-      in.pressure_ok = std::abs(rig.measured_pressure_mpa() - setpoint_mpa_) <= tolerance_mpa_;
-      in.meter_pulses = rig.plant().flow_meter_pulses();
-      in.pulses_per_litre = pulses_per_litre_;
-      in.pressure_mpa = rig.measured_pressure_mpa();
-      const bool was_overriding = recheck_.overriding();
-      const int was_nozzle = recheck_.current_nozzle();
-      recheck_.step(in, lines_);
-      if (recheck_.overriding()) {
-        if (!was_overriding || recheck_.current_nozzle() != was_nozzle) {
-          rescale(rig);
-          rig.command_duties(recheck_.duties());
-        }
-      } else if (was_overriding) {
-        rescale(rig);
-        respray();
-      }
-      rig.run_for(slice);
-    }
-  }
-
-  const NozzleRecheck& recheck() const { return recheck_; }
-  bool overriding() const { return recheck_.overriding(); }
-
- private:
-  static NozzleRecheckConfig recheck_config(const BlockageOptions& options, std::size_t nozzles) {
-    NozzleRecheckConfig config = options.recheck_config;
-    config.nozzles = nozzles;
-    return config;
-  }
-  // Each nozzle's calibrated line and full-open flow times its last reading.
-  void rescale(ClosedLoopRig& rig) const {
-    std::vector<NozzleLine> scaled(lines_.size());
-    std::vector<double> full(full_.size());
-    for (std::size_t i = 0; i < lines_.size(); ++i) {
-      scaled[i] = scaled_line(lines_[i], recheck_.scale(i));
-      full[i] = full_[i] * recheck_.scale(i);
-    }
-    rig.set_nozzle_lines(scaled);
-    rig.set_full_open_flows(full);
-  }
-
-  NozzleRecheck recheck_;
-  std::vector<NozzleLine> lines_;  // as calibrated: the re-check reads against these
-  std::vector<double> full_;
-  double pulses_per_litre_;
-  double setpoint_mpa_;
-  double tolerance_mpa_;
-  double slice_s_;
-};
+RigRecheckSettings recheck_settings(const BlockageOptions& options) {
+  return {options.recheck_config, options.pressure_mpa, options.pressure_tolerance_mpa,
+          options.recheck_slice_s};
+}
 
 BlockageMachine blockage_once(const Machine& machine, std::uint64_t fleet_seed, int index,
                               const BlockageOptions& options) {
@@ -158,9 +84,9 @@ BlockageMachine blockage_once(const Machine& machine, std::uint64_t fleet_seed, 
   out.blocked_nozzle = std::uniform_int_distribution<int>(0, rig.plant().nozzle_count() - 1)(rng);
   std::optional<sim::FieldDutyProcess> field;
   if (options.duties == BlockageDuties::kField) field.emplace(full.size(), rng(), options.field);
-  std::optional<HeadlandRecheck> recheck;
+  std::optional<RigRecheck> recheck;
   if (options.recheck && field)
-    recheck.emplace(options, lines, full, calibrated.config.meter_pulses_per_l);
+    recheck.emplace(recheck_settings(options), lines, full, calibrated.config.meter_pulses_per_l);
   std::vector<double> shares(full.size());
   std::vector<double> flows(full.size());
   auto redraw = [&] {
@@ -176,7 +102,11 @@ BlockageMachine blockage_once(const Machine& machine, std::uint64_t fleet_seed, 
   auto respray = [&] { rig.request_flows(flows); };
   auto advance = [&](double seconds) {
     if (recheck) {
-      recheck->run(rig, *field, seconds, respray);
+      // The window: the field's headland for the whole next slice.
+      const auto headland = [&](double now, double next) {
+        return field->headland_at(now) && field->headland_at(next);
+      };
+      recheck->run(rig, seconds, headland, respray);
     } else {
       rig.run_for(seconds);
     }

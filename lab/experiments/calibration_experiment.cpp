@@ -6,6 +6,7 @@
 #include <cmath>
 #include <deque>
 #include <mutex>
+#include <random>
 #include <utility>
 #include <vector>
 
@@ -26,6 +27,16 @@ RigConfig calibration_rig(const CalibrationOptions& options) {
   return config;
 }
 
+// The jug's reading error for this machine: its own stream of the machine's seed.
+double catch_jug_error(const CalibrationOptions& options) {
+  if (!(options.jug_error_limit > 0.0)) return 0.0;
+  std::seed_seq seq{static_cast<std::uint32_t>(options.seed),
+                    static_cast<std::uint32_t>(options.seed >> 32), 0x6a7567U};
+  std::mt19937_64 rng(seq);
+  return std::uniform_real_distribution<double>(-options.jug_error_limit,
+                                                options.jug_error_limit)(rng);
+}
+
 }  // namespace
 
 CalibrationResult run_calibration(const CalibrationOptions& options) {
@@ -36,15 +47,19 @@ CalibrationResult run_calibration(const CalibrationOptions& options) {
   const double nominal = config.meter_pulses_per_l;
   if (options.change) apply_change(rig.plant(), *options.change);
 
-  // Catch test: all nozzles open, liquid collected (the plant's TRUE volume) vs pulses.
+  // Catch test: all nozzles open, liquid collected (the plant's true volume as the jug reads
+  // it) vs pulses.
   rig.command_duties(std::vector<double>(static_cast<std::size_t>(n), 100.0));
   rig.start();
   rig.run_for(options.settle_s);
   const double litres0 = rig.plant().total_delivered_l();
   const std::uint64_t pulses0 = rig.plant().flow_meter_pulses();
   rig.run_for(options.catch_test_s);
-  result.meter = calibrate_flow_meter(rig.plant().flow_meter_pulses() - pulses0,
-                                      rig.plant().total_delivered_l() - litres0, nominal);
+  const double jug_error = catch_jug_error(options);
+  result.jug_error_pct = jug_error * 100.0;
+  result.meter = calibrate_flow_meter(
+      rig.plant().flow_meter_pulses() - pulses0,
+      (rig.plant().total_delivered_l() - litres0) * (1.0 + jug_error), nominal);
   result.true_pulses_per_litre = rig.plant().true_meter_pulses_per_l();
   result.meter_k_error_pct =
       (nominal - result.true_pulses_per_litre) / result.true_pulses_per_litre * 100.0;
@@ -96,7 +111,7 @@ const CalibrationResult& cached_calibration(const CalibrationOptions& options) {
     return a.seed == b.seed && a.pressure_mpa == b.pressure_mpa &&
            a.frequency_hz == b.frequency_hz && a.catch_test_s == b.catch_test_s &&
            a.duties_pct == b.duties_pct && a.settle_s == b.settle_s && a.measure_s == b.measure_s &&
-           a.plant == b.plant && a.change == b.change;
+           a.plant == b.plant && a.change == b.change && a.jug_error_limit == b.jug_error_limit;
   };
   static std::mutex mutex;
   // deque: references handed out stay valid as entries are added.

@@ -211,16 +211,7 @@ void ClosedLoopRig::apply_flow_requests(double dt_s) {
   }
   // The daemon's step: the law's duties, then (a control tick, the trim on) the flow trim,
   // which decides itself whether a window is usable (pressure off set-point, too little flow).
-  NozzleCommandInputs in;
-  in.dt_s = dt_s;
-  in.spraying = true;
-  in.trim = config_.fixes.flow_feedback && !boom_trim_ && dt_s > 0.0;
-  in.law = command_law(config_);
-  in.pressure_compensation = config_.fixes.pressure_compensation;
-  in.pressure_mpa = measured_pressure_mpa_;
-  in.setpoint_mpa = config_.setpoint_mpa;
-  in.pulses = plant_.flow_meter_pulses();
-  in.pulses_per_litre = config_.meter_pulses_per_l;
+  NozzleCommandInputs in = command_inputs(dt_s, true);
   in.target_flow_l_per_min = std::span<const double>(flows.data(), n);
   in.lines = std::span<const NozzleLine>(lines.data(), n);
   in.schedule_time_s = started_ ? plant_.time_s() - pwm_start_s_ : -1.0;
@@ -234,6 +225,32 @@ void ClosedLoopRig::apply_flow_requests(double dt_s) {
     commanded_promise_[k] = promised_flow_l_per_min(lines[k], duties_[k], pressure);
   }
   set_pwm_duties();
+}
+
+void ClosedLoopRig::step_not_spraying(double dt_s) {
+  // The daemon keeps stepping its duties while a calibration or a re-check holds the valves,
+  // told not to spray: the trim drops its part-filled meter window then, so the litres of the
+  // held valves never enter a window the next request's promise is judged against.
+  const auto n = static_cast<std::size_t>(plant_.nozzle_count());
+  const std::array<double, plant::kMaxNozzles> no_flows{};
+  NozzleCommandInputs in = command_inputs(dt_s, false);
+  in.target_flow_l_per_min = std::span<const double>(no_flows.data(), n);
+  in.lines = std::span<const NozzleLine>(lines_.data(), n);
+  command_step_.step(in);
+}
+
+NozzleCommandInputs ClosedLoopRig::command_inputs(double dt_s, bool spraying) const {
+  NozzleCommandInputs in;
+  in.dt_s = dt_s;
+  in.spraying = spraying;
+  in.trim = config_.fixes.flow_feedback && !boom_trim_ && dt_s > 0.0;
+  in.law = command_law(config_);
+  in.pressure_compensation = config_.fixes.pressure_compensation;
+  in.pressure_mpa = measured_pressure_mpa_;
+  in.setpoint_mpa = config_.setpoint_mpa;
+  in.pulses = plant_.flow_meter_pulses();
+  in.pulses_per_litre = config_.meter_pulses_per_l;
+  return in;
 }
 
 void ClosedLoopRig::start() {
@@ -441,7 +458,11 @@ void ClosedLoopRig::run_for(double duration_s) {
     // The control loop's tick: the duties for the latest reading (the daemon's control loop
     // reads the pressure loop's last published sample).
     if (next_command_s_ <= now + kEps) {
-      if (flows_requested_) apply_flow_requests(config_.command_period_s);
+      if (flows_requested_) {
+        apply_flow_requests(config_.command_period_s);
+      } else {
+        step_not_spraying(config_.command_period_s);
+      }
       next_command_s_ += config_.command_period_s;
     }
     if (config_.record_period_s > 0.0 && next_record_s_ <= now + kEps) {

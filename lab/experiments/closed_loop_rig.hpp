@@ -179,6 +179,10 @@ class ClosedLoopRig {
   // The daemon's duty step for the requested flows; dt_s > 0 (a control-loop tick) steps the
   // flow trim too.
   void apply_flow_requests(double dt_s);
+  // Commanded duties held (a calibration, a re-check): the daemon's step told not to spray.
+  void step_not_spraying(double dt_s);
+  // The step's inputs but the targets and lines: the rig's fixes, pressure and meter now.
+  NozzleCommandInputs command_inputs(double dt_s, bool spraying) const;
   void set_pwm_duties();
   struct PressureReading {
     double pressure_mpa = 0.0;

@@ -99,6 +99,7 @@ struct CalibrationResult {
   double true_pulses_per_litre = 0.0;
   double meter_k_error_pct = 0.0;  // (nominal label - true) / true * 100 as the catch test saw
   double meter_calibration_error_pct = 0.0;  // (calibrated - true) / true * 100
+  double jug_error_pct = 0.0;  // the catch-test jug's reading error drawn for this machine
   std::vector<NozzleCalibration> nozzles;
 };
 struct CalibrationOptions {
@@ -111,6 +112,10 @@ struct CalibrationOptions {
   double measure_s = 20.0;
   plant::PlantParams plant{};  // the machine calibrated (PlantParams{} = the ideal bench)
   std::optional<MachineChange> change{};  // applied before calibrating: a recalibration
+  // The catch test's collected volume is read off a jug, off by a fraction drawn uniform in
+  // +-jug_error_limit per machine (from `seed`; the same jug when it recalibrates): a user's
+  // graduated jug reads within about +-0.8 %. 0: the plant's true volume.
+  double jug_error_limit = 0.008;
 };
 CalibrationResult run_calibration(const CalibrationOptions& options);
 
@@ -146,10 +151,18 @@ struct SprayRunOptions {
   // ...as a model (BoomTrim: common gain and valve timing) or FlowTrim, 1 / the metered ratio
   // (the daemon's).
   bool model_trim = false;
-  // Calibrate after `change`, not before it (a user recalibrating the changed machine).
+  // Calibrate after `change`, not before it (a user recalibrating the changed machine); the
+  // requested volume stays the calibration as made (the job's target).
   bool recalibrated = false;
   // Also fit each nozzle's ratio from the phase windows (PhaseWindowFit; orthogonal only).
   bool identify_nozzles = false;
+  // A headland before each run, after the change (not raw): control::NozzleRecheck holds each
+  // nozzle open alone, reads it against its calibrated held-open flow and rescales its line
+  // (scaled_line), as the daemon does; then the run's flows are asked of the rescaled lines.
+  // The requested volume stays the calibration's (the reading moves the lines, not the target).
+  bool headland_recheck = false;
+  NozzleRecheckConfig recheck_config{};
+  double recheck_pressure_tolerance_mpa = 0.02;
   // The daemon's flow trim settings (control::FlowTrimStep, which the rig runs).
   FlowTrimConfig flow_trim{};
 };
@@ -346,6 +359,10 @@ struct OrthogonalFleetRow {
   Spread pressure_band_mpa;
   Spread mean_identification_error_pct;  // trim_on only (identify_nozzles)
   Spread max_identification_error_pct;
+  // Over every nozzle-run of every machine (64 per machine): the mean and 95th percentile of
+  // the volume error [%].
+  double per_nozzle_mean_error_pct = 0.0;
+  double per_nozzle_p95_error_pct = 0.0;
   std::vector<OrthogonalResult> machines;
 };
 struct OrthogonalFleetResult {
@@ -356,6 +373,9 @@ struct OrthogonalFleetResult {
   // calibration run again on the changed machine (sprayctl calibrate meter / nozzles), then
   // the daemon's trim.
   OrthogonalFleetRow recalibrated;
+  // The daemon's remedy without the user: the headland re-check after the change (each nozzle
+  // alone against its calibrated held-open flow, its line rescaled), then the daemon's trim.
+  OrthogonalFleetRow headland_recheck;
   Spread held_open_floor_pct;  // orthogonal_held_open_floor_pct() per machine
   Spread common_floor_pct;     // orthogonal_common_floor_pct() per machine
 };

@@ -5,7 +5,11 @@
 // "Requested" volume of a nozzle at duty d = d/100 x its full-open flow x run time. With the
 // fixes the machine only knows its calibration, so the full-open flow it aims at is the
 // calibrated line at 100 %; raw, there is no calibration and the reference is the nozzle's
-// true full-open flow at the set-point. Either way the delivered volume is the TRUE one.
+// true full-open flow at the set-point. Either way the delivered volume is the TRUE one. A
+// machine recalibrated after its change aims with the new calibration but is judged against
+// the one as made, like every other row: the dose the job was set for does not move because
+// a nozzle wore (judged against its own recalibration, a worn nozzle's extra flow would count
+// as asked for).
 #include <algorithm>
 #include <cmath>
 #include <span>
@@ -13,6 +17,7 @@
 #include <vector>
 
 #include "lab/experiments/experiments.hpp"
+#include "lab/experiments/rig_recheck.hpp"
 #include "lab/experiments/vocabulary.hpp"
 
 namespace weedspray::lab::experiments {
@@ -20,8 +25,13 @@ namespace {
 
 struct PreparedMachine {
   RigConfig config;
+  double pulses_per_litre = 0.0;  // the calibrated meter's
   std::vector<NozzleLine> lines;
-  std::vector<double> full_flows;  // requested reference per nozzle [L/min]
+  std::vector<double> full_flows;  // the full-open flow the machine knows per nozzle [L/min]
+  // The requested reference per nozzle [L/min]: the flow a nozzle at 100 % is asked for and
+  // judged against. The machine's knowledge but for a recalibration, which moves what the machine
+  // knows and never the target: the job's dose was set by the calibration as made.
+  std::vector<double> reference_flows;
 };
 
 PreparedMachine prepare_machine(const SprayRunOptions& options) {
@@ -36,6 +46,7 @@ PreparedMachine prepare_machine(const SprayRunOptions& options) {
     const plant::HydraulicPlant probe(m.config.plant, options.seed);  // as made
     for (int i = 0; i < probe.nozzle_count(); ++i)
       m.full_flows.push_back(probe.nozzle_full_open_flow_l_per_min(i, options.pressure_mpa));
+    m.reference_flows = m.full_flows;
     return m;
   }
   CalibrationOptions cal_options;
@@ -49,8 +60,14 @@ PreparedMachine prepare_machine(const SprayRunOptions& options) {
   m.config.identify_nozzles = options.identify_nozzles;
   m.config.flow_trim = options.flow_trim;
   m.config.meter_pulses_per_l = cal.meter.pulses_per_litre;
+  m.pulses_per_litre = cal.meter.pulses_per_litre;
   for (const auto& n : cal.nozzles) m.lines.push_back(n.fitted);
   m.full_flows = calibrated_full_flows(cal);
+  m.reference_flows = m.full_flows;
+  if (options.recalibrated) {
+    cal_options.change.reset();
+    m.reference_flows = calibrated_full_flows(cached_calibration(cal_options));
+  }
   return m;
 }
 
@@ -65,17 +82,28 @@ RunOutcome spray_run(const PreparedMachine& m, std::span<const double> duty_pct,
                      const SprayRunOptions& options) {
   ClosedLoopRig rig(m.config);
   const std::size_t n = duty_pct.size();
+  std::vector<double> flows(n);
   if (options.raw) {
     rig.command_duties(duty_pct);
   } else {
     rig.set_nozzle_lines(m.lines);
     rig.set_full_open_flows(m.full_flows);
-    std::vector<double> flows(n);
-    for (std::size_t i = 0; i < n; ++i) flows[i] = duty_pct[i] / 100.0 * m.full_flows[i];
+    for (std::size_t i = 0; i < n; ++i) flows[i] = duty_pct[i] / 100.0 * m.reference_flows[i];
     rig.request_flows(flows);
   }
   if (options.change) apply_change(rig.plant(), *options.change);
   rig.start();
+  if (options.headland_recheck && !options.raw) {
+    // The headland: every nozzle read alone, its line rescaled; the run's flows asked again as
+    // it lets go (of the rescaled lines), then the run settles as any other.
+    RigRecheckSettings settings{options.recheck_config, options.pressure_mpa,
+                                options.recheck_pressure_tolerance_mpa};
+    settings.config.interval_s = 0.0;
+    RigRecheck recheck(settings, m.lines, m.full_flows, m.pulses_per_litre);
+    const double limit_s = 10.0 * static_cast<double>(n) *
+                           (options.recheck_config.settle_s + options.recheck_config.measure_s);
+    recheck.run_whole_boom(rig, limit_s, [&] { rig.request_flows(flows); });
+  }
   rig.run_for(options.settle_s);
   rig.restart_identification();
   std::vector<double> v0(n);
@@ -94,7 +122,7 @@ RunOutcome spray_run(const PreparedMachine& m, std::span<const double> duty_pct,
     DutyPoint p;
     p.duty_pct = duty_pct[i];
     p.commanded_duty_pct = duties[i];
-    p.requested_l = duty_pct[i] / 100.0 * m.full_flows[i] * options.run_s / 60.0;
+    p.requested_l = duty_pct[i] / 100.0 * m.reference_flows[i] * options.run_s / 60.0;
     p.delivered_l = rig.plant().nozzle_delivered_l(static_cast<int>(i)) - v0[i];
     p.error_pct =
         p.requested_l > 0 ? std::abs(p.delivered_l - p.requested_l) / p.requested_l * 100.0 : 0.0;
@@ -178,7 +206,7 @@ double orthogonal_held_open_floor_pct(const SprayRunOptions& options) {
     for (std::size_t i = 0; i < row.size(); ++i) {
       if (row[i] < 100.0) continue;
       const double ratio =
-          changed.nozzle_open_flow_now_l_per_min(static_cast<int>(i), p) / m.full_flows[i];
+          changed.nozzle_open_flow_now_l_per_min(static_cast<int>(i), p) / m.reference_flows[i];
       lo = lo == 0.0 ? ratio : std::min(lo, ratio);
       hi = std::max(hi, ratio);
     }
@@ -201,7 +229,8 @@ double orthogonal_common_floor_pct(const SprayRunOptions& options) {
   const double drift = options.change ? options.change->meter_drift : 0.0;
   std::vector<double> ratio(n);
   for (std::size_t i = 0; i < n; ++i)
-    ratio[i] = changed.nozzle_open_flow_now_l_per_min(static_cast<int>(i), p) / m.full_flows[i];
+    ratio[i] =
+        changed.nozzle_open_flow_now_l_per_min(static_cast<int>(i), p) / m.reference_flows[i];
   // The scale k in [lo, hi] (steps of 1e-4) minimising the summed |r (1 + drift) k - 1| of
   // `among` (what the meter shows), and the summed TRUE error |r k - 1| at that k.
   const auto true_error_at_best = [&](const std::vector<double>& among, double lo, double hi) {
@@ -236,9 +265,21 @@ double orthogonal_common_floor_pct(const SprayRunOptions& options) {
 namespace weedspray::lab::experiments {
 namespace {
 
+// The q-quantile of `values` (linear between the two nearest ranks).
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const double at = q * static_cast<double>(values.size() - 1);
+  const auto lo = static_cast<std::size_t>(std::floor(at));
+  const std::size_t hi = std::min(lo + 1, values.size() - 1);
+  return values[lo] + (at - static_cast<double>(lo)) * (values[hi] - values[lo]);
+}
+
 OrthogonalFleetRow summarise(std::vector<OrthogonalResult> machines) {
-  std::vector<double> mean, max, max_modulated, band, id_mean, id_max;
+  std::vector<double> mean, max, max_modulated, band, id_mean, id_max, nozzle_runs;
   for (const auto& r : machines) {
+    for (const auto& run : r.runs)
+      for (const auto& p : run.nozzles) nozzle_runs.push_back(p.error_pct);
     mean.push_back(r.mean_error_pct);
     max.push_back(r.max_error_pct);
     max_modulated.push_back(r.max_error_modulated_pct);
@@ -246,8 +287,17 @@ OrthogonalFleetRow summarise(std::vector<OrthogonalResult> machines) {
     id_mean.push_back(r.mean_identification_error_pct);
     id_max.push_back(r.max_identification_error_pct);
   }
-  return {spread_of(mean),    spread_of(max),    spread_of(max_modulated), spread_of(band),
-          spread_of(id_mean), spread_of(id_max), std::move(machines)};
+  OrthogonalFleetRow row;
+  row.mean_error_pct = spread_of(mean);
+  row.max_error_pct = spread_of(max);
+  row.max_error_modulated_pct = spread_of(max_modulated);
+  row.pressure_band_mpa = spread_of(band);
+  row.mean_identification_error_pct = spread_of(id_mean);
+  row.max_identification_error_pct = spread_of(id_max);
+  row.per_nozzle_mean_error_pct = spread_of(nozzle_runs).mean;
+  row.per_nozzle_p95_error_pct = quantile(std::move(nozzle_runs), 0.95);
+  row.machines = std::move(machines);
+  return row;
 }
 
 }  // namespace
@@ -271,7 +321,7 @@ LinearityFleetResult run_linearity_fleet(const FleetOptions& fleet, const SprayR
 }
 
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const SprayRunOptions& base) {
-  std::vector<OrthogonalResult> on, model, off, recalibrated;
+  std::vector<OrthogonalResult> on, model, off, recalibrated, rechecked;
   std::vector<double> held_open_floor, common_floor;
   const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
   for (std::size_t i = 0; i < machines.size(); ++i) {
@@ -301,12 +351,21 @@ OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const Spra
     options.flow_feedback = false;
     off.push_back(run_orthogonal(options));
     options.flow_feedback = true;
+    options.headland_recheck = true;
+    rechecked.push_back(run_orthogonal(options));
+    options.headland_recheck = false;
     options.recalibrated = true;
     recalibrated.push_back(run_orthogonal(options));
   }
-  return {summarise(std::move(on)),   summarise(std::move(model)),
-          summarise(std::move(off)),  summarise(std::move(recalibrated)),
-          spread_of(held_open_floor), spread_of(common_floor)};
+  OrthogonalFleetResult result;
+  result.trim_on = summarise(std::move(on));
+  result.model_trim = summarise(std::move(model));
+  result.trim_off = summarise(std::move(off));
+  result.recalibrated = summarise(std::move(recalibrated));
+  result.headland_recheck = summarise(std::move(rechecked));
+  result.held_open_floor_pct = spread_of(held_open_floor);
+  result.common_floor_pct = spread_of(common_floor);
+  return result;
 }
 
 }  // namespace weedspray::lab::experiments

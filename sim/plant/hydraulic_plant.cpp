@@ -39,6 +39,11 @@ void validate(const PlantParams& p) {
   require(p.pressure_sensor.shunt_ohms > 0, "pressure_sensor.shunt_ohms", "> 0");
   require(p.pressure_sensor.noise_volts_sigma >= 0, "pressure_sensor.noise_volts_sigma", ">= 0");
   require(p.pressure_sensor.time_constant_s >= 0, "pressure_sensor.time_constant_s", ">= 0");
+  require(std::abs(p.pressure_sensor.offset_fraction) < 0.25, "pressure_sensor.offset_fraction",
+          "within +-0.25");
+  require(p.pressure_sensor.span_error > -1, "pressure_sensor.span_error", "> -1");
+  require(std::isfinite(p.pressure_sensor.drift_per_hour), "pressure_sensor.drift_per_hour",
+          "finite");
   require(p.flow_meter.nominal_pulses_per_l > 0, "flow_meter.nominal_pulses_per_l", "> 0");
   require(p.flow_meter.k_factor_error > -0.5 && p.flow_meter.k_factor_error < 0.5,
           "flow_meter.k_factor_error", "in (-0.5, 0.5)");
@@ -446,8 +451,11 @@ double HydraulicPlant::sensor_current_ma() const {
   if (wire_broken_) return 0.0;
   if (shorted_) return 24.0;
   const auto& s = params_.pressure_sensor;
-  // Transmitters saturate a little beyond their span (NAMUR NE43: 3.8-20.5 mA).
-  return std::clamp(4.0 + 16.0 * sensor_pressure_mpa_ / s.full_scale_mpa, 3.8, 20.5);
+  // Its own offset (drifting) and span error, then the saturation a little beyond the span
+  // (NAMUR NE43: 3.8-20.5 mA).
+  const double offset = s.offset_fraction + s.drift_per_hour * time_s_ / 3600.0;
+  const double reading = (1.0 + s.span_error) * sensor_pressure_mpa_ / s.full_scale_mpa;
+  return std::clamp(4.0 + 16.0 * (offset + reading), 3.8, 20.5);
 }
 
 double HydraulicPlant::pressure_sensor_volts() const {

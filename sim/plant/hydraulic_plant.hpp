@@ -148,6 +148,14 @@ struct PressureSensorParams {
   double noise_volts_sigma = 0.002;
   // Transmitter response time constant.
   double time_constant_s = 0.002;
+  // Calibration error of this transmitter against its label (the controller converts by the
+  // label): zero offset as a fraction of the 16 mA span, span error as a fraction of the
+  // reading, and the offset drifting at drift_per_hour [fraction of span per hour of plant
+  // time]. Class 0.25-0.5 % FS transmitters: offset within +-0.5 % of span, span within +-1 %
+  // (datasheet accuracy classes); the ideal bench has none.
+  double offset_fraction = 0.0;
+  double span_error = 0.0;
+  double drift_per_hour = 0.0;
   bool operator==(const PressureSensorParams&) const = default;
 };
 

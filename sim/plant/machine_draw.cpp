@@ -33,6 +33,11 @@ Machine draw_machine(std::uint64_t seed, int index) {
   p.flow_meter.k_factor_error = draw_uniform(rng, -0.02, 0.02);
   p.wheel.slip = draw_uniform(rng, -0.03, 0.05);
   m.seed = rng();
+  // The pressure transmitter's own error, from a stream of its own (the draws above stay).
+  auto sensor_rng = machine_rng(seed, index, 3);
+  p.pressure_sensor.offset_fraction = draw_uniform(sensor_rng, -0.005, 0.005);
+  p.pressure_sensor.span_error = draw_uniform(sensor_rng, -0.01, 0.01);
+  p.pressure_sensor.drift_per_hour = draw_uniform(sensor_rng, -0.001, 0.001);
   return m;
 }
 

@@ -16,6 +16,9 @@
 //   valve base delays         x U(0.8, 1.25)     invented (coil and spring between batches)
 //   meter K error as made     U(-0.02, 0.02)     LWGY class +-1 % of reading, twice for wear
 //   wheel slip                U(-0.03, 0.05)     invented (trailed / driven ground wheel)
+//   pressure transmitter      offset U(-0.5, 0.5) % of span, span U(-1, 1) %, offset drift
+//                             U(-0.1, 0.1) % of span per hour: 0.25-0.5 % FS class datasheets
+//                             (drift invented); the controller converts by the label
 #pragma once
 
 #include <cstdint>

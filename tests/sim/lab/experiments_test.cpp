@@ -71,10 +71,13 @@ TEST(RippleExperiment, StaggeredSwitchingSwingsThePressureFarLess) {
 }
 
 TEST(CalibrationExperiment, FindsTheMeterErrorAndTheTrueNozzleLines) {
-  const CalibrationResult r = run_calibration(CalibrationOptions{});
+  CalibrationOptions exact_jug;
+  exact_jug.jug_error_limit = 0.0;
+  const CalibrationResult r = run_calibration(exact_jug);
   // The label (8500) is off by the plant's K-factor error; the catch test finds the truth.
   EXPECT_GT(std::abs(r.meter_k_error_pct), 1.0);
   EXPECT_LT(std::abs(r.meter_calibration_error_pct), 0.1);
+  EXPECT_EQ(r.jug_error_pct, 0.0);
   ASSERT_EQ(r.nozzles.size(), 4u);
   for (const auto& n : r.nozzles) {
     EXPECT_NEAR(n.fitted.slope_l_per_min_per_pct, n.truth.slope_l_per_min_per_pct,
@@ -82,6 +85,15 @@ TEST(CalibrationExperiment, FindsTheMeterErrorAndTheTrueNozzleLines) {
     EXPECT_NEAR(n.fitted.intercept_l_per_min, n.truth.intercept_l_per_min, 0.003);
     EXPECT_GT(n.r_squared, 0.999);
   }
+}
+
+// The catch test reads its volume off a jug: the meter's K comes out off by the jug's drawn
+// error (the meter reads high by what the jug reads low), within its +-0.8 %.
+TEST(CalibrationExperiment, TheMeterCarriesTheCatchJugsReadingError) {
+  const CalibrationResult r = run_calibration(CalibrationOptions{});
+  EXPECT_NE(r.jug_error_pct, 0.0);
+  EXPECT_LE(std::abs(r.jug_error_pct), 0.8);
+  EXPECT_NEAR(r.meter_calibration_error_pct, -r.jug_error_pct, 0.1);
 }
 
 TEST(LinearityExperiment, CalibratedMachineIsLinearAndRawIsNot) {

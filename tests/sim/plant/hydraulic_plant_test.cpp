@@ -87,6 +87,24 @@ TEST(HydraulicPlant, SensorMapsPressureToFourToTwentyMilliamps) {
   EXPECT_GT(plant.sensor_current_ma(), 21.0);
 }
 
+// A transmitter off its label: its zero offset (a share of the 16 mA span, drifting with the
+// plant's time) and span error move the current the controller converts by the label.
+TEST(HydraulicPlant, SensorCarriesItsOffsetSpanErrorAndDrift) {
+  PlantParams params;
+  params.pressure_sensor.noise_volts_sigma = 0.0;
+  params.pressure_sensor.offset_fraction = 0.005;
+  params.pressure_sensor.span_error = -0.01;
+  params.pressure_sensor.drift_per_hour = 0.36;  // fast, to see it in 10 s
+  HydraulicPlant plant(params, 3);
+  EXPECT_NEAR(plant.sensor_current_ma(), 4.0 + 16.0 * 0.005, 1e-9);  // no pressure: the offset
+  plant.set_pump(true);
+  plant.set_valves(0xF);
+  plant.set_return_valve_volts(4.0);
+  plant.step(10.0);  // the offset drifted by 0.1 % of span
+  const double reading = 0.99 * plant.line_pressure_mpa() / params.pressure_sensor.full_scale_mpa;
+  EXPECT_NEAR(plant.sensor_current_ma(), 4.0 + 16.0 * (0.006 + reading), 1e-3);
+}
+
 TEST(HydraulicPlant, WheelPulsesFollowDistance) {
   HydraulicPlant plant(PlantParams{}, 1);
   plant.set_ground_speed(1.5);
