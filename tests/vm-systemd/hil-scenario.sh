@@ -570,14 +570,24 @@ judge_fault() { # NAME SIGNAL PID LIMIT_MS FIGURE_KEY [exit]: prints the figure 
 }
 
 # The E-stop circuit opens while spraying (its line pulled up: an edge the daemon's ws-estop
-# thread reads). Figure: from a trace marker written just before the pull changes to every
-# valve and the pump written 0 in the kernel's record (so it includes gpio-sim's edge delivery).
-# Then the stop must hold with the circuit closed again until sprayctl clear-alarms.
+# thread reads). Figure: from the edge's interrupt in the kernel's record (gpio-sim raises it
+# when the pull changes, as a board's GPIO controller does when the contact opens) to every
+# valve and the pump written 0. The time from the harness's own trace marker, written just
+# before the pull changes, is printed beside it: on the emulated CPU the harness's shell can
+# wait for a CPU between the marker and the pull (the daemon's real-time threads run above it),
+# which is the stimulus being late, not the stop. Then the stop must hold with the circuit
+# closed again until sprayctl clear-alarms.
 estop_line=11
 estop_pull() { echo "$1" >"$chip_dir/sim_gpio$estop_line/pull"; }
-marker_to_safe() { # MARKER -> ms from the trace marker to every watched line written 0 (-1: never)
+# The E-stop line's interrupt: /proc/interrupts names gpio-sim's interrupt chip (irq_sim), the
+# line's offset as its hardware number, and the requester.
+estop_irq() {
+  awk -v line="$estop_line" '{ for (i = 2; i < NF; i++) if ($i == "irq_sim" && $(i + 1) == line) { sub(":", "", $1); print $1; exit } }' /proc/interrupts
+}
+marker_to_safe() { # MARKER [IRQ] -> ms from the trace marker (or the first interrupt IRQ after
+  # it) to every watched line written 0 (-1: never)
   echo 0 >"$tracing/tracing_on"
-  awk -v marker="$1" -v watched="$watched" -v base="$gpio_base" -v init="$initial_mask" '
+  awk -v marker="$1" -v irq="${2:-}" -v watched="$watched" -v base="$gpio_base" -v init="$initial_mask" '
     BEGIN {
       n = split(watched, w, " "); for (i = 1; i <= n; i++) watch[w[i]] = 1
       split(init, m, " ")
@@ -590,7 +600,8 @@ marker_to_safe() { # MARKER -> ms from the trace marker to every watched line wr
       ts = ""; for (i = 1; i <= NF; i++) if ($i ~ /^[0-9]+\.[0-9]+:$/) { ts = substr($i, 1, length($i) - 1) + 0; break }
       if (ts == "") next
     }
-    / tracing_mark_write: / && t0 < 0 { if (index($0, marker)) t0 = ts; next }
+    / tracing_mark_write: / && marked == 0 { if (index($0, marker)) { marked = 1; if (irq == "") t0 = ts }; next }
+    / irq_handler_entry: / && marked && t0 < 0 && irq != "" { if (index($0, "irq=" irq " ")) t0 = ts; next }
     / gpio_value: / {
       for (i = 1; i <= NF; i++) if ($i == "gpio_value:") { g = $(i + 1); how = $(i + 2); v = $(i + 3) }
       if (!(g in watch) || how != "set") next
@@ -604,14 +615,21 @@ marker_to_safe() { # MARKER -> ms from the trace marker to every watched line wr
 }
 estop_pull pull-down
 start_spraying || info "estop: not spraying before it (State=$(bus_state))"
+irq="$(estop_irq)"
+[ -n "$irq" ] || info "estop: no irq_sim interrupt for line $estop_line in /proc/interrupts: $(grep irq_sim /proc/interrupts | tr -s ' ' | tr '\n' '|')"
+echo "irq == ${irq:-0}" >"$tracing/events/irq/irq_handler_entry/filter"
+echo 1 >"$tracing/events/irq/irq_handler_entry/enable"
 trace_window_begin
 echo estop_open >"$tracing/trace_marker"
 estop_pull pull-up
 wait_for 10 state_is Fault
-estop_ms="$(marker_to_safe estop_open)"
+if [ -n "$irq" ]; then estop_ms="$(marker_to_safe estop_open "$irq")"; else estop_ms=-1; fi
+stimulus_ms="$(marker_to_safe estop_open)"
+echo 0 >"$tracing/events/irq/irq_handler_entry/enable"
 figure estop_safe_ms "$estop_ms"
+figure estop_safe_from_marker_ms "$stimulus_ms"
 step estop_safe "$(awk -v ms="$estop_ms" 'BEGIN { print (ms >= 0 && ms <= 10) ? 0 : 1 }')" \
-  "E-stop line pulled up while spraying: every valve and the pump written 0 after $estop_ms ms (limit 10); the daemon's Estop (closed, latched, edge to safe ms): $(bus_value Estop); State=$(bus_state), Alarms $(bus_value Alarms)"
+  "E-stop line pulled up while spraying: every valve and the pump written 0 after $estop_ms ms from the edge's interrupt (irq ${irq:-none}; limit 10), $stimulus_ms ms from the harness's marker before the pull; the daemon's Estop (closed, latched, edge to safe ms): $(bus_value Estop); State=$(bus_state), Alarms $(bus_value Alarms)"
 estop_pull pull-down
 sleep 2
 step estop_latched "$([ "$(bus_state)" = Fault ] && [ "$(hil pump)" = 0 ]; echo $?)" \
