@@ -11,20 +11,29 @@ namespace {
 namespace ex = lab::experiments;
 
 int run_dose_fleet_command(const ExperimentOptions& o) {
-  const ex::DoseFleetResult r = ex::run_dose_fleet({o.seed, o.plants, true});
+  const ex::DoseOptions base;
+  const ex::DoseFleetResult r = ex::run_dose_fleet({o.seed, o.plants, true}, base);
   Report report = fleet_report(o.plants, o.seed);
-  report.json().add("changed_after_calibration", Json::boolean(true));
+  report.json()
+      .add("changed_after_calibration", Json::boolean(true))
+      .add("target_follows_speed", Json::boolean(base.follow_speed))
+      .add("speed_m_per_s", Json::object()
+                                .add("min", Json::number(r.speed_min_m_per_s, "%.4g"))
+                                .add("max", Json::number(r.speed_max_m_per_s, "%.4g")));
   report.line(
-      "wheat paper dose check (densities 0.40-0.75, 1 m/s, 0.4 MPa, 5 Hz, nozzle 1), %d drawn "
-      "machines (seed %llu), each calibrated as made, then changed",
-      o.plants, static_cast<unsigned long long>(o.seed));
+      "wheat paper dose check (densities 0.40-0.75, 0.4 MPa, 5 Hz, nozzle 1), %d drawn "
+      "machines (seed %llu), each calibrated as made, then changed; the ground speed ramps "
+      "(%.2f-%.2f m/s) and %s",
+      o.plants, static_cast<unsigned long long>(o.seed), r.speed_min_m_per_s, r.speed_max_m_per_s,
+      base.follow_speed ? "the law's target follows it" : "the target stays the law's at 1 m/s");
   SpreadTable table("over the machines");
   for (const auto* row : {&r.trim_on, &r.trim_off}) {
     const bool on = row == &r.trim_on;
     table.section(on ? "trim_on" : "trim_off", on ? "online flow trim ON" : "online flow trim OFF")
         .row("r2", "R2 (worst = lowest)", row->r2, "%12.5f")
         .row("mean_error_pct", "mean error [%]", row->mean_error_pct, "%12.3f")
-        .row("max_error_pct", "max error [%]", row->max_error_pct, "%12.3f");
+        .row("max_error_pct", "max error [%]", row->max_error_pct, "%12.3f")
+        .row("clipped_pct", "clipped above full open [%]", row->clipped_pct, "%12.3f");
   }
   table.report_to(report);
   report.print(o.json);

@@ -35,7 +35,9 @@ int run_field_dose_command(const ExperimentOptions& o) {
       .add("changed_after_calibration", Json::boolean(true))
       .add("run_s", Json::number(options.run_s, "%.0f"))
       .add("min_share", Json::number(options.field.min_share, "%.2f"))
-      .add("max_share", Json::number(options.field.max_share, "%.2f"));
+      .add("max_share", Json::number(options.field.max_share, "%.2f"))
+      .add("target_follows_speed", Json::boolean(true))
+      .add("speed_swing", Json::number(options.field.speed_swing, "%.2f"));
   report.line(
       "boom-total dose over a %.0f s field (shares %.2f-%.2f of full flow, speed +-%.0f %%, "
       "headlands) at %.1f MPa / %.0f Hz, the daemon's band %.0f-%.0f %% (%s), %d drawn machines "
@@ -65,7 +67,8 @@ int run_field_dose_command(const ExperimentOptions& o) {
         .row("raised_share_pct", "nozzle-time raised to duty_min [%]", row->raised_share_pct,
              "%12.2f")
         .row("held_open_share_pct", "nozzle-time held open [%]", row->held_open_share_pct, "%12.2f")
-        .row("applied_l_per_ha", "applied [L/ha]", row->applied_l_per_ha, "%12.1f");
+        .row("applied_l_per_ha", "applied [L/ha]", row->applied_l_per_ha, "%12.1f")
+        .row("clipped_pct", "clipped above full open [%]", row->clipped_pct, "%12.3f");
   }
   table.report_to(report);
   report.print(o.json);

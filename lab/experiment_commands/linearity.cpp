@@ -12,9 +12,12 @@ namespace {
 namespace ex = lab::experiments;
 
 int run_linearity_fleet_command(const ExperimentOptions& o) {
-  const ex::LinearityFleetResult r = ex::run_linearity_fleet({o.seed, o.plants, true});
+  const ex::SprayRunOptions base;
+  const ex::LinearityFleetResult r = ex::run_linearity_fleet({o.seed, o.plants, true}, base);
   Report report = fleet_report(o.plants, o.seed);
-  report.json().add("changed_after_calibration", Json::boolean(true));
+  report.json()
+      .add("changed_after_calibration", Json::boolean(true))
+      .add("target_follows_speed", Json::boolean(base.follow_speed));
   report.line(
       "nozzle 1 swept 10-100 %%, 0.2 MPa, 3 Hz, %d drawn machines (seed %llu), "
       "calibrated as made, then changed; trim on",

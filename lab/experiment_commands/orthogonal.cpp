@@ -24,16 +24,28 @@ ex::ChangeParts change_parts(const std::string& name) {
 int run_orthogonal_fleet_command(const ExperimentOptions& o) {
   ex::FleetOptions fleet{o.seed, o.plants, true};
   fleet.parts = change_parts(o.change_parts);
-  const ex::OrthogonalFleetResult r = ex::run_orthogonal_fleet(fleet);
+  const ex::SprayRunOptions base;
+  const ex::OrthogonalFleetResult r = ex::run_orthogonal_fleet(fleet, base);
   Report report = fleet_report(o.plants, o.seed);
   report.json()
       .add("changed_after_calibration", Json::boolean(fleet.parts != ex::ChangeParts::kNone))
-      .add("change_parts", Json::string(o.change_parts));
+      .add("change_parts", Json::string(o.change_parts))
+      .add("target_follows_speed", Json::boolean(base.follow_speed))
+      .add("reference_speed_m_per_s", Json::number(base.reference_speed_m_per_s, "%.3g"))
+      .add("speed_m_per_s", Json::object()
+                                .add("min", Json::number(r.speed_min_m_per_s, "%.4g"))
+                                .add("max", Json::number(r.speed_max_m_per_s, "%.4g")));
   report.line(
       "L16 orthogonal test, 0.2 MPa, 3 Hz, %d drawn machines (seed %llu), each calibrated as "
       "made, then changed (%s of: wear, a partial blockage, valve ageing, meter drift, supply "
       "and speed ramps)",
       o.plants, static_cast<unsigned long long>(o.seed), o.change_parts.c_str());
+  report.line(
+      "the duties are the demand at %.1f m/s; %s (speeds %.2f-%.2f m/s), clipped at the "
+      "full-open flow",
+      base.reference_speed_m_per_s,
+      base.follow_speed ? "the target follows the ground speed" : "the target ignores the speed",
+      r.speed_min_m_per_s, r.speed_max_m_per_s);
   SpreadTable table("over the machines");
   for (const auto& [key, name, row] :
        {std::tuple{"trim_on", "ON (the daemon's: ratio, FlowTrim)", &r.trim_on},
@@ -50,6 +62,7 @@ int run_orthogonal_fleet_command(const ExperimentOptions& o) {
         .row("max_error_below_100_pct", "  ...below 100 % duty [%]", row->max_error_modulated_pct,
              "%12.3f")
         .row("pressure_band_mpa", "pressure band [MPa]", row->pressure_band_mpa, "%12.4f")
+        .row("clipped_pct", "clipped above full open [%]", row->clipped_pct, "%12.3f")
         .member("per_nozzle_error_pct",
                 Json::object()
                     .add("mean", Json::number(row->per_nozzle_mean_error_pct, "%.6g"))

@@ -12,17 +12,20 @@
 
 #include "lab/experiments/experiments.hpp"
 #include "lab/experiments/rig_recheck.hpp"
+#include "lab/experiments/speed_target.hpp"
 #include "lab/experiments/vocabulary.hpp"
 
 namespace weedspray::lab::experiments {
 namespace {
 
-// The field's demand as a share of each nozzle's full-open flow: the rate law's share at the
-// nominal speed times the ground speed (the volume per area is kept), at most held open.
+// The field's demand as a share of each nozzle's full-open flow: the share at the nominal speed
+// through the daemon's rate law at the ground speed (speed_target.hpp: the volume per area is
+// kept), at most held open.
 void field_demand_at(sim::FieldDutyProcess& field, double t_s, std::span<double> shares) {
   field.shares_at(t_s, shares);
   const double speed = field.speed_factor_at(t_s);
-  for (double& share : shares) share = std::min(1.0, share * speed);
+  for (double& share : shares)
+    share = speed_following_flow(share, 1.0, 1.0, speed, 1.0).flow_l_per_min;
 }
 
 // The healthy part's shares, as BlockageMachine reports them: closures and the lag-1

@@ -163,11 +163,12 @@ void ClosedLoopRig::set_full_open_flows(std::span<const double> flow_l_per_min) 
 
 void ClosedLoopRig::request_flows(std::span<const double> flow_l_per_min) {
   requested_flows_.fill(0.0);
-  promised_flows_.fill(0.0);
   const std::size_t n = std::min(flow_l_per_min.size(), requested_flows_.size());
   std::copy_n(flow_l_per_min.begin(), n, requested_flows_.begin());
   flows_requested_ = true;
-  // Once running, the next control tick takes them (as the daemon's next cycle does).
+  // Once running, the next control tick takes them (as the daemon's next cycle does); until
+  // then the latched duties and their promise hold (a request every tick, as a speed-following
+  // target makes, leaves the model trim no tick without a promise).
   if (!started_) apply_flow_requests(0.0);
 }
 

@@ -123,7 +123,10 @@ CalibrationResult run_calibration(const CalibrationOptions& options);
 struct DutyPoint {
   double duty_pct = 0.0;
   double commanded_duty_pct = 0.0;  // after calibration / compensation / trim
+  // Asked over the run: the duty's share of the reference flow at the reference speed, times
+  // the ground speed over the reference speed (speed_target.hpp), at most the full-open flow.
   double requested_l = 0.0;
+  double clipped_l = 0.0;    // the speed-following target above the full-open flow: not asked
   double delivered_l = 0.0;  // TRUE
   double error_pct = 0.0;    // |delivered - requested| / requested * 100
 };
@@ -165,6 +168,13 @@ struct SprayRunOptions {
   double recheck_pressure_tolerance_mpa = 0.02;
   // The daemon's flow trim settings (control::FlowTrimStep, which the rig runs).
   FlowTrimConfig flow_trim{};
+  // The duties are each nozzle's demand at the reference speed; follow_speed: every control
+  // period the target is the demand times the ground speed (the change's ramp, else the
+  // reference) over the reference speed, through the daemon's rate law, clipped at the
+  // reference's full-open flow (the calibration as made: recalibrated, a nozzle that lost flow
+  // is still asked it) (speed_target.hpp). false: the duty's flow whatever the speed.
+  bool follow_speed = true;
+  double reference_speed_m_per_s = 1.0;
 };
 LinearityResult run_linearity(const SprayRunOptions& options);
 
@@ -206,6 +216,8 @@ struct OrthogonalResult {
   // identify_nozzles: over the nozzle-runs below 100 % duty (held-open ones share one column)
   double mean_identification_error_pct = 0.0;
   double max_identification_error_pct = 0.0;
+  // The speed-following target's volume above the full-open flows, % of the law's volume.
+  double clipped_pct = 0.0;
 };
 OrthogonalResult run_orthogonal(const SprayRunOptions& options);
 
@@ -235,9 +247,12 @@ std::vector<double> calibrated_full_flows(const CalibrationResult& calibration);
 // ---------- dose: wheat paper's check, densities 0.40-0.75 at 1 m/s, 0.4 MPa, 5 Hz ----------
 struct DosePoint {
   double density = 0.0;
-  double theoretical_l_per_min = 0.0;  // 60 D w v u / k
-  double delivered_l_per_min = 0.0;    // TRUE, nozzle 1
+  // 60 D w v u / k over the run (the mean of the speed-following target, clipped at the
+  // full-open flow), nozzle 1
+  double theoretical_l_per_min = 0.0;
+  double delivered_l_per_min = 0.0;  // TRUE, nozzle 1
   double duty_pct = 0.0;
+  double clipped_l_per_min = 0.0;  // the law's flow above the full-open flow, over the run
 };
 struct DoseResult {
   std::vector<DosePoint> points;
@@ -256,10 +271,14 @@ struct DoseOptions {
   double settle_s = 3.0;
   double run_s = 60.0;
   // The machine (PlantParams{} = the ideal bench), calibrated as made; `change` is applied
-  // after the calibration, before each density's run (ramps over the measured minute).
+  // after the calibration, before each density's run (ramps over the measured minute). Its
+  // ground speed ramp replaces speed_m_per_s.
   plant::PlantParams plant{};
   std::optional<MachineChange> change{};
   bool flow_feedback = true;  // online flow trim
+  // Each control period the law's target at the ground speed then (speed_target.hpp), clipped
+  // at the nozzle's full-open flow; false: at speed_m_per_s whatever the ground speed.
+  bool follow_speed = true;
 };
 DoseResult run_dose(const DoseOptions& options);
 
@@ -363,6 +382,7 @@ struct OrthogonalFleetRow {
   // the volume error [%].
   double per_nozzle_mean_error_pct = 0.0;
   double per_nozzle_p95_error_pct = 0.0;
+  Spread clipped_pct;  // per machine: OrthogonalResult::clipped_pct
   std::vector<OrthogonalResult> machines;
 };
 struct OrthogonalFleetResult {
@@ -378,6 +398,9 @@ struct OrthogonalFleetResult {
   OrthogonalFleetRow headland_recheck;
   Spread held_open_floor_pct;  // orthogonal_held_open_floor_pct() per machine
   Spread common_floor_pct;     // orthogonal_common_floor_pct() per machine
+  // The ground speeds the runs went through (the changes' ramps; the reference without them).
+  double speed_min_m_per_s = 0.0;
+  double speed_max_m_per_s = 0.0;
 };
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet,
                                            const SprayRunOptions& base = {});
@@ -392,9 +415,13 @@ struct DoseFleetRow {
   Spread r2;              // delivered vs theoretical over the densities (worst = lowest)
   Spread mean_error_pct;  // per machine: mean |delivered - theoretical| / theoretical
   Spread max_error_pct;   // per machine: its worst density
+  Spread clipped_pct;     // per machine: the law's volume above the full-open flow [%]
 };
 struct DoseFleetResult {
   DoseFleetRow trim_on, trim_off;
+  // The ground speeds the runs went through (the changes' ramps).
+  double speed_min_m_per_s = 0.0;
+  double speed_max_m_per_s = 0.0;
 };
 // Calibrated as made (0.4 MPa, 5 Hz), tested after the drawn change, trim on and off.
 DoseFleetResult run_dose_fleet(const FleetOptions& fleet, const DoseOptions& base = {});
@@ -508,7 +535,8 @@ BlockageFleetResult run_blockage_fleet(const FleetOptions& fleet,
 // ramp), then sprays a field (sim::FieldDutyProcess seeded per machine: correlated patches
 // shared across the boom, closures, headlands, ground speed +-speed_swing) for run_s with the
 // daemon's rate law: every request_period_s each nozzle is asked for its share of its
-// calibrated full-open flow times the ground speed factor (the volume per area is kept), the
+// calibrated full-open flow times the ground speed factor (the volume per area is kept; the
+// daemon's rate law, speed_target.hpp, clipped at the full-open flow), the
 // duties in the daemon's band (duty_min/duty_max, low-duty policy) and the online trim on or
 // off. The field's ground speed replaces the drawn change's speed ramp.
 //   target L/ha:  the requested flow integrated over time / the area sprayed (ground speed x
@@ -548,6 +576,8 @@ struct FieldDoseRun {
   // nozzle's line flow at duty_min, the smallest one's at duty_max.
   double band_low_share = 0.0;
   double band_high_share = 0.0;
+  // The speed-following target above the full-open flows, % of the law's volume (not asked).
+  double clipped_pct = 0.0;
 };
 struct FieldDoseMachine {
   FieldDoseRun trim_on, trim_off;
@@ -560,6 +590,7 @@ struct FieldDoseRow {
   Spread raised_share_pct;
   Spread held_open_share_pct;
   Spread applied_l_per_ha;
+  Spread clipped_pct;
 };
 struct FieldDoseFleetResult {
   FieldDoseRow trim_on, trim_off;

@@ -5,6 +5,7 @@
 // wheat paper's operating point (0.4 MPa, 5 Hz).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -12,6 +13,7 @@
 
 #include "control/nozzle_scheduler.hpp"
 #include "lab/experiments/experiments.hpp"
+#include "lab/experiments/speed_target.hpp"
 #include "lab/experiments/vocabulary.hpp"
 
 namespace weedspray::lab::experiments {
@@ -33,30 +35,48 @@ DoseResult run_dose(const DoseOptions& options) {
   CalibratedMachine m =
       calibrate(options.seed, options.pressure_mpa, options.frequency_hz, law, options.plant);
   m.config.fixes.flow_feedback = options.flow_feedback;
+  m.config.ground_speed_m_per_s = options.speed_m_per_s;
   DoseResult result;
   std::vector<double> x, y;
+  const std::size_t nozzles = m.full_flows.size();
   for (double density : options.densities) {
     ClosedLoopRig rig = calibrated_rig(m);
-    const double q = target_flow_l_per_min(law, density, options.speed_m_per_s);
-    rig.request_flows(std::vector<double>(m.full_flows.size(), q));
+    // Every nozzle at the law's flow for the density at the ground speed now (the change's
+    // ramp, else speed_m_per_s), at most its full-open flow; nozzle 1's asked volume kept.
+    std::vector<double> flows(nozzles);
+    AskedFlow first;
+    const auto ask = [&] {
+      const double speed =
+          options.follow_speed ? rig.plant().ground_speed_m_per_s() : options.speed_m_per_s;
+      for (std::size_t i = 0; i < nozzles; ++i) {
+        const AskedFlow asked = asked_flow(law, density, speed, m.full_flows[i]);
+        flows[i] = asked.flow_l_per_min;
+        if (i == 0) first = asked;
+      }
+      rig.request_flows(flows);
+    };
     if (options.change) apply_change(rig.plant(), *options.change);
+    ask();
     rig.start();
     rig.run_for(options.settle_s);
     const double v0 = rig.plant().nozzle_delivered_l(0);
-    if (options.change) {
-      // The change's ramps (supply voltage, ground speed) move over the measured minute.
-      const double step = m.config.control_period_s;
-      for (double t = 0.0; t < options.run_s - 1e-9; t += step) {
-        apply_change_progress(rig.plant(), *options.change, t / options.run_s);
-        rig.run_for(step);
-      }
-    } else {
-      rig.run_for(options.run_s);
+    // The change's ramps (supply voltage, ground speed) move over the measured minute, the
+    // targets with the speed.
+    AskedVolume asked;
+    const double step = m.config.control_period_s;
+    for (double t = 0.0; t < options.run_s - 1e-9; t += step) {
+      if (options.change) apply_change_progress(rig.plant(), *options.change, t / options.run_s);
+      ask();
+      asked.add(first, step);
+      rig.run_for(step);
     }
+    const double minutes = options.run_s / 60.0;
+    const double q = asked.asked_l / minutes;
     DosePoint p;
     p.density = density;
     p.theoretical_l_per_min = q;
-    p.delivered_l_per_min = (rig.plant().nozzle_delivered_l(0) - v0) / (options.run_s / 60.0);
+    p.clipped_l_per_min = asked.clipped_l / minutes;
+    p.delivered_l_per_min = (rig.plant().nozzle_delivered_l(0) - v0) / minutes;
     p.duty_pct = rig.commanded_duties_pct()[0];
     result.points.push_back(p);
     x.push_back(p.theoretical_l_per_min);
@@ -69,7 +89,9 @@ DoseResult run_dose(const DoseOptions& options) {
 }
 
 DoseFleetResult run_dose_fleet(const FleetOptions& fleet, const DoseOptions& base) {
-  std::vector<double> r2[2], mean[2], max[2];
+  std::vector<double> r2[2], mean[2], max[2], clipped[2];
+  DoseFleetResult result;
+  double speed_min = std::numeric_limits<double>::infinity(), speed_max = -speed_min;
   const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
   for (std::size_t i = 0; i < machines.size(); ++i) {
     DoseOptions options = base;
@@ -77,22 +99,36 @@ DoseFleetResult run_dose_fleet(const FleetOptions& fleet, const DoseOptions& bas
     options.plant = machines[i].params;
     options.change = fleet.changed ? draw_change(machines[i], fleet.seed, static_cast<int>(i))
                                    : no_change(machines[i]);
+    for (const double speed :
+         {options.change->speed_start_m_per_s, options.change->speed_end_m_per_s}) {
+      speed_min = std::min(speed_min, speed);
+      speed_max = std::max(speed_max, speed);
+    }
     for (int trim = 0; trim < 2; ++trim) {
       options.flow_feedback = trim == 0;
       const DoseResult r = run_dose(options);
-      double worst = 0.0;
-      for (const auto& p : r.points)
+      double worst = 0.0, asked = 0.0, over = 0.0;
+      for (const auto& p : r.points) {
         worst = std::max(worst, std::abs(p.delivered_l_per_min - p.theoretical_l_per_min) /
                                     p.theoretical_l_per_min * 100.0);
+        asked += p.theoretical_l_per_min;
+        over += p.clipped_l_per_min;
+      }
       r2[trim].push_back(r.r2);
       mean[trim].push_back(r.mean_error_pct);
       max[trim].push_back(worst);
+      clipped[trim].push_back(asked + over > 0.0 ? over / (asked + over) * 100.0 : 0.0);
     }
   }
   const auto row = [&](int trim) {
-    return DoseFleetRow{spread_of(r2[trim], true), spread_of(mean[trim]), spread_of(max[trim])};
+    return DoseFleetRow{spread_of(r2[trim], true), spread_of(mean[trim]), spread_of(max[trim]),
+                        spread_of(clipped[trim])};
   };
-  return {row(0), row(1)};
+  result.trim_on = row(0);
+  result.trim_off = row(1);
+  result.speed_min_m_per_s = machines.empty() ? base.speed_m_per_s : speed_min;
+  result.speed_max_m_per_s = machines.empty() ? base.speed_m_per_s : speed_max;
+  return result;
 }
 
 namespace {

@@ -10,14 +10,24 @@
 // the one as made, like every other row: the dose the job was set for does not move because
 // a nozzle wore (judged against its own recalibration, a worn nozzle's extra flow would count
 // as asked for).
+//
+// The duties are the demand at the reference speed (1 m/s, the speed the machine was calibrated
+// and the L16 is laid out for). The drawn change ramps the ground speed (0.8-1.2 m/s), and a rate
+// controller's target follows it: every control period each nozzle is asked its duty's share of
+// the reference flow times speed / reference speed, through the daemon's rate law
+// (speed_target.hpp), clipped at the reference's full-open flow. A nozzle at 100 % is asked
+// the held-open flow at or above the reference speed and a share below it. The requested volume
+// is the asked (clipped) target integrated over the run; what was clipped is reported apart.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <span>
 #include <utility>
 #include <vector>
 
 #include "lab/experiments/experiments.hpp"
 #include "lab/experiments/rig_recheck.hpp"
+#include "lab/experiments/speed_target.hpp"
 #include "lab/experiments/vocabulary.hpp"
 
 namespace weedspray::lab::experiments {
@@ -41,6 +51,7 @@ PreparedMachine prepare_machine(const SprayRunOptions& options) {
   m.config.pwm_frequency_hz = options.frequency_hz;
   m.config.record_period_s = 0.0;
   m.config.plant = options.plant;
+  m.config.ground_speed_m_per_s = options.reference_speed_m_per_s;
   if (options.raw) {
     m.config.fixes = {false, false, false};
     const plant::HydraulicPlant probe(m.config.plant, options.seed);  // as made
@@ -77,21 +88,56 @@ struct RunOutcome {
   std::vector<double> identification_error_pct;  // options.identify_nozzles
 };
 
+// Each nozzle's target at the rig's ground speed now (options.follow_speed; else at the
+// reference speed), clipped at the reference's full-open flow (the job's: a recalibration moves
+// what the machine knows, not what it is asked), asked of the rig as flows. Raw, the machine has
+// no rate law: its duties (shares of the true full-open flows) times speed / reference speed, at
+// most 100 %, commanded again only when they move (a new command restarts the PWM's period).
+struct SpeedFollowingRequest {
+  const PreparedMachine& m;
+  std::span<const double> duty_pct;
+  const SprayRunOptions& options;
+  std::vector<AskedFlow> asked = std::vector<AskedFlow>(duty_pct.size());
+  std::vector<double> flows = std::vector<double>(duty_pct.size());
+  std::vector<double> duties = std::vector<double>(duty_pct.size());
+  bool commanded = false;
+
+  void ask(ClosedLoopRig& rig) {
+    const double reference = options.reference_speed_m_per_s;
+    const double speed = options.follow_speed ? rig.plant().ground_speed_m_per_s() : reference;
+    for (std::size_t i = 0; i < duty_pct.size(); ++i) {
+      asked[i] = speed_following_flow(duty_pct[i] / 100.0, m.reference_flows[i], reference, speed,
+                                      m.reference_flows[i]);
+      flows[i] = asked[i].flow_l_per_min;
+    }
+    if (options.raw) {
+      bool moved = !commanded;
+      for (std::size_t i = 0; i < duty_pct.size(); ++i) {
+        const double duty = std::min(100.0, duty_pct[i] * (speed / reference));
+        moved = moved || duty != duties[i];
+        duties[i] = duty;
+      }
+      if (moved) rig.command_duties(duties);
+      commanded = true;
+    } else {
+      rig.request_flows(flows);
+    }
+  }
+};
+
 // One fresh run: start-up, settle, then run_s measured.
 RunOutcome spray_run(const PreparedMachine& m, std::span<const double> duty_pct,
                      const SprayRunOptions& options) {
   ClosedLoopRig rig(m.config);
   const std::size_t n = duty_pct.size();
-  std::vector<double> flows(n);
-  if (options.raw) {
-    rig.command_duties(duty_pct);
-  } else {
+  if (!options.raw) {
     rig.set_nozzle_lines(m.lines);
     rig.set_full_open_flows(m.full_flows);
-    for (std::size_t i = 0; i < n; ++i) flows[i] = duty_pct[i] / 100.0 * m.reference_flows[i];
-    rig.request_flows(flows);
   }
+  SpeedFollowingRequest request{m, duty_pct, options};
   if (options.change) apply_change(rig.plant(), *options.change);
+  request.ask(rig);
+  const std::vector<double>& flows = request.flows;
   rig.start();
   if (options.headland_recheck && !options.raw) {
     // The headland: every nozzle read alone, its line rescaled; the run's flows asked again as
@@ -109,10 +155,14 @@ RunOutcome spray_run(const PreparedMachine& m, std::span<const double> duty_pct,
   std::vector<double> v0(n);
   for (std::size_t i = 0; i < n; ++i) v0[i] = rig.plant().nozzle_delivered_l(static_cast<int>(i));
   RunOutcome out;
-  // Pressure band sampled every control period of the measured window.
+  // Pressure band sampled every control period of the measured window; the targets follow the
+  // ground speed at the same period.
+  std::vector<AskedVolume> asked(n);
   const double dt = m.config.control_period_s;
   for (double t = 0.0; t < options.run_s - 1e-9; t += dt) {
     if (options.change) apply_change_progress(rig.plant(), *options.change, t / options.run_s);
+    request.ask(rig);
+    for (std::size_t i = 0; i < n; ++i) asked[i].add(request.asked[i], dt);
     rig.run_for(dt);
     out.pressure_band_mpa = std::max(
         out.pressure_band_mpa, std::abs(rig.plant().line_pressure_mpa() - options.pressure_mpa));
@@ -122,7 +172,8 @@ RunOutcome spray_run(const PreparedMachine& m, std::span<const double> duty_pct,
     DutyPoint p;
     p.duty_pct = duty_pct[i];
     p.commanded_duty_pct = duties[i];
-    p.requested_l = duty_pct[i] / 100.0 * m.reference_flows[i] * options.run_s / 60.0;
+    p.requested_l = asked[i].asked_l;
+    p.clipped_l = asked[i].clipped_l;
     p.delivered_l = rig.plant().nozzle_delivered_l(static_cast<int>(i)) - v0[i];
     p.error_pct =
         p.requested_l > 0 ? std::abs(p.delivered_l - p.requested_l) / p.requested_l * 100.0 : 0.0;
@@ -164,6 +215,7 @@ OrthogonalResult run_orthogonal(const SprayRunOptions& options) {
   result.raw = options.raw;
   int count = 0;
   int identified = 0;
+  double asked_l = 0.0, clipped_l = 0.0;
   for (const auto& row : kOrthogonalL16) {
     const RunOutcome out = spray_run(m, row, options);
     OrthogonalRun run;
@@ -178,6 +230,8 @@ OrthogonalResult run_orthogonal(const SprayRunOptions& options) {
       ++identified;
     }
     for (const auto& p : run.nozzles) {
+      asked_l += p.requested_l;
+      clipped_l += p.clipped_l;
       result.mean_error_pct += p.error_pct;
       result.max_error_pct = std::max(result.max_error_pct, p.error_pct);
       if (p.duty_pct < 100.0)
@@ -189,6 +243,7 @@ OrthogonalResult run_orthogonal(const SprayRunOptions& options) {
   }
   result.mean_error_pct /= count;
   if (identified > 0) result.mean_identification_error_pct /= identified;
+  result.clipped_pct = AskedVolume{asked_l, clipped_l}.clipped_pct();
   return result;
 }
 
@@ -276,8 +331,9 @@ double quantile(std::vector<double> values, double q) {
 }
 
 OrthogonalFleetRow summarise(std::vector<OrthogonalResult> machines) {
-  std::vector<double> mean, max, max_modulated, band, id_mean, id_max, nozzle_runs;
+  std::vector<double> mean, max, max_modulated, band, id_mean, id_max, nozzle_runs, clipped;
   for (const auto& r : machines) {
+    clipped.push_back(r.clipped_pct);
     for (const auto& run : r.runs)
       for (const auto& p : run.nozzles) nozzle_runs.push_back(p.error_pct);
     mean.push_back(r.mean_error_pct);
@@ -296,6 +352,7 @@ OrthogonalFleetRow summarise(std::vector<OrthogonalResult> machines) {
   row.max_identification_error_pct = spread_of(id_max);
   row.per_nozzle_mean_error_pct = spread_of(nozzle_runs).mean;
   row.per_nozzle_p95_error_pct = quantile(std::move(nozzle_runs), 0.95);
+  row.clipped_pct = spread_of(clipped);
   row.machines = std::move(machines);
   return row;
 }
@@ -323,6 +380,7 @@ LinearityFleetResult run_linearity_fleet(const FleetOptions& fleet, const SprayR
 OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const SprayRunOptions& base) {
   std::vector<OrthogonalResult> on, model, off, recalibrated, rechecked;
   std::vector<double> held_open_floor, common_floor;
+  double speed_min = std::numeric_limits<double>::infinity(), speed_max = -speed_min;
   const std::vector<Machine> machines = draw_machines(fleet.seed, fleet.plants);
   for (std::size_t i = 0; i < machines.size(); ++i) {
     const Machine& m = machines[i];
@@ -333,6 +391,11 @@ OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const Spra
     options.change = fleet.changed
                          ? draw_change_parts(m, fleet.seed, static_cast<int>(i), fleet.parts)
                          : no_change(m);
+    for (const double speed :
+         {options.change->speed_start_m_per_s, options.change->speed_end_m_per_s}) {
+      speed_min = std::min(speed_min, speed);
+      speed_max = std::max(speed_max, speed);
+    }
     options.flow_feedback = true;
     options.model_trim = false;
     held_open_floor.push_back(orthogonal_held_open_floor_pct(options));
@@ -365,6 +428,8 @@ OrthogonalFleetResult run_orthogonal_fleet(const FleetOptions& fleet, const Spra
   result.headland_recheck = summarise(std::move(rechecked));
   result.held_open_floor_pct = spread_of(held_open_floor);
   result.common_floor_pct = spread_of(common_floor);
+  result.speed_min_m_per_s = machines.empty() ? base.reference_speed_m_per_s : speed_min;
+  result.speed_max_m_per_s = machines.empty() ? base.reference_speed_m_per_s : speed_max;
   return result;
 }
 

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
+#include <cstddef>
 #include <random>
 #include <stdexcept>
 #include <vector>
@@ -209,6 +211,68 @@ TEST(SavingsExperiment, TallyAgainstLabelledWeeds) {
 
   truth.pop_back();
   EXPECT_THROW(tally_against_truth(weeds.equal_coverage, truth), std::invalid_argument);
+}
+
+// A rate controller's target follows the ground speed: the runs' duties are the demand at the
+// reference speed (1 m/s), and a step to another speed after the calibration moves every asked
+// volume by the speed ratio, up to the full-open flow (the rest clipped and reported).
+MachineChange speed_step_to(double speed_m_per_s) {
+  MachineChange change;
+  change.valve_ageing.fill(1.0);
+  change.supply_volts_start = change.supply_volts_end = plant::PlantParams{}.pump.supply_volts;
+  change.speed_start_m_per_s = change.speed_end_m_per_s = speed_m_per_s;
+  return change;
+}
+
+TEST(SpeedFollowingTarget, AStepInGroundSpeedMovesTheAskedVolumeByTheSpeedRatio) {
+  SprayRunOptions options;
+  options.run_s = 10.0;
+  const LinearityResult reference = run_linearity(options);
+  options.change = speed_step_to(0.8);
+  const LinearityResult slower = run_linearity(options);
+  options.change = speed_step_to(1.2);
+  const LinearityResult faster = run_linearity(options);
+  ASSERT_EQ(slower.points.size(), reference.points.size());
+  ASSERT_EQ(faster.points.size(), reference.points.size());
+  for (std::size_t i = 0; i < reference.points.size(); ++i) {
+    const DutyPoint& ref = reference.points[i];
+    const DutyPoint& slow = slower.points[i];
+    const DutyPoint& fast = faster.points[i];
+    SCOPED_TRACE(ref.duty_pct);
+    EXPECT_EQ(ref.clipped_l, 0.0);
+    EXPECT_NEAR(slow.requested_l / ref.requested_l, 0.8, 1e-9);
+    EXPECT_EQ(slow.clipped_l, 0.0);
+    // The controller follows the lower target; at 10 % x 0.8 the pulse (about 4 % duty at 3 Hz)
+    // is shorter than the valve opens and closes in.
+    if (ref.duty_pct >= 20.0) {
+      EXPECT_LE(slow.error_pct, 2.0);
+    }
+    if (1.2 * ref.duty_pct <= 100.0) {
+      EXPECT_NEAR(fast.requested_l / ref.requested_l, 1.2, 1e-9);
+      EXPECT_EQ(fast.clipped_l, 0.0);
+      EXPECT_LE(fast.error_pct, 2.0);
+    } else {
+      // Past the full-open flow: that is asked (held open), the rest clipped.
+      const double full_l = ref.requested_l / (ref.duty_pct / 100.0);
+      EXPECT_NEAR(fast.requested_l / full_l, 1.0, 1e-9);
+      EXPECT_NEAR(fast.clipped_l / full_l, 1.2 * ref.duty_pct / 100.0 - 1.0, 1e-9);
+    }
+  }
+}
+
+TEST(SpeedFollowingTarget, TheDoseChecksTheoreticalFlowFollowsTheSpeed) {
+  DoseOptions options;
+  options.densities = {0.5, 0.75};
+  options.run_s = 10.0;
+  options.change = speed_step_to(1.2);
+  const DoseResult r = run_dose(options);
+  ASSERT_EQ(r.points.size(), 2U);
+  EXPECT_NEAR(r.points[0].theoretical_l_per_min, 1.2 * 0.41, 1e-6);
+  EXPECT_NEAR(r.points[1].theoretical_l_per_min, 1.2 * 0.615, 1e-6);
+  for (const DosePoint& p : r.points) {
+    EXPECT_EQ(p.clipped_l_per_min, 0.0);
+    EXPECT_LT(std::abs(p.delivered_l_per_min / p.theoretical_l_per_min - 1.0), 0.02);
+  }
 }
 
 }  // namespace
