@@ -3,9 +3,11 @@
 # Hardware in the loop, run in the systemd guest after guest-test.sh (same unit, as
 # root). weedspray-hil plays the sprayer behind the wires (tools/hil): it samples the valve,
 # pump, buzzer, lamp and heartbeat lines of the gpio-sim chip guest-test.sh made, pulses the
-# flow meter (interrupt-cnt chip) and wheel lines, and serves the pressure ADC, return-valve DAC
-# and tank level as Modbus RTU slaves on ptys, all driven by the hydraulic plant model. The
-# installed weedsprayd.service runs against it with [adc]/[dac] source = "modbus".
+# flow meter (interrupt-cnt chip) and wheel lines, writes the pressure transmitter's voltage
+# into the IIO dummy's ADC input and reads the return valve's voltage from its DAC output (the
+# device guest-test.sh made), and serves the tank level as a Modbus RTU slave on a pty, all
+# driven by the hydraulic plant model. The installed weedsprayd.service runs against it with
+# [adc]/[dac] source = "iio" (as a Pi with an ADS1115 and an MCP4725) and [modbus] for the tank.
 #
 # Safety figures come from the kernel's own record: tracefs events gpio_value (every value
 # written to a line, by anyone, with its time), signal_generate (the fatal signal: kill -9,
@@ -77,6 +79,19 @@ for dir in /sys/class/gpio/gpiochip*; do
   [ "$(cat "$dir/label" 2>/dev/null)" = weedspray ] && gpio_base="$(cat "$dir/base")" && break
 done
 [ -n "$gpio_base" ] || setup_failed "no /sys/class/gpio entry labelled weedspray (GPIO base)"
+# The IIO dummy guest-test.sh instantiated: its in_voltage0_raw takes the plant's writes
+# (tests/vm/iio_dummy_settable_adc.patch), its out_voltage0_raw holds the daemon's DAC writes.
+iio_name=weedspray-iio
+iio_dir=""
+for dir in /sys/bus/iio/devices/iio:device*; do
+  [ "$(cat "$dir/name" 2>/dev/null)" = "$iio_name" ] && iio_dir="$(readlink -f "$dir")" && break
+done
+[ -n "$iio_dir" ] || setup_failed "no IIO device named $iio_name"
+# Millivolts per count, the daemon's iio_scale_mv and the plant's alike: the ADC as an ADS1115
+# at +-4.096 V (the dummy's own in_voltage0_scale, 0.001333 mV, would need 2.5 million counts
+# for 3.3 V); the DAC as guest-test.sh sets it (the dummy has no out_voltage0_scale).
+adc_scale_mv=0.125
+dac_scale_mv=1.0
 watched="$(for l in "${valve_lines[@]}" "$pump_line"; do printf '%d ' $((gpio_base + l)); done)"
 # The camera: field images through v4l2loopback when the host made them (x86: run-systemd-vm-
 # test.sh, weedspray-lab hil-frames); weedspray-hil writes them. Else vivid, every zone green
@@ -113,6 +128,7 @@ hil_log=/run/weedspray-hil.log
 weedspray-hil --chip-dir "$chip_dir" --valve-lines "${valve_lines[@]}" --pump-line "$pump_line" \
   --buzzer-line 5 --lamp-line 6 --heartbeat-line 10 --wheel-line 9 \
   --flow-chip-dir "$flow_chip_dir" --flow-line 0 --run-dir "$run_dir" --rate-hz 2000 \
+  --iio-dir "$iio_dir" --adc-mv-per-count "$adc_scale_mv" --dac-mv-per-count "$dac_scale_mv" \
   --tank-capacity-l 200 --tank-level-l 150 --wheel-pulses-per-m 20 --flow-pulses-per-l 2000 \
   --seed 11 "${camera_args[@]}" >"$hil_log" 2>&1 &
 hil_pid=$!
@@ -126,7 +142,6 @@ flow_count_before="$(counter_count)"
 # --- the daemon, wired to it by a conf.d drop-in -------------------------------------------------
 systemctl stop weedsprayd 2>/dev/null
 rm -f /etc/weedspray/conf.d/50-vm-test.toml
-pressure_loop_hz=20 # see [pressure] below
 cat >/etc/weedspray/conf.d/50-hil.toml <<EOF
 # Written by tests/vm-systemd/hil-scenario.sh: the machine is weedspray-hil.
 [gpio]
@@ -149,26 +164,9 @@ counter = "interrupt-cnt"
 # emulated CPU samples at well under 2 kHz when busy.
 pulses_per_litre = 2000
 
-# The emulated CPU answers a Modbus transaction in 10-50 ms: a 20 Hz loop keeps the pressure
-# samples inside their freshness limit (3 periods; at 50 Hz they went stale and raised
-# pressure_sensor_fault). The valve thread's cross-watch waits 3 periods too (daemon/sprayer/sprayer.cpp;
-# a fixed 50 ms took the 20 Hz loop for stalled and stopped the pump every few hundred ms).
-# The default gains are tuned for the default 100 Hz loop; at 20 Hz with a Modbus ADC read
-# ahead of each tick and the DAC written by a transaction after it they never settle (held-out
-# machines unsettled after 3 s: 10 of 20 at 0.4 MPa, 19 of 20 at 0.2; the guest's loop held
-# 0.35-0.37 MPa for 0.4). These are the same fair search rerun with this loop:
-#   weedspray-lab experiment step --plants 20 --tune --control-period-ms 50
-#     --converter-lead-ms 25 --converter-lag-ms 15   (one command line)
-# (lead: the worker's clamp, half a period; lag: 1 ms + a 10-20 ms transaction). On the 20
-# held-out machines: all settle, 0.4 MPa overshoot 1.3 % mean / 2.9 % max, settle 1.4 / 1.9 s.
-[pressure]
-loop_hz = $pressure_loop_hz
-kp = 5.623
-ki = 31.62
-kd = 0.3278
-cp = 0.3163
-ci = 6.423
-cd = 0.0
+# The pressure loop runs at its default 100 Hz with the default gains: the ADC and DAC are
+# sysfs attributes of the IIO dummy, one pread or pwrite each, as an ADS1115 and an
+# MCP4725 are on a Pi (the plant updates the ADC input and reads the DAC at 500 Hz).
 
 # The plant's wheel: 20 magnets a metre, so the wheel's edges are 40 ms apart at 0.6 m/s (the
 # kernel's threaded edge handler merges edges closer than it gets the emulated CPU).
@@ -178,15 +176,19 @@ pulses_per_metre = 20
 $([ "$video_node" = /dev/video20 ] || printf '%s\n' '# vivid: one colour, no histogram to split.' '[vision]' 'threshold = "fixed"')
 
 [adc]
-source = "modbus"
+source = "iio"
+iio_device = "$iio_name"
+pressure_channel = 0
+iio_scale_mv = $adc_scale_mv
 
 [dac]
-source = "modbus"
+source = "iio"
+iio_device = "$iio_name"
+channel = 0
+full_scale_v = 3.3
+iio_scale_mv = $dac_scale_mv
 
-[analog_modbus]
-device = "$run_dir/analog"
-timeout_s = 0.1
-
+# The tank level: a Modbus RTU module on its own bus (a pty of weedspray-hil).
 [modbus]
 enabled = true
 device = "$run_dir/tank"
@@ -196,7 +198,7 @@ EOF
 # drop-in cannot change an [[camera]] entry: the main file's is edited (as guest-test.sh does).
 sed -i -e "/^\[\[camera\]\]/,\$ { s/^fps = .*/fps = 2.0/; s#^device = .*#device = '$video_node'# }" \
   /etc/weedspray/weedspray.toml
-# Test-only: the ptys (char-pts) behind the Modbus ports, and the crash hook's variable.
+# Test-only: the pty (char-pts) behind the tank's Modbus port, and the crash hook's variable.
 mkdir -p /etc/systemd/system/weedsprayd.service.d
 cat >/etc/systemd/system/weedsprayd.service.d/50-hil.conf <<EOF
 [Service]
@@ -251,7 +253,7 @@ tank="$(bus_value TankLevel)"
 true_tank="$(hil tank_pct)"
 ok="$(awk -v s="$state" -v p="$pressure" -v t="$tank" -v tt="$true_tank" \
   'BEGIN { print (s == "Idle" && p != "" && t != "" && (t - tt) ^ 2 < 1) ? 0 : 1 }')"
-step idle_live_readings "$ok" "State=$state Pressure=$pressure MPa TankLevel=$tank % (plant $true_tank %), DAC $(hil dac_volts) V after $(hil dac_writes) writes, Modbus requests analog $(hil analog_requests) tank $(hil tank_requests)"
+step idle_live_readings "$ok" "State=$state Pressure=$pressure MPa (plant $(hil pressure_mpa) MPa, IIO ADC in_voltage0_raw $(cat "$iio_dir/in_voltage0_raw") after $(hil adc_writes) plant writes) TankLevel=$tank % (plant $true_tank %, Modbus requests $(hil tank_requests)), IIO DAC $(hil dac_volts) V (out_voltage0_raw $(cat "$iio_dir/out_voltage0_raw")), plant IIO errors $(hil iio_errors)"
 
 # --- spraying: pressure and duty -----------------------------------------------------------------
 hil_command speed 0.6
@@ -639,15 +641,14 @@ wait_for 10 state_is Idle
 step estop_reset "$?" "sprayctl clear-alarms with the circuit closed: State=$(bus_state), Estop $(bus_value Estop)"
 
 # The pressure sensor's wire cut while spraying: the plant's loop current drops to 0 mA at the
-# ADC module. The pressure loop reads a sensor fault, never a pressure: pump off in that cycle,
-# valves closed. Figure: from weedspray-hil's trace marker (written just after the module's
-# register changed) to every valve and the pump written 0. The Fault then latches.
-# Limit: the pressure loop's own promise, three of its periods (the next read after the cut,
-# a read that ran past the loop's deadline, the cycle that acts; a converter silent for three
-# periods is a fault too). Here 150 ms: the loop runs at 20 Hz because a Modbus transaction
-# takes 10-20 ms on the emulated CPU; the issue's 20 ms needs a 100 Hz loop (30 ms bound) on a
-# fast converter.
-cut_limit_ms="$(awk -v hz="$pressure_loop_hz" 'BEGIN { print 3000 / hz }')"
+# ADC input (in_voltage0_raw written 0). The pressure loop reads a sensor fault, never a
+# pressure: pump off in that cycle, valves closed. Figure: from weedspray-hil's trace marker
+# (written just after the ADC input changed) to every valve and the pump written 0. The Fault
+# then latches.
+# Limit: the issue's 20 ms. The 100 Hz pressure loop reads the ADC once a period, just before
+# its deadline, and acts in the cycle that reads the cut: about one period (10 ms) at worst,
+# plus the emulated CPU's scheduling.
+cut_limit_ms=20
 figure sensor_cut_limit_ms "$cut_limit_ms"
 start_spraying || info "sensor cut: not spraying before it (State=$(bus_state))"
 trace_window_begin
@@ -656,7 +657,7 @@ wait_for 10 state_is Fault
 cut_ms="$(marker_to_safe sensor_cut)"
 figure sensor_cut_safe_ms "$cut_ms"
 step sensor_cut_safe "$(awk -v ms="$cut_ms" -v lim="$cut_limit_ms" 'BEGIN { print (ms >= 0 && ms <= lim) ? 0 : 1 }')" \
-  "pressure sensor wire cut while spraying: every valve and the pump written 0 after $cut_ms ms (limit $cut_limit_ms: three periods of the ${pressure_loop_hz} Hz pressure loop); State=$(bus_state), Alarms $(bus_value Alarms), pump line $(hil pump), valve lines $(hil valve_mask), plant pressure $(hil pressure_mpa) MPa"
+  "pressure sensor wire cut while spraying: every valve and the pump written 0 after $cut_ms ms (limit $cut_limit_ms, the issue's figure; the pressure loop at 100 Hz); State=$(bus_state), Alarms $(bus_value Alarms), pump line $(hil pump), valve lines $(hil valve_mask), plant pressure $(hil pressure_mpa) MPa"
 hil_command sensor_wire mended
 sleep 1
 sprayctl clear-alarms >/dev/null 2>&1

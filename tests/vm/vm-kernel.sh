@@ -5,7 +5,8 @@
 # built out of tree from linux-source:
 #   gpio-sim (+ irq_sim), counter + interrupt-cnt, interrupt_counter_fixture (test-only),
 #   industrialio-configfs + industrialio-sw-device + iio_dummy (IIO_SIMPLE_DUMMY without its
-#   buffer and event parts: one ADC input in_voltage0_raw and one DAC output out_voltage0_raw).
+#   buffer and event parts: one ADC input in_voltage0_raw and one DAC output out_voltage0_raw;
+#   iio_dummy_settable_adc.patch makes the ADC input take what root writes to it).
 #
 # The caller defines die, note, require_tool and cache_dir (absolute), optionally vm_arch
 # (amd64, the default, or arm64: Debian's arm64 kernel for qemu-system-aarch64 -M virt, the
@@ -40,9 +41,11 @@ if [ "$vm_arch" = amd64 ]; then
 fi
 # Loaded by guest-init.sh after it has made the gpio-sim chips, not from modules.load.
 fixture_source="$vm_kernel_lib_dir/interrupt_counter_fixture.c"
+# Applied to iio_simple_dummy.c before the build (the patch's header says what and why).
+iio_dummy_patch="$vm_kernel_lib_dir/iio_dummy_settable_adc.patch"
 # Bump when the module build steps change: a new value makes a new kernel_dir (and the old
 # one is removed), so a cache never lacks a module the guest now expects.
-module_build_revision=3
+module_build_revision=4
 
 # --- package indices -----------------------------------------------------------------------
 # amd64 packages come through the host's apt. The arm64 kernel and the arm64 guest's programs
@@ -135,6 +138,7 @@ vm_kernel_init() {
   require_tool depmod kmod
   require_tool make make
   require_tool gcc gcc
+  require_tool patch patch
   [ -f "$fixture_source" ] || die "$fixture_source is missing"
   case "$vm_arch" in
     amd64) ;;
@@ -174,7 +178,7 @@ vm_kernel_init() {
 
   module_set_key="$( (
     echo "$module_build_revision ${built_modules[*]} / ${vm_staged_modules[*]}"
-    cat "$fixture_source"
+    cat "$fixture_source" "$iio_dummy_patch"
   ) | sha256sum | cut -c1-12)"
   kernel_dir="$cache_dir/$kernel_release-$kernel_version-modules-$module_set_key"
   vmlinux="$kernel_dir/vmlinux"
@@ -267,6 +271,9 @@ build_modules() {
   grep -q 'handle_simple_irq(irq_to_desc(irqnum));' "$src/irq_sim.c" ||
     die "irq_sim.c no longer has the line this script patches; update build_modules"
   sed -i 's/handle_simple_irq(irq_to_desc(irqnum));/generic_handle_irq(irqnum);/' "$src/irq_sim.c"
+  # The dummy's ADC input settable from user space (the HIL plant drives it).
+  patch --forward --quiet -p1 -d "$src" <"$iio_dummy_patch" ||
+    die "$(basename "$iio_dummy_patch") does not apply to this kernel's iio_simple_dummy.c"
   # As drivers/{gpio,counter,iio,iio/dummy}/Makefile build them (CONFIG_GPIO_SIM, COUNTER,
   # INTERRUPT_CNT, IIO_CONFIGFS, IIO_SW_DEVICE, IIO_SIMPLE_DUMMY; not _BUFFER or _EVENTS, whose
   # code iio_simple_dummy.h stubs out).

@@ -7,15 +7,18 @@
 //     valve's measured open time (its duty);
 //   - makes the flow meter's and the wheel sensor's pulses with gpio-sim pulls, as many as the
 //     plant's meter and wheel produce;
-//   - serves the pressure transmitter (ADC), the return valve's DAC and the tank level as Modbus
-//     RTU slaves on pty pairs (modbus_slaves.hpp);
+//   - writes the pressure transmitter's voltage into the board's IIO ADC input and reads the
+//     return valve's control voltage from its IIO DAC output, every 4th sample (500 Hz at
+//     2 kHz; iio_converters.hpp);
+//   - serves the tank level as a Modbus RTU slave on a pty pair (modbus_slaves.hpp);
 //   - with --camera-device, shows the daemon's camera field images: raw YUYV frames written
 //     into v4l2loopback (loopback_camera.hpp).
 // Interface for the scenario script, in --run-dir:
 //   status   rewritten every 50 ms: key=value lines (cumulative counters and the plant's state)
 //   control  a FIFO taking one command a line: "speed M_PER_S", "tank_l LITRES",
-//            "sensor_wire cut|mended" (the pressure sensor's loop current 0 mA, trace marker
-//            "sensor_cut"), "frame NAME" (the camera's frame NAME.yuyv from now on), "quit"
+//            "sensor_wire cut|mended" (the pressure sensor's loop current 0 mA at the ADC
+//            input, then trace marker "sensor_cut"), "frame NAME" (the camera's frame NAME.yuyv
+//            from now on), "quit"
 // On quit (or SIGTERM) it prints its ground truth as "WEEDSPRAY-HIL-TRUTH key=value" lines.
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -37,6 +40,7 @@
 
 #include "io/signal_conversion.hpp"
 #include "sim/plant/hydraulic_plant.hpp"
+#include "tools/hil/iio_converters.hpp"
 #include "tools/hil/loopback_camera.hpp"
 #include "tools/hil/modbus_slaves.hpp"
 #include "tools/hil/sim_gpio_lines.hpp"
@@ -63,8 +67,7 @@ struct Options {
   double tank_level_l = 150;
   double wheel_pulses_per_m = 100;
   double flow_pulses_per_l = 8500;
-  double adc_volts_per_count = 0.001;
-  double dac_volts_per_count = 0.001;
+  IioConvertersConfig iio;
   double tank_pct_per_count = 0.1;
   std::uint64_t seed = 1;
   LoopbackCameraConfig camera;  // no device: no camera
@@ -104,7 +107,8 @@ struct Measured {
 };
 
 void write_status(const Options& o, const sim::plant::HydraulicPlant& plant, const Measured& m,
-                  ModbusBoard& board, const LoopbackCamera* camera, double elapsed_s) {
+                  ModbusBoard& board, IioConverters& iio, const LoopbackCamera* camera,
+                  double elapsed_s) {
   std::ostringstream s;
   s << "elapsed_s=" << elapsed_s << "\nsamples=" << m.samples << "\nsampled_s=" << m.sampled_s
     << "\nsample_hz=" << (m.sampled_s > 0 ? static_cast<double>(m.samples) / m.sampled_s : 0)
@@ -120,11 +124,11 @@ void write_status(const Options& o, const sim::plant::HydraulicPlant& plant, con
     << "\nwheel_backlog=" << plant.wheel_pulses() - m.wheel_sent;
   for (std::size_t i = 0; i < m.valve_open_s.size(); ++i)
     s << "\nvalve" << i << "_open_s=" << m.valve_open_s[i];
+  s << "\ndac_volts=" << iio.dac_volts() << "\nadc_counts=" << iio.adc_counts()
+    << "\nadc_writes=" << iio.adc_writes() << "\niio_errors=" << iio.errors();
   {
     std::lock_guard lock(board.mutex);
-    s << "\ndac_volts=" << board.dac_counts * o.dac_volts_per_count
-      << "\ndac_writes=" << board.dac_writes << "\nanalog_requests=" << board.analog_requests
-      << "\ntank_requests=" << board.tank_requests << "\nbad_frames=" << board.bad_frames;
+    s << "\ntank_requests=" << board.tank_requests;
   }
   if (camera)
     s << "\ncamera_frame=" << camera->current() << "\ncamera_writes=" << camera->writes()
@@ -162,7 +166,7 @@ void print_truth(const sim::plant::HydraulicPlant& plant, const Measured& m) {
 struct CommandTarget {
   const Options& options;
   sim::plant::HydraulicPlant& plant;
-  ModbusBoard& board;
+  IioConverters& iio;
   LoopbackCamera* camera;
 };
 
@@ -183,13 +187,9 @@ void handle_command(const std::string& line, CommandTarget& target) {
   if (verb == "speed") target.plant.set_ground_speed(value);
   if (verb == "tank_l") target.plant.set_tank_level_l(value);
   if (verb == "sensor_wire" && (argument == "cut" || argument == "mended")) {
-    // The ADC module's register follows at once (not at the next sample), then the marker.
+    // The ADC input follows at once (not at the next plant step), then the marker.
     target.plant.set_sensor_wire_broken(argument == "cut");
-    {
-      std::lock_guard lock(target.board.mutex);
-      target.board.adc_counts =
-          counts(target.plant.pressure_sensor_volts(), target.options.adc_volts_per_count);
-    }
+    target.iio.set_adc_volts(target.plant.pressure_sensor_volts());
     trace_marker(argument == "cut" ? "sensor_cut" : "sensor_mended");
   }
   if (verb == "frame" && !(target.camera && target.camera->show(argument)))
@@ -232,13 +232,13 @@ int run(const Options& o) {
         o.flow_chip_dir.empty() ? o.chip_dir : o.flow_chip_dir, o.flow_line);
   if (o.wheel_line >= 0) lines.wheel = std::make_unique<SimInputLine>(o.chip_dir, o.wheel_line);
 
+  IioConverters iio(o.iio);
+  iio.set_adc_volts(plant.pressure_sensor_volts());
   {
     std::lock_guard lock(board.mutex);
-    board.adc_counts = counts(plant.pressure_sensor_volts(), o.adc_volts_per_count);
     board.tank_counts =
         counts(plant.tank_level_l() / o.tank_capacity_l * 100, o.tank_pct_per_count);
   }
-  start_analog_bus({.link = o.run_dir + "/analog"}, board);
   start_tank_bus({.link = o.run_dir + "/tank"}, board);
   std::unique_ptr<LoopbackCamera> camera;
   if (!o.camera.device.empty()) camera = std::make_unique<LoopbackCamera>(o.camera);
@@ -250,7 +250,7 @@ int run(const Options& o) {
   // The sampler stays at normal priority: on the emulated CPUs it is busy all the time, and as a
   // SCHED_FIFO thread it would starve the daemon's own threads and the kernel's IRQ threads
   // (priority 50, the wheel's edge events) - a machine must not slow down its controller. Its
-  // achieved rate is reported (sample_hz). The Modbus threads answer at SCHED_FIFO 60.
+  // achieved rate is reported (sample_hz). The Modbus thread answers at SCHED_FIFO 60.
 
   Measured m;
   m.valve_open_s.assign(lines.valves.size(), 0.0);
@@ -258,9 +258,10 @@ int run(const Options& o) {
   const double period_s = 1.0 / o.rate_hz;
   const double start = now_s();
   double last = start;
+  double dac_volts = iio.dac_volts();
   double next_status = start;
   std::string pending;
-  CommandTarget commands{o, plant, board, camera.get()};
+  CommandTarget commands{o, plant, iio, camera.get()};
   struct timespec next {};
   clock_gettime(CLOCK_MONOTONIC, &next);
   std::printf("weedspray-hil: running (%zu valves, %.0f Hz sampling, status in %s)\n",
@@ -290,8 +291,11 @@ int run(const Options& o) {
     m.valve_mask = mask;
     m.pump = lines.pump && lines.pump->high();
     // The signalling lines change slowly (the heartbeat at up to 250 Hz): every 4th sample, so
-    // the emulated CPU's time goes to the valves.
-    if (m.samples % 4 == 0) {
+    // the emulated CPU's time goes to the valves. So do the converters: the daemon reads the ADC
+    // and writes the DAC at its pressure loop's 100 Hz, and at 2 kHz every 4th sample is 500 Hz,
+    // an ADS1115 converting at 475 samples a second.
+    const bool slow_slot = m.samples % 4 == 0;
+    if (slow_slot) {
       m.buzzer = lines.buzzer && lines.buzzer->high();
       m.lamp = lines.lamp && lines.lamp->high();
       const bool heartbeat = lines.heartbeat && lines.heartbeat->high();
@@ -305,16 +309,12 @@ int run(const Options& o) {
     // The machine reacts.
     plant.set_valves(mask);
     plant.set_pump(m.pump);
-    double dac_volts = 0;
-    {
-      std::lock_guard lock(board.mutex);
-      dac_volts = board.dac_counts * o.dac_volts_per_count;
-    }
+    if (slow_slot) dac_volts = iio.dac_volts();
     plant.set_return_valve_volts(io::valve_volts_from_dac_volts(dac_volts, drive));
     plant.step(std::min(dt, 0.05));
+    if (slow_slot) iio.set_adc_volts(plant.pressure_sensor_volts());
     {
       std::lock_guard lock(board.mutex);
-      board.adc_counts = counts(plant.pressure_sensor_volts(), o.adc_volts_per_count);
       board.tank_counts =
           counts(plant.tank_level_l() / o.tank_capacity_l * 100, o.tank_pct_per_count);
     }
@@ -331,10 +331,10 @@ int run(const Options& o) {
     if (t >= next_status) {
       next_status = t + 0.05;
       if (fifo >= 0) poll_commands(fifo, pending, commands);
-      write_status(o, plant, m, board, camera.get(), t - start);
+      write_status(o, plant, m, board, iio, camera.get(), t - start);
     }
   }
-  write_status(o, plant, m, board, camera.get(), now_s() - start);
+  write_status(o, plant, m, board, iio, camera.get(), now_s() - start);
   print_truth(plant, m);
   return 0;
 }
@@ -345,7 +345,7 @@ int run(const Options& o) {
 int main(int argc, char** argv) {
   using weedspray::hil::Options;
   Options o;
-  CLI::App app{"weedspray-hil: the simulated sprayer behind gpio-sim and Modbus ptys"};
+  CLI::App app{"weedspray-hil: the simulated sprayer behind gpio-sim, IIO and a Modbus pty"};
   app.add_option("--chip-dir", o.chip_dir, "gpio-sim chip's sysfs dir (.../gpio-sim.N/gpiochipM)")
       ->required();
   app.add_option("--valve-lines", o.valve_lines, "offsets of the valve lines")->required();
@@ -363,6 +363,16 @@ int main(int argc, char** argv) {
   app.add_option("--tank-level-l", o.tank_level_l);
   app.add_option("--wheel-pulses-per-m", o.wheel_pulses_per_m);
   app.add_option("--flow-pulses-per-l", o.flow_pulses_per_l, "the flow meter's label value");
+  app.add_option("--iio-dir", o.iio.device_dir,
+                 "the IIO device's sysfs dir: pressure into its ADC input, return valve from its "
+                 "DAC output")
+      ->required();
+  app.add_option("--adc-channel", o.iio.adc_channel, "in_voltageN_raw of the pressure sensor");
+  app.add_option("--dac-channel", o.iio.dac_channel, "out_voltageN_raw of the return valve");
+  app.add_option("--adc-mv-per-count", o.iio.adc_mv_per_count,
+                 "the daemon's adc.iio_scale_mv (0.125: an ADS1115 at +-4.096 V)");
+  app.add_option("--adc-max-count", o.iio.adc_max_count, "the ADC's positive full scale");
+  app.add_option("--dac-mv-per-count", o.iio.dac_mv_per_count, "the daemon's dac.iio_scale_mv");
   app.add_option("--seed", o.seed);
   app.add_option("--camera-device", o.camera.device, "v4l2loopback node to write frames into");
   app.add_option("--camera-frames", o.camera.frames_dir,

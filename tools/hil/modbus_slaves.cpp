@@ -4,7 +4,6 @@
 #include <fcntl.h>
 #include <grp.h>
 #include <modbus/modbus.h>
-#include <poll.h>
 #include <pthread.h>
 #include <pty.h>
 #include <sched.h>
@@ -60,79 +59,11 @@ modbus_t* slave_context(const Pty& pty, int slave_id) {
 }
 
 void raise_priority() {
-  // Answers inside the daemon's response timeout (20 ms on the analog bus) while the emulated
-  // CPUs are busy; ignored where not permitted.
+  // Answers inside the daemon's response timeout while the emulated CPUs are busy; ignored
+  // where not permitted.
   struct sched_param param {};
   param.sched_priority = 60;
   pthread_setschedparam(pthread_self(), SCHED_FIFO, &param);
-}
-
-std::uint16_t crc16(const std::uint8_t* data, std::size_t length) {
-  std::uint16_t crc = 0xFFFF;
-  for (std::size_t i = 0; i < length; ++i) {
-    crc ^= data[i];
-    for (int bit = 0; bit < 8; ++bit) crc = (crc & 1) ? (crc >> 1) ^ 0xA001 : crc >> 1;
-  }
-  return crc;
-}
-
-// One 8-byte request (functions 03, 04, 06: slave, function, two words, CRC). libmodbus's own
-// receive filters on one slave id; the analog bus carries two, so the frame is read here and
-// answered with modbus_reply for whichever module it addresses. A gap of 20 ms inside a frame
-// restarts it (the RTU rule, with slack for the emulated CPU).
-bool read_request(int fd, std::array<std::uint8_t, 8>& frame) {
-  std::size_t have = 0;
-  while (have < frame.size()) {
-    struct pollfd p {
-      fd, POLLIN, 0
-    };
-    const int ready = ::poll(&p, 1, have == 0 ? -1 : 20);
-    if (ready < 0 && errno == EINTR) continue;
-    if (ready <= 0) return false;
-    const ssize_t n = ::read(fd, frame.data() + have, frame.size() - have);
-    if (n <= 0) {
-      if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
-      ::usleep(1000);  // EIO while the daemon has the port closed: wait for it
-      return false;
-    }
-    have += static_cast<std::size_t>(n);
-  }
-  const std::uint16_t crc = crc16(frame.data(), 6);
-  return frame[6] == (crc & 0xFF) && frame[7] == (crc >> 8);
-}
-
-void serve_analog(Pty pty, ModbusBusConfig config, ModbusBoard& board) {
-  raise_priority();
-  modbus_t* ctx = slave_context(pty, config.adc_id);
-  modbus_mapping_t* adc = modbus_mapping_new(0, 0, 0, kRegisters);
-  modbus_mapping_t* dac = modbus_mapping_new(0, 0, kRegisters, 0);
-  std::array<std::uint8_t, 8> frame{};
-  for (;;) {
-    if (!read_request(pty.master, frame)) {
-      std::lock_guard lock(board.mutex);
-      ++board.bad_frames;
-      continue;
-    }
-    const int slave = frame[0];
-    const int function = frame[1];
-    const int address = (frame[2] << 8) | frame[3];
-    modbus_mapping_t* mapping = slave == config.adc_id   ? adc
-                                : slave == config.dac_id ? dac
-                                                         : nullptr;
-    if (mapping == nullptr) continue;  // another module's address: not ours to answer
-    {
-      std::lock_guard lock(board.mutex);
-      ++board.analog_requests;
-      if (address == config.register_address) adc->tab_input_registers[address] = board.adc_counts;
-    }
-    modbus_set_slave(ctx, slave);
-    modbus_reply(ctx, frame.data(), static_cast<int>(frame.size()), mapping);
-    if (slave == config.dac_id && function == 0x06 && address == config.register_address) {
-      std::lock_guard lock(board.mutex);
-      board.dac_counts = dac->tab_registers[address];
-      ++board.dac_writes;
-    }
-  }
 }
 
 void serve_tank(Pty pty, ModbusBusConfig config, ModbusBoard& board) {
@@ -156,10 +87,6 @@ void serve_tank(Pty pty, ModbusBusConfig config, ModbusBoard& board) {
 }
 
 }  // namespace
-
-void start_analog_bus(const ModbusBusConfig& config, ModbusBoard& board) {
-  std::thread(serve_analog, open_pty(config.link), config, std::ref(board)).detach();
-}
 
 void start_tank_bus(const ModbusBusConfig& config, ModbusBoard& board) {
   std::thread(serve_tank, open_pty(config.link), config, std::ref(board)).detach();
