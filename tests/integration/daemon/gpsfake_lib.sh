@@ -11,8 +11,29 @@ require_gpsfake() {
     fail "gpsd and gpsfake are required (apt-get install gpsd gpsd-clients; ./dev deps installs them)"
 }
 
+# A free port BELOW the kernel's ephemeral range (net.ipv4.ip_local_port_range): the daemon
+# dials gpsd's port every fraction of a second until gpsfake's gpsd listens, and a connect()
+# to a port inside the range can be given that very port as its own local one (TCP's
+# simultaneous open: the socket connects to itself and reads back its own WATCH, never a
+# fix). Outside the range no local port can equal it.
 free_port() {
-  /usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
+  /usr/bin/python3 -c '
+import random, socket
+low = int(open("/proc/sys/net/ipv4/ip_local_port_range").read().split()[0])
+for _ in range(200):
+    port = random.randrange(10000, low)
+    s = socket.socket()
+    try:
+        s.bind(("127.0.0.1", port))
+    except OSError:
+        continue
+    finally:
+        s.close()
+    print(port)
+    break
+else:
+    raise SystemExit("no free port below the ephemeral range")
+'
 }
 
 start_gpsfake() {  # start_gpsfake PORT LOG [gpsfake options...] TRACK
