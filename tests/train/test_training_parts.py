@@ -3,11 +3,12 @@
 
 import unittest
 
+import cv2
 import numpy as np
 import torch
 
 from datasets import UNKNOWN_LICENCE, model_licence, plant_soil_mask
-from evaluate import IGNORE, Scores, confusion_matrix, network_input_size, zone_cells, zone_tradeoff
+from evaluate import IGNORE, Scores, area_shrink, confusion_matrix, network_input_size, whole_factor, zone_cells, zone_tradeoff
 from loss import auto_class_weights, loss_fn, parse_class_weights
 from sampling import Sampler, ScaledPhoto, class_frequencies
 from synthetic import field_photo
@@ -91,6 +92,23 @@ class Sampling(unittest.TestCase):
         self.assertEqual(network_input_size(spec, 0.3125, 960, 720), (320, 256))
         self.assertEqual(network_input_size(spec, 0.625, 960, 720), (640, 480))
         self.assertEqual(network_input_size(dict(spec, ground_mm_per_px=None), 0.625, 960, 720), (320, 256))
+
+
+    def test_frames_shrink_by_a_whole_factor_first_and_keep_their_geometry(self):
+        self.assertEqual((whole_factor(1280, 640), whole_factor(800, 384), whole_factor(1280, 400)), (2, 2, 2))
+        self.assertEqual((whole_factor(295, 64), whole_factor(221, 64), whole_factor(100, 60)), (1, 1, 1))
+        rng = np.random.default_rng(4)
+        frame = cv2.GaussianBlur(rng.integers(0, 256, (800, 1280, 3)).astype(np.uint8), (0, 0), 3)
+        frame[600:640, 1000:1040] = 255  # a bright square far from the origin
+        for size in ((640, 384), (320, 192), (416, 256)):
+            shrunk = area_shrink(frame, size)
+            direct = cv2.resize(frame, size, interpolation=cv2.INTER_AREA)
+            self.assertEqual(shrunk.shape, direct.shape)
+            self.assertLess(float(np.abs(shrunk.astype(float) - direct).mean()), 1.5)
+            square = [np.argwhere(image[..., 0] > 200).mean(axis=0) for image in (shrunk, direct)]
+            self.assertLess(float(np.abs(square[0] - square[1]).max()), 0.15)  # its centre, in output pixels
+        odd = frame[:221, :295]
+        self.assertTrue(np.array_equal(area_shrink(odd, (64, 64)), cv2.resize(odd, (64, 64), interpolation=cv2.INTER_AREA)))
 
 
 class Zones(unittest.TestCase):

@@ -5,7 +5,7 @@
 Masks hold one class id per pixel; 255 marks unlabelled pixels, which no figure counts.
 
 Preprocessing is the one the daemon applies (vision/weed_source.cpp network_input_size): the
-whole frame resized with INTER_AREA, channels swapped to RGB when spec.rgb, then
+whole frame shrunk by area averaging (area_shrink), channels swapped to RGB when spec.rgb, then
 (pixel - mean_rgb) * scale. When both the model's ground scale (spec.ground_mm_per_px) and the
 photos' (--dataset-mm-per-px) are known, the frame is resampled so that one input pixel covers
 ground_mm_per_px (each side rounded to a multiple of spec.stride, aspect kept); otherwise it is
@@ -96,11 +96,26 @@ def network_input_size(spec, frame_mm_per_px, width, height):
     return tuple(max(1, int(np.floor(side * scale / stride + 0.5))) * stride for side in (width, height))
 
 
+def whole_factor(side, to):
+    """The largest whole factor <= side / to that divides side (1 when none)."""
+    return next((f for f in range(side // to, 1, -1) if side % f == 0), 1)
+
+
+def area_shrink(bgr, size):
+    """Area averaging as the daemon shrinks a frame (vision/weed_network.cpp): by a whole factor
+    of each side that divides it first, then the rest."""
+    step = (bgr.shape[1] // whole_factor(bgr.shape[1], size[0]), bgr.shape[0] // whole_factor(bgr.shape[0], size[1]))
+    if step == (bgr.shape[1], bgr.shape[0]) or step == tuple(size):
+        return cv2.resize(bgr, size, interpolation=cv2.INTER_AREA)
+    whole = cv2.resize(bgr, step, interpolation=cv2.INTER_AREA)
+    return cv2.resize(whole, size, interpolation=cv2.INTER_AREA)
+
+
 def to_blob(bgr, spec, size=None):
     """N=1 x 3 x H x W float blob of a BGR frame at size (default: the spec's input size)."""
     size = size or (spec["input_width"], spec["input_height"])
-    shrinking = size[0] <= bgr.shape[1] and size[1] <= bgr.shape[0]  # as the daemon resamples
-    resized = cv2.resize(bgr, size, interpolation=cv2.INTER_AREA if shrinking else cv2.INTER_LINEAR)
+    shrinking = size[0] <= bgr.shape[1] and size[1] <= bgr.shape[0]
+    resized = area_shrink(bgr, size) if shrinking else cv2.resize(bgr, size, interpolation=cv2.INTER_LINEAR)
     return cv2.dnn.blobFromImage(resized, spec["scale"], size, tuple(spec["mean_rgb"]), swapRB=spec["rgb"])
 
 
