@@ -120,6 +120,33 @@ class SmallSetTraining(unittest.TestCase):
         self.assertRegex(checked.stdout, r"camera\[0\]: 1.01 mm/px -> tiny.onnx "
                                          r"\(learnt at [0-9.]+ mm/px; .*\): network input \d+x\d+\n")
 
+    def test_detail_network_end_to_end(self):
+        """--detail 2: a stride-64 spec whose logits are half the input's size, exported for
+        OpenCV and accepted by the daemon; sizes that are no multiple of 64 are refused."""
+        etc = os.path.join(self.tmp.name, "etc-detail")
+        run(train.main, self.common("fine") + [
+            "--steps", "2", "--detail", "2", "--input", "128x128", "--crop", "128x64",
+            "--dataset-mm-per-px", "1.0", "--target-mm-per-px", "1.0", "--report-worst", "0", "--install", etc])
+        with open(os.path.join(self.out, "fine.json")) as text:
+            report = json.load(text)
+        self.assertEqual(report["spec"]["stride"], 64)
+        self.assertIn("input_height/2 x input_width/2", report["spec"]["output"])
+        self.assertIn("weed", report["validation"]["iou"])
+        net = cv2.dnn.readNet(os.path.join(self.out, "fine.onnx"))
+        net.setInput(np.zeros((1, 3, 128, 192), np.float32))
+        self.assertEqual(net.forward().shape, (1, 3, 64, 96))
+        with self.assertRaises(SystemExit), contextlib.redirect_stderr(io.StringIO()) as refused:
+            train.parse_args(self.common("odd") + ["--detail", "2", "--crop", "96x64"])
+        self.assertIn("--crop 96x64: with --detail 2 the sides must be multiples of 64", refused.getvalue())
+        if os.environ.get("WEEDSPRAYD"):
+            main = os.path.join(etc, "weedspray.toml")
+            with open(main, "w") as out:
+                out.write("# the defaults\n")
+            checked = subprocess.run([os.environ["WEEDSPRAYD"], "--sim", "--check-config", "--config", main],
+                                     capture_output=True, text=True)
+            self.assertEqual(checked.returncode, 0, checked.stderr)
+            self.assertIn("fine.onnx", checked.stdout)
+
     def test_epochs_without_scale_from_a_checkpoint(self):
         log = run(train.main, self.common("again") + [
             "--epochs", "1", "--base", os.path.join(self.out, "tiny.pt"), "--report-worst", "0"])

@@ -42,7 +42,10 @@ def parse_class_weights(text, classes):
 
 
 def loss_fn(logits, target, class_weights):
-    """Weighted cross-entropy + soft Dice over the labelled pixels of target (N x H x W ids)."""
+    """Weighted cross-entropy + soft Dice over the labelled pixels of target (N x H x W ids).
+    Logits smaller than the target (a detail network's) are enlarged to it bilinearly."""
+    if logits.shape[2:] != target.shape[1:]:
+        logits = F.interpolate(logits, size=target.shape[1:], mode="bilinear", align_corners=False)
     labelled = target != IGNORE
     if not bool(labelled.any()):
         return logits.sum() * 0.0

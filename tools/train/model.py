@@ -8,6 +8,15 @@ a depthwise-separable block (3x3 depthwise + 1x1 pointwise, BN, ReLU); a 1x1 cla
 last bilinear x2 give logits at the input size. About 0.5 M parameters, 2 MB as ONNX.
 Input sizes must be multiples of 32.
 
+With detail = K > 1 (2 or 4) the input is K times finer than the network above sees it: the
+encoder gets the input averaged over K x K (what the daemon's area resampling would give at K
+times the scale), a K*2 x K*2 stride-K*2 convolution of the fine input adds to its first layer
+what the averaging lost (zero at the start, so a base's weights work unchanged), and one more
+decoder stage at the averaged scale, fed by a stride-K convolution of the fine input, gives the
+logits there: 1/K of the input's size, twice as fine as the plain network decides (its class
+head works at half its input's resolution). Input sizes must be multiples of 32 * K. For a
+camera finer than the network's body, at a few ms more than the plain network (``stride``).
+
 Checkpoints (NAME.pt, torch.save of a dict): state_dict, classes, width and meta (ground scale,
 training data, licence: what a model built on it must carry on). load_checkpoint_into copies a
 checkpoint's encoder and decoder into a network with other classes and starts its 1x1 class
@@ -23,6 +32,8 @@ SKIP_ENDS = (2, 4, 7, 14)
 ENCODER_END = 18
 DECODER_CHANNELS = (64, 32, 24, 16)
 HEAD_PREFIX = "classify."
+DETAIL_PREFIXES = ("detail.", "fine_skip.", "fine_block.")
+FINE_CHANNELS = 8
 
 
 def _relu6_to_relu(module: nn.Module) -> None:
@@ -45,9 +56,17 @@ class SeparableBlock(nn.Sequential):
         )
 
 
+def stride(detail: int = 1) -> int:
+    """What the input's sides must be multiples of."""
+    return 32 * detail
+
+
 class SegmentationNet(nn.Module):
-    def __init__(self, classes: int, width: float = 0.5):
+    def __init__(self, classes: int, width: float = 0.5, detail: int = 1):
         super().__init__()
+        if detail not in (1, 2, 4):
+            raise ValueError(f"detail {detail}: must be 1, 2 or 4")
+        self.detail_factor = detail
         features = mobilenet_v2(weights=None, width_mult=width).features[:ENCODER_END]
         _relu6_to_relu(features)
         bounds = (0,) + SKIP_ENDS + (ENCODER_END,)
@@ -65,22 +84,49 @@ class SegmentationNet(nn.Module):
             blocks.append(SeparableBlock(below + skip, out))
             below = out
         self.decoder = nn.ModuleList(blocks)
-        self.classify = nn.Conv2d(below, classes, 1)
         self.up = nn.Upsample(scale_factor=2, mode="bilinear", align_corners=False)
+        if detail == 1:
+            self.classify = nn.Conv2d(below, classes, 1)
+            return
+        self.pool = nn.AvgPool2d(detail)
+        first = self.stages[0][0][0]
+        self.detail = nn.Conv2d(3, first.out_channels, 2 * detail, stride=2 * detail, bias=False)
+        nn.init.zeros_(self.detail.weight)
+        self.fine_skip = _conv_bn_relu(nn.Conv2d(3, FINE_CHANNELS, detail, stride=detail, bias=False))
+        self.fine_block = _conv_bn_relu(nn.Conv2d(below + FINE_CHANNELS, FINE_CHANNELS, 1, bias=False))
+        self.classify = nn.Conv2d(FINE_CHANNELS, classes, 1)
 
     def forward(self, x):
-        skips = []
-        for stage in self.stages:
-            x = stage(x)
-            skips.append(x)
+        fine = x
+        if self.detail_factor > 1:
+            # The first stage's convolution, BN and ReLU, with the detail branch added before BN.
+            first = self.stages[0][0]
+            x = first[2](first[1](first[0](self.pool(fine)) + self.detail(fine)))
+            x = self.stages[0][1:](x)
+            skips = [x]
+            for stage in self.stages[1:]:
+                x = stage(x)
+                skips.append(x)
+        else:
+            skips = []
+            for stage in self.stages:
+                x = stage(x)
+                skips.append(x)
         x = skips.pop()
         for block in self.decoder:
             x = block(torch.cat([self.up(x), skips.pop()], dim=1))
-        return self.up(self.classify(x))
+        if self.detail_factor == 1:
+            return self.up(self.classify(x))
+        return self.classify(self.fine_block(torch.cat([self.up(x), self.fine_skip(fine)], dim=1)))
+
+
+def _conv_bn_relu(conv: nn.Conv2d) -> nn.Sequential:
+    return nn.Sequential(conv, nn.BatchNorm2d(conv.out_channels), nn.ReLU(inplace=True))
 
 
 def save_checkpoint(path: str, model: SegmentationNet, classes, meta: dict, width: float = 0.5) -> None:
-    torch.save({"state_dict": model.state_dict(), "classes": list(classes), "width": width, "meta": meta}, path)
+    torch.save({"state_dict": model.state_dict(), "classes": list(classes), "width": width,
+                "detail": model.detail_factor, "meta": meta}, path)
 
 
 def read_checkpoint(path: str) -> dict:
@@ -94,14 +140,19 @@ def read_checkpoint(path: str) -> dict:
 
 
 def load_checkpoint_into(model: SegmentationNet, checkpoint: dict, classes) -> bool:
-    """Copies the checkpoint's weights into model; True when the class head was kept too."""
-    keep_head = list(checkpoint["classes"]) == list(classes)
+    """Copies the checkpoint's weights into model; True when the class head was kept too.
+    A checkpoint without the detail parts (a plain network's) leaves them as they start."""
+    own = model.state_dict()
+    keep_head = list(checkpoint["classes"]) == list(classes) and all(
+        v.shape == own[k].shape for k, v in checkpoint["state_dict"].items() if k.startswith(HEAD_PREFIX) and k in own)
     weights = {k: v for k, v in checkpoint["state_dict"].items() if keep_head or not k.startswith(HEAD_PREFIX)}
     try:
         missing, unexpected = model.load_state_dict(weights, strict=False)
     except RuntimeError as error:
         raise ValueError(f"checkpoint does not fit the network (width {checkpoint.get('width')}): {error}")
-    body_missing = [k for k in missing if not k.startswith(HEAD_PREFIX)]
+    brought_detail = any(k.startswith(DETAIL_PREFIXES) for k in weights)
+    body_missing = [k for k in missing
+                    if not k.startswith(HEAD_PREFIX) and (brought_detail or not k.startswith(DETAIL_PREFIXES))]
     if body_missing or unexpected:
         raise ValueError(f"checkpoint does not fit the network (width {checkpoint.get('width')}): "
                          f"missing {body_missing[:3]}, unexpected {unexpected[:3]}")

@@ -71,7 +71,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from datasets import model_licence, training_data_entry  # noqa: E402
 from evaluate import evaluate, find_image, load_pair, median_forward_ms, read_list, to_blob  # noqa: E402
 from loss import auto_class_weights, parse_class_weights  # noqa: E402
-from model import SegmentationNet, load_checkpoint_into, read_checkpoint, save_checkpoint  # noqa: E402
+from model import SegmentationNet, load_checkpoint_into, read_checkpoint, save_checkpoint, stride  # noqa: E402
 from onnx_export import OPSET, export_onnx, load_opencv_net, max_abs_diff_vs_opencv  # noqa: E402
 from report import LEGEND, install, worst_images, write_overlays  # noqa: E402
 from sampling import MEAN_RGB, SCALE, Sampler, ScaledPhoto, class_frequencies  # noqa: E402
@@ -129,6 +129,9 @@ def build_parser():
     parser.add_argument("--seed", type=int, default=9)
     parser.add_argument("--input", type=parse_size, default=(320, 256), help="network input WxH")
     parser.add_argument("--crop", type=parse_size, default=(256, 192), help="training crop WxH (at the target scale)")
+    parser.add_argument("--detail", type=int, choices=(1, 2, 4), default=1,
+                        help="input K times finer than the network's body sees it; classes come out at 1/K of the "
+                             "input's size (sides then multiples of 32 K)")
     parser.add_argument("--batch", type=positive(int), default=8)
     parser.add_argument("--lr", type=positive(float), default=4e-3)
     parser.add_argument("--classes", default="soil,crop,weed", help="class names in class-id order")
@@ -165,6 +168,10 @@ def parse_args(argv=None):
             parser.error(f"--{key.replace('_', '-')} {getattr(args, key)}: not a class id of --classes")
     if not NAME_PATTERN.match(args.name):
         parser.error(f"--name '{args.name}': use letters, digits, '.', '_' and '-'")
+    for option, (width, height) in (("--input", args.input), ("--crop", args.crop)):
+        if width % stride(args.detail) or height % stride(args.detail):
+            parser.error(f"{option} {width}x{height}: with --detail {args.detail} the sides must be multiples of "
+                         f"{stride(args.detail)}")
     if args.target_mm_per_px and not args.dataset_mm_per_px:
         parser.error("--target-mm-per-px needs --dataset-mm-per-px (the photos' own ground scale)")
     return args
@@ -211,7 +218,7 @@ def resolve_class_weights(args, photos):
 
 def build_model(args, target_mm):
     """The network, fresh or from --base; and what the base brings ({} without one)."""
-    model = SegmentationNet(len(args.class_names), width=WIDTH)
+    model = SegmentationNet(len(args.class_names), width=WIDTH, detail=args.detail)
     if not args.base:
         return model, {}
     try:
@@ -223,10 +230,11 @@ def build_model(args, target_mm):
     base_mm = meta.get("ground_mm_per_px")
     print(f"--base {args.base}: classes {checkpoint['classes']} -> {args.class_names}, "
           f"class head {'kept' if kept else 'new'}, learnt at {base_mm} mm/px", flush=True)
-    if base_mm and target_mm and max(base_mm / target_mm, target_mm / base_mm) > BASE_SCALE_MISMATCH:
-        print(f"warning: the base learnt at {base_mm} mm/px, this model's target is {target_mm:.3g} mm/px "
+    body_mm = target_mm * args.detail if target_mm else None
+    if base_mm and body_mm and max(base_mm / body_mm, body_mm / base_mm) > BASE_SCALE_MISMATCH:
+        print(f"warning: the base learnt at {base_mm} mm/px, this model's body sees {body_mm:.3g} mm/px "
               f"(more than {BASE_SCALE_MISMATCH}x apart): its features fit this scale less; "
-              f"--target-mm-per-px {base_mm} trains at the base's scale", flush=True)
+              f"--target-mm-per-px {base_mm / args.detail:g} trains at the base's scale", flush=True)
     elif base_mm and not target_mm:
         print(f"note: the base learnt at {base_mm} mm/px, but these photos' scale is unknown: "
               f"--dataset-mm-per-px lets them be resampled to a scale of your choice", flush=True)
@@ -242,19 +250,20 @@ def model_spec(args, ground_mm):
     return {
         "input_width": args.input[0],
         "input_height": args.input[1],
-        "stride": STRIDE,
+        "stride": stride(args.detail),
         "input_channels": 3,
         "mean_rgb": list(MEAN_RGB),
         "scale": SCALE,
         "rgb": True,
-        "resize": "whole frame, INTER_AREA: to ground_mm_per_px per pixel when known (sides rounded to the stride), "
-                  "else to the input size (aspect not kept)",
+        "resize": "whole frame, area averaging (by a whole factor dividing each side, then the rest): to ground_mm_per_px per pixel "
+                  "when known (sides rounded to the stride), else to the input size (aspect not kept)",
         "classes": args.class_names,
         "soil_class": args.soil_class,
         "crop_class": args.crop_class,
         "weed_class": args.weed_class,
         "input_name": "input",
-        "output": "logits, 1 x classes x input_height x input_width (argmax = class id)",
+        "output": ("logits, 1 x classes x input_height x input_width (argmax = class id)" if args.detail == 1 else
+                   f"logits, 1 x classes x input_height/{args.detail} x input_width/{args.detail} (argmax = class id)"),
         "ground_mm_per_px": round(ground_mm, 4) if ground_mm else None,
         "ground_scale_note": note,
     }

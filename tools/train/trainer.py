@@ -66,7 +66,7 @@ def train_steps(model, sampler, steps, batch, lr, class_weights, rng, log_every=
 
 
 def quick_iou(model, samples, spec):
-    """IoU per class with torch at the network's resolution over (image, mask, photo mm/px or
+    """IoU per class with torch at the network's output resolution over (image, mask, photo mm/px or
     None) samples, unlabelled pixels left out (progress lines and the base's figures)."""
     classes = len(spec["classes"])
     confusion = np.zeros((classes, classes), np.int64)
@@ -75,7 +75,7 @@ def quick_iou(model, samples, spec):
         for image, mask, mm_per_px in samples:
             size = network_input_size(spec, mm_per_px, image.shape[1], image.shape[0])
             labels = model(torch.from_numpy(to_blob(image, spec, size)))[0].argmax(0).numpy()
-            small = cv2.resize(mask, size, interpolation=cv2.INTER_NEAREST)
+            small = cv2.resize(mask, labels.shape[::-1], interpolation=cv2.INTER_NEAREST)
             labelled = small != IGNORE
             index = small[labelled].astype(np.int64) * classes + labels[labelled]
             confusion += np.bincount(index, minlength=classes**2).reshape(classes, classes)
