@@ -8,7 +8,8 @@ import numpy as np
 import torch
 
 from datasets import UNKNOWN_LICENCE, model_licence, plant_soil_mask
-from evaluate import IGNORE, Scores, area_shrink, confusion_matrix, network_input_size, whole_factor, zone_cells, zone_tradeoff
+from evaluate import (IGNORE, Scores, area_shrink, confusion_matrix, laid_frames, network_input_size, whole_factor,
+                      zone_cells, zone_tradeoff)
 from loss import auto_class_weights, loss_fn, parse_class_weights
 from sampling import Sampler, ScaledPhoto, class_frequencies
 from synthetic import field_photo
@@ -109,6 +110,21 @@ class Sampling(unittest.TestCase):
             self.assertLess(float(np.abs(square[0] - square[1]).max()), 0.15)  # its centre, in output pixels
         odd = frame[:221, :295]
         self.assertTrue(np.array_equal(area_shrink(odd, (64, 64)), cv2.resize(odd, (64, 64), interpolation=cv2.INTER_AREA)))
+
+
+    def test_photos_are_laid_into_frames_as_a_camera_sees_the_ground(self):
+        pairs = []
+        for value in (10, 20, 30):
+            image = np.full((40, 60, 3), value, np.uint8)
+            mask = np.full((40, 60), value // 10, np.uint8)
+            pairs.append((image, mask))
+        frames = laid_frames(pairs, 1.0, 2.0, (50, 30))  # photos become 30 x 20
+        self.assertEqual(len(frames), 1)
+        frame, truth = frames[0]
+        self.assertEqual(frame.shape, (30, 50, 3))
+        self.assertEqual((frame[0, 0, 0], frame[0, 45, 0], frame[25, 0, 0], frame[25, 45, 0]), (10, 20, 30, 10))
+        self.assertEqual((truth[0, 0], truth[0, 45], truth[25, 0], truth[25, 45]), (1, 2, 3, 1))
+        self.assertTrue(np.array_equal(truth, frame[..., 0] // 10))
 
 
 class Zones(unittest.TestCase):

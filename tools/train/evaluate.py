@@ -301,6 +301,46 @@ def evaluate(net, spec, images, masks, stems, dataset_mm_per_px=None):
     return scores.summary()
 
 
+def laid_frames(pairs, photo_mm_per_px, frame_mm_per_px, size):
+    """(image, mask) pairs laid edge to edge, in order, into frames of size (W, H) as a camera of
+    frame_mm_per_px sees the ground (io/sim/ground_mosaic.cpp): each photo resampled to that
+    scale (area averaging, masks nearest), rows filled left to right, a photo cut where the
+    frame ends; the last frame is filled from the first photos again. Unfilled pixels: 255."""
+    factor = photo_mm_per_px / frame_mm_per_px
+    width, height = size
+    frames, i = [], 0
+    while i < len(pairs):
+        frame = np.zeros((height, width, 3), np.uint8)
+        truth = np.full((height, width), IGNORE, np.uint8)
+        y = 0
+        while y < height:
+            x, row = 0, 0
+            while x < width:
+                image, mask = pairs[i % len(pairs)]
+                i += 1
+                cell = (max(1, round(image.shape[1] * factor)), max(1, round(image.shape[0] * factor)))
+                image = cv2.resize(image, cell, interpolation=cv2.INTER_AREA if factor < 1 else cv2.INTER_LINEAR)
+                mask = cv2.resize(mask, cell, interpolation=cv2.INTER_NEAREST)
+                w, h = min(cell[0], width - x), min(cell[1], height - y)
+                frame[y:y + h, x:x + w] = image[:h, :w]
+                truth[y:y + h, x:x + w] = mask[:h, :w]
+                x += w
+                row = max(row, h)
+            y += row
+        frames.append((frame, truth))
+    return frames
+
+
+def evaluate_laid(net, spec, images, masks, stems, photo_mm_per_px, frame_mm_per_px, size):
+    """The figures of evaluate() over frames of the stems laid as a camera sees them: each
+    frame counts as one image (zones are the frame's, intervals are over frames)."""
+    pairs = [load_pair(images, masks, stem, len(spec["classes"])) for stem in stems]
+    scores = Scores(spec["classes"], spec["crop_class"], spec["weed_class"])
+    for n, (frame, truth) in enumerate(laid_frames(pairs, photo_mm_per_px, frame_mm_per_px, size)):
+        scores.add(f"frame {n}", truth, predict_labels(net, frame, spec, frame_mm_per_px))
+    return scores.summary()
+
+
 def median_forward_ms(net, spec, repeats=30):
     """Median ms of one forward pass at the input size, OpenCV DNN on one thread."""
     threads = cv2.getNumThreads()
@@ -324,13 +364,29 @@ def main():
     parser.add_argument("--masks", required=True)
     parser.add_argument("--list", required=True, help="image stems to evaluate, one per line")
     parser.add_argument("--dataset-mm-per-px", type=float, help="ground mm per pixel of the photos as stored")
+    parser.add_argument("--lay-frames", metavar="WxH",
+                        help="lay the photos edge to edge into frames of WxH as a camera of --frame-mm-per-px sees "
+                             "the ground, and score the frames (needs --dataset-mm-per-px)")
+    parser.add_argument("--frame-mm-per-px", type=float, help="the camera's ground mm per pixel for --lay-frames")
     parser.add_argument("--per-image", action="store_true", help="also print each image's IoU per class")
     parser.add_argument("--bench", action="store_true", help="also time one forward pass, one thread")
     args = parser.parse_args()
     with open(args.spec) as spec_file:
         spec = json.load(spec_file)["spec"]
     net = cv2.dnn.readNet(args.model)
-    result = evaluate(net, spec, args.images, args.masks, read_list(args.list), args.dataset_mm_per_px)
+    if args.lay_frames:
+        try:
+            size = tuple(int(v) for v in args.lay_frames.lower().split("x"))
+            if len(size) != 2 or min(size) < 1:
+                raise ValueError
+        except ValueError:
+            parser.error(f"--lay-frames '{args.lay_frames}': expected WxH, e.g. 1280x800")
+        if not (args.dataset_mm_per_px and args.frame_mm_per_px):
+            parser.error("--lay-frames needs --dataset-mm-per-px and --frame-mm-per-px (> 0)")
+        result = evaluate_laid(net, spec, args.images, args.masks, read_list(args.list), args.dataset_mm_per_px,
+                               args.frame_mm_per_px, size)
+    else:
+        result = evaluate(net, spec, args.images, args.masks, read_list(args.list), args.dataset_mm_per_px)
     if not args.per_image:
         del result["per_image"]
     if args.bench:
