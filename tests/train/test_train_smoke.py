@@ -129,7 +129,7 @@ class SmallSetTraining(unittest.TestCase):
             "--dataset-mm-per-px", "1.0", "--target-mm-per-px", "1.0", "--report-worst", "0", "--install", etc])
         with open(os.path.join(self.out, "fine.json")) as text:
             report = json.load(text)
-        self.assertEqual(report["spec"]["stride"], 64)
+        self.assertEqual((report["spec"]["stride"], report["training"]["detail"]), (64, 2))
         self.assertIn("input_height/2 x input_width/2", report["spec"]["output"])
         self.assertIn("weed", report["validation"]["iou"])
         net = cv2.dnn.readNet(os.path.join(self.out, "fine.onnx"))

@@ -371,6 +371,7 @@ def training_record(args, argv, run, setup):
         "iterations": setup["steps"],
         "batch": args.batch,
         "crop": list(args.crop),
+        "detail": args.detail,
         "lr": args.lr,
         "class_weights": setup["weights"],
         "class_weights_method": setup["weights_method"],
