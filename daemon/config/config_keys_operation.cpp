@@ -78,16 +78,18 @@ void append_operation_keys(std::vector<KeySpec<Config>>& keys) {
      "plants: connected vegetation smaller than this on the ground is a colour speck, not a "
      "plant (sprays nothing); also the least area the network must call weed inside a plant it "
      "calls crop for that part to stay weed (converted with the camera's ground scale)"},
-    {WS_KEY(vision, model), std::string("weed-peanut-4mm.onnx"), 0, 0, "path",
+    {WS_KEY(vision, model), std::string("weed-peanut-2mm.onnx"), 0, 0, "path",
      "dnn, hybrid, plants: the segmentation network, an ONNX file OpenCV DNN loads (checked with one "
      "forward pass at load), with its spec in NAME.json beside it (input size, normalisation, "
      "channel order, classes, the ground scale it learnt at, training data and licence; "
      "tools/train/train.py writes it). A relative path is looked up beside the configuration "
      "file that sets it, then among the installed models (/usr/share/weedspray/models from the "
      "package; a build tree also looks in its checkout's models/). The default is the shipped "
-     "crop/weed/soil model trained on peanut fields at 4 mm per network pixel, which keeps up "
-     "with a camera that sees about 1 mm per pixel (weed-peanut.onnx, also shipped, learnt at "
-     "0.94 mm per network pixel: for cameras closer to the ground); train one for your crop with "
+     "crop/weed/soil model trained on peanut fields, fed 2 mm of ground per pixel and deciding "
+     "every 4 mm, which keeps up with a camera that sees about 1 mm per pixel (also shipped: "
+     "weed-peanut-4mm.onnx, fed and deciding at 4 and 8 mm, faster and blind to more small "
+     "weeds; weed-peanut.onnx, learnt at 0.94 mm per network pixel, for cameras closer to the "
+     "ground); train one for your crop with "
      "tools/train/train.py (docs/vision.md). The model_* and *_class keys below are optional: "
      "left unset they are the model's own; set, they must agree with its JSON"},
     {WS_KEY(vision, model_input_width), 320, 32, 4096, "px",

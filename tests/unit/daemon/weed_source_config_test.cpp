@@ -74,7 +74,7 @@ TEST(WeedSourceConfig, DnnReadsTheModelOnce) {
 TEST(WeedSourceConfig, DefaultModelIsTheShippedOne) {
   const Config config = parse_weed_config("[vision]\nweed_source = \"hybrid\"\n");
   ASSERT_NE(config.model, nullptr);
-  EXPECT_EQ(config.model->path, fs::path(WEEDSPRAY_SOURCE_DIR) / "models" / "weed-peanut-4mm.onnx");
+  EXPECT_EQ(config.model->path, fs::path(WEEDSPRAY_SOURCE_DIR) / "models" / "weed-peanut-2mm.onnx");
 }
 
 // A model folder of its own: the tiny network with a description written by the test.
