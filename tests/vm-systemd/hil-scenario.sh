@@ -643,8 +643,10 @@ step estop_reset "$?" "sprayctl clear-alarms with the circuit closed: State=$(bu
 # The pressure sensor's wire cut while spraying: the plant's loop current drops to 0 mA at the
 # ADC input (in_voltage0_raw written 0). The pressure loop reads a sensor fault, never a
 # pressure: pump off in that cycle, valves closed. Figure: from weedspray-hil's trace marker
-# (written just after the ADC input changed) to every valve and the pump written 0. The Fault
-# then latches.
+# written just before the ADC input changes to every valve and the pump written 0 (an upper
+# bound: it holds the plant's own write). Its marker just after the change is printed beside
+# it: on the emulated CPU the daemon's real-time loops can act on the new input before the
+# plant writes that one (then -1). The Fault then latches.
 # Limit: the issue's 20 ms. The 100 Hz pressure loop reads the ADC once a period, just before
 # its deadline, and acts in the cycle that reads the cut: about one period (10 ms) at worst,
 # plus the emulated CPU's scheduling.
@@ -655,9 +657,11 @@ trace_window_begin
 hil_command sensor_wire cut
 wait_for 10 state_is Fault
 cut_ms="$(marker_to_safe sensor_cut)"
+cut_applied_ms="$(marker_to_safe sensor_cut_applied)"
 figure sensor_cut_safe_ms "$cut_ms"
+figure sensor_cut_safe_from_applied_ms "$cut_applied_ms"
 step sensor_cut_safe "$(awk -v ms="$cut_ms" -v lim="$cut_limit_ms" 'BEGIN { print (ms >= 0 && ms <= lim) ? 0 : 1 }')" \
-  "pressure sensor wire cut while spraying: every valve and the pump written 0 after $cut_ms ms (limit $cut_limit_ms, the issue's figure; the pressure loop at 100 Hz); State=$(bus_state), Alarms $(bus_value Alarms), pump line $(hil pump), valve lines $(hil valve_mask), plant pressure $(hil pressure_mpa) MPa"
+  "pressure sensor wire cut while spraying: every valve and the pump written 0 after $cut_ms ms from the plant's marker before the ADC input changed, $cut_applied_ms ms from its marker after (-1: safe before it) (limit $cut_limit_ms; the pressure loop at 100 Hz); State=$(bus_state), Alarms $(bus_value Alarms), pump line $(hil pump), valve lines $(hil valve_mask), plant pressure $(hil pressure_mpa) MPa"
 hil_command sensor_wire mended
 sleep 1
 sprayctl clear-alarms >/dev/null 2>&1

@@ -16,8 +16,9 @@
 // Interface for the scenario script, in --run-dir:
 //   status   rewritten every 50 ms: key=value lines (cumulative counters and the plant's state)
 //   control  a FIFO taking one command a line: "speed M_PER_S", "tank_l LITRES",
-//            "sensor_wire cut|mended" (the pressure sensor's loop current 0 mA at the ADC
-//            input, then trace marker "sensor_cut"), "frame NAME" (the camera's frame NAME.yuyv
+//            "sensor_wire cut|mended" (trace marker "sensor_cut", the pressure sensor's loop
+//            current 0 mA at the ADC input, marker "sensor_cut_applied"), "frame NAME" (the
+//            camera's frame NAME.yuyv
 //            from now on), "quit"
 // On quit (or SIGTERM) it prints its ground truth as "WEEDSPRAY-HIL-TRUTH key=value" lines.
 #include <fcntl.h>
@@ -171,12 +172,13 @@ struct CommandTarget {
 };
 
 // A line in the kernel's trace (tracefs trace_marker), so the scenario can time the daemon's
-// reaction from the very moment the plant changed; nothing when tracing is not mounted.
+// reaction from the very moment the plant changed; nothing when tracing is not mounted. The
+// file stays open (main opens it with the first marker): an open per marker would widen the
+// gap between a change and its markers.
 void trace_marker(const char* text) {
-  const int fd = ::open("/sys/kernel/tracing/trace_marker", O_WRONLY | O_CLOEXEC);
+  static const int fd = ::open("/sys/kernel/tracing/trace_marker", O_WRONLY | O_CLOEXEC);
   if (fd < 0) return;
   [[maybe_unused]] const ssize_t n = ::write(fd, text, std::strlen(text));
-  ::close(fd);
 }
 
 void handle_command(const std::string& line, CommandTarget& target) {
@@ -187,10 +189,14 @@ void handle_command(const std::string& line, CommandTarget& target) {
   if (verb == "speed") target.plant.set_ground_speed(value);
   if (verb == "tank_l") target.plant.set_tank_level_l(value);
   if (verb == "sensor_wire" && (argument == "cut" || argument == "mended")) {
-    // The ADC input follows at once (not at the next plant step), then the marker.
-    target.plant.set_sensor_wire_broken(argument == "cut");
+    // A marker, the ADC input at once (not at the next plant step), a second marker. The
+    // daemon's real-time loops can act on the new input before this process writes another
+    // line, so the scenario times from the first (an upper bound: it includes this write).
+    const bool cut = argument == "cut";
+    trace_marker(cut ? "sensor_cut" : "sensor_mended");
+    target.plant.set_sensor_wire_broken(cut);
     target.iio.set_adc_volts(target.plant.pressure_sensor_volts());
-    trace_marker(argument == "cut" ? "sensor_cut" : "sensor_mended");
+    trace_marker(cut ? "sensor_cut_applied" : "sensor_mended_applied");
   }
   if (verb == "frame" && !(target.camera && target.camera->show(argument)))
     std::fprintf(stderr, "weedspray-hil: no camera frame '%s'\n", argument.c_str());
@@ -210,6 +216,7 @@ void poll_commands(int fifo, std::string& pending, CommandTarget& target) {
 
 int run(const Options& o) {
   ::mkdir(o.run_dir.c_str(), 0755);
+  trace_marker("weedspray-hil started");
   ModbusBoard board;
   sim::plant::PlantParams params;
   params.nozzle_count = static_cast<int>(o.valve_lines.size());
