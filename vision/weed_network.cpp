@@ -14,10 +14,10 @@ namespace {
 }
 
 // Area averaging in two steps: by a whole factor of each side first (OpenCV's integer-ratio
-// path), then the rest. One INTER_AREA at a ratio that is no whole number takes OpenCV's
-// general path: 7 ms of one x86 core for 1280x800 -> 640x384 against 1.6 ms for the two steps.
-// The factor divides the side exactly, so the frame's geometry is kept to the pixel.
-// tools/train/evaluate.py resamples the same way.
+// path), then the rest, on a frame that many times smaller. One INTER_AREA at a ratio that is
+// no whole number takes OpenCV's slower general path over the whole frame. The factor divides
+// the side exactly, so the frame's geometry is kept to the pixel. tools/train/evaluate.py
+// resamples the same way.
 int whole_factor(int from, int to) {
   for (int factor = from / to; factor > 1; --factor) {
     if (from % factor == 0) return factor;
@@ -93,7 +93,7 @@ const cv::Mat& WeedNetwork::segment_at(const cv::Mat& image, bool image_is_rgb, 
   // which aliases fine weeds away when shrinking a frame 3x.
   const bool shrinking = size.width <= image.cols && size.height <= image.rows;
   if (shrinking) {
-    area_shrink(image, size, whole_factor_, resized_);
+    area_shrink(image, size, shrunk_by_whole_factor_, resized_);
   } else {
     cv::resize(image, resized_, size, 0, 0, cv::INTER_LINEAR);
   }

@@ -41,7 +41,7 @@ class WeedNetwork {
   cv::Size image_size_;  // the last image's size and the network input it maps to
   cv::Size input_size_;
   cv::dnn::Net net_;
-  cv::Mat whole_factor_;  // the frame shrunk by the whole factor of each side
+  cv::Mat shrunk_by_whole_factor_;  // area_shrink's first step
   cv::Mat resized_;
   cv::Mat blob_;
   cv::Mat scores_;
