@@ -111,7 +111,6 @@ class Sampling(unittest.TestCase):
         odd = frame[:221, :295]
         self.assertTrue(np.array_equal(area_shrink(odd, (64, 64)), cv2.resize(odd, (64, 64), interpolation=cv2.INTER_AREA)))
 
-
     def test_photos_are_laid_into_frames_as_a_camera_sees_the_ground(self):
         pairs = []
         for value in (10, 20, 30):
@@ -125,7 +124,6 @@ class Sampling(unittest.TestCase):
         self.assertEqual((frame[0, 0, 0], frame[0, 45, 0], frame[25, 0, 0], frame[25, 45, 0]), (10, 20, 30, 10))
         self.assertEqual((truth[0, 0], truth[0, 45], truth[25, 0], truth[25, 45]), (1, 2, 3, 1))
         self.assertTrue(np.array_equal(truth, frame[..., 0] // 10))
-
 
 class Zones(unittest.TestCase):
     def test_zone_kinds_and_the_farmers_rule(self):

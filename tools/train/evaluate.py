@@ -385,6 +385,8 @@ def main():
             parser.error("--lay-frames needs --dataset-mm-per-px and --frame-mm-per-px (> 0)")
         result = evaluate_laid(net, spec, args.images, args.masks, read_list(args.list), args.dataset_mm_per_px,
                                args.frame_mm_per_px, size)
+    elif args.frame_mm_per_px:
+        parser.error("--frame-mm-per-px is the camera's scale for --lay-frames; give --lay-frames WxH too")
     else:
         result = evaluate(net, spec, args.images, args.masks, read_list(args.list), args.dataset_mm_per_px)
     if not args.per_image:

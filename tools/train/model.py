@@ -14,8 +14,9 @@ times the scale), a K*2 x K*2 stride-K*2 convolution of the fine input adds to i
 what the averaging lost (zero at the start, so a base's weights work unchanged), and one more
 decoder stage at the averaged scale, fed by a stride-K convolution of the fine input, gives the
 logits there: 1/K of the input's size, twice as fine as the plain network decides (its class
-head works at half its input's resolution). Input sizes must be multiples of 32 * K. For a
-camera finer than the network's body, at a few ms more than the plain network (``stride``).
+head works at half its input's resolution). Input sizes must be multiples of 32 * K
+(``stride``). For a camera finer than the network's body, at a few ms more a frame than the
+plain network.
 
 Checkpoints (NAME.pt, torch.save of a dict): state_dict, classes, width and meta (ground scale,
 training data, licence: what a model built on it must carry on). load_checkpoint_into copies a
@@ -98,20 +99,16 @@ class SegmentationNet(nn.Module):
 
     def forward(self, x):
         fine = x
+        stages = iter(self.stages)
+        skips = []
         if self.detail_factor > 1:
             # The first stage's convolution, BN and ReLU, with the detail branch added before BN.
-            first = self.stages[0][0]
-            x = first[2](first[1](first[0](self.pool(fine)) + self.detail(fine)))
-            x = self.stages[0][1:](x)
-            skips = [x]
-            for stage in self.stages[1:]:
-                x = stage(x)
-                skips.append(x)
-        else:
-            skips = []
-            for stage in self.stages:
-                x = stage(x)
-                skips.append(x)
+            first = next(stages)
+            x = first[1:](first[0][2](first[0][1](first[0][0](self.pool(fine)) + self.detail(fine))))
+            skips.append(x)
+        for stage in stages:
+            x = stage(x)
+            skips.append(x)
         x = skips.pop()
         for block in self.decoder:
             x = block(torch.cat([self.up(x), skips.pop()], dim=1))
