@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // bench-vision: time per 1280x800 BGR frame of the default pipeline, against a straightforward
 // OpenCV-primitives version of the same pipeline (cv::transform, cv::threshold with Otsu,
-// cv::countNonZero per zone); with --pipeline, of a weed source (inter_row, dnn, hybrid, plants).
+// cv::countNonZero per zone); with --pipeline, of a weed source (inter_row, dnn, hybrid, plants,
+// dnn_vegetation).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -257,12 +258,14 @@ void add_bench_vision_command(CLI::App& app) {
       "Time a vision pipeline on 1280x800 frames, one thread (the default one vs an OpenCV "
       "baseline, or a weed source)");
   bench
-      ->add_option("--pipeline", options->pipeline,
-                   "Weed source: vegetation (the default pipeline), inter_row, dnn, hybrid, plants")
+      ->add_option(
+          "--pipeline", options->pipeline,
+          "Weed source: vegetation (the default pipeline), inter_row, dnn, hybrid, plants, "
+          "dnn_vegetation")
       ->capture_default_str();
   bench
       ->add_option("--model", options->model,
-                   "ONNX weed model for dnn, hybrid and plants (spec from FILE.json)")
+                   "ONNX weed model for the sources that need one (spec from FILE.json)")
       ->check(CLI::ExistingFile);
   bench->add_option("--crop-margin-px", options->crop_margin_px, "hybrid: crop margin in pixels")
       ->capture_default_str();

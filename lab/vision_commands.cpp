@@ -102,7 +102,8 @@ void add_vision_commands(CLI::App& app) {
   CLI::App* eval = app.add_subcommand(
       "vision-eval",
       "Every vegetation index x threshold against hand-labelled masks; with --classes or "
-      "--weed-sources, the weed sources (vegetation, inter_row, dnn, hybrid, plants)");
+      "--weed-sources, the weed sources (vegetation, inter_row, dnn, hybrid, plants, "
+      "dnn_vegetation)");
   eval->add_option("--images", weeds.images_dir, "Folder of field images")
       ->required()
       ->check(CLI::ExistingDirectory);
@@ -121,11 +122,13 @@ void add_vision_commands(CLI::App& app) {
                  "zone recall and clean zones left dry)");
   eval->add_flag("--weed-sources", eval_options->weed_sources,
                  "Evaluate the weed sources' vegetation (crop or weed) against plant masks");
-  eval->add_option("--model", weeds.model,
-                   "ONNX weed model (spec from FILE.json): adds dnn, hybrid and plants")
+  eval->add_option(
+          "--model", weeds.model,
+          "ONNX weed model (spec from FILE.json): adds dnn, hybrid, plants and dnn_vegetation")
       ->check(CLI::ExistingFile);
   eval->add_option("--weed-source", weeds.weed_source,
-                   "Evaluate only this source: vegetation, inter_row, dnn, hybrid, plants");
+                   "Evaluate only this source: vegetation, inter_row, dnn, hybrid, plants, "
+                   "dnn_vegetation");
   eval->add_option("--config", weeds.config,
                    "weedsprayd configuration: [vision] keys of the first camera, its model and "
                    "spray.decision_threshold")

@@ -203,11 +203,11 @@ void add_segment_command(CLI::App& app) {
                       "(OUT_<stem>.png for several images)");
   segment
       ->add_option("--weed-source", options->weed_source,
-                   "What counts as weed: vegetation, inter_row, dnn, hybrid")
+                   "What counts as weed: " + join_names(vision::weed_source_names()))
       ->capture_default_str();
   segment
       ->add_option("--model", options->model,
-                   "ONNX weed model for dnn and hybrid (spec from FILE.json)")
+                   "ONNX weed model for the sources that need one (spec from FILE.json)")
       ->check(CLI::ExistingFile);
   segment->add_option("--crop-margin-px", options->crop_margin_px, "hybrid: crop margin in pixels")
       ->capture_default_str();

@@ -89,6 +89,7 @@ Setup setup_from(const WeedEvalOptions& options) {
       setup.sources.push_back(vision::WeedSource::kDnn);
       setup.sources.push_back(vision::WeedSource::kHybrid);
       setup.sources.push_back(vision::WeedSource::kPlants);
+      setup.sources.push_back(vision::WeedSource::kDnnVegetation);
     }
   }
   for (const vision::WeedSource source : setup.sources) {

@@ -15,9 +15,11 @@ struct WeedClassifier::Masks {
   cv::Mat converted;      // the region as BGR when the frame is YUYV or grey
   cv::Mat vegetation;     // hybrid, region resolution, 0/255
   cv::Mat near_crop;      // hybrid: the network's crop at region resolution, grown by the margin
-  cv::Mat crop;           // hybrid: vegetation within near_crop
-  cv::Mat plant_classes;  // plants: class ids at region resolution
-  cv::Mat weed;           // hybrid: vegetation outside near_crop
+  cv::Mat crop;           // hybrid: vegetation within near_crop; else the class map's crop
+  cv::Mat plant_classes;  // plants, dnn_vegetation: class ids at region resolution
+  cv::Mat grown;          // dnn_vegetation: vegetation grown by the plants' join
+  cv::Mat join_kernel;    // dnn_vegetation: a disc of the plants' join radius
+  cv::Mat weed;           // hybrid: vegetation outside near_crop; else the class map's weed
   cv::Mat margin_kernel;
   cv::Mat scratch;
 };
@@ -67,27 +69,26 @@ cv::Mat region_image(const ImageView& frame, const PixelRect& region, cv::Mat& c
   return converted;
 }
 
-// Weed and crop shares of each zone of a class map.
-void densities_from_classes(const cv::Mat& classes, FrameResult& result) {
+// Weed and crop shares of each zone from masks (non-zero = weed, crop) of one size.
+void count_zone_densities(const cv::Mat& weed, const cv::Mat& crop, FrameResult& result) {
   for (int row = 0; row < result.rows; ++row) {
     for (int col = 0; col < result.cols; ++col) {
-      const ZoneRect zone =
-          zone_rect(row, col, result.rows, result.cols, classes.cols, classes.rows);
-      std::uint64_t weed = 0;
-      std::uint64_t crop = 0;
-      for (int y = zone.y_begin; y < zone.y_end; ++y) {
-        const std::uint8_t* line = classes.ptr<std::uint8_t>(y);
-        for (int x = zone.x_begin; x < zone.x_end; ++x) {
-          weed += line[x] == kClassWeed;
-          crop += line[x] == kClassCrop;
-        }
-      }
+      const ZoneRect zone = zone_rect(row, col, result.rows, result.cols, weed.cols, weed.rows);
       const int i = row * result.cols + col;
       const double pixels = std::max(1.0, zone.pixels());
-      result.zone_density[i] = static_cast<double>(weed) / pixels;
-      result.crop_density[i] = static_cast<double>(crop) / pixels;
+      result.zone_density[i] = cv::countNonZero(weed(zone.rect())) / pixels;
+      result.crop_density[i] = cv::countNonZero(crop(zone.rect())) / pixels;
     }
   }
+}
+
+// Weed and crop shares of each zone of a class map; weed and crop are scratch masks (sized once
+// per class-map size, so a steady stream allocates nothing).
+void densities_from_classes(const cv::Mat& classes, cv::Mat& weed, cv::Mat& crop,
+                            FrameResult& result) {
+  cv::compare(classes, kClassWeed, weed, cv::CMP_EQ);
+  cv::compare(classes, kClassCrop, crop, cv::CMP_EQ);
+  count_zone_densities(weed, crop, result);
 }
 
 }  // namespace
@@ -102,6 +103,9 @@ WeedClassifier::WeedClassifier(const PipelineConfig& config,
     network_ =
         std::make_unique<WeedNetwork>(config_.dnn, model_onnx_bytes, config_.frame_mm_per_px);
   }
+  const int join_px = plant_join_px(config.frame_mm_per_px);
+  masks_->join_kernel =
+      cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * join_px + 1, 2 * join_px + 1));
   if (config_.crop_margin_px > 0) {
     const int side = 2 * config_.crop_margin_px + 1;
     masks_->margin_kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(side, side));
@@ -131,6 +135,10 @@ bool WeedClassifier::classify(const ImageView& frame, const PixelRect& region,
       case WeedSource::kPlants:
         classify_dnn(frame, result);
         classify_plants(index, level, result);
+        break;
+      case WeedSource::kDnnVegetation:
+        classify_dnn(frame, result);
+        classify_dnn_vegetation(index, level, result);
         break;
     }
   } catch (const std::exception& failure) {
@@ -178,15 +186,21 @@ void WeedClassifier::classify_inter_row(const std::uint8_t* index, std::uint8_t 
 void WeedClassifier::classify_dnn(const ImageView& frame, FrameResult& result) {
   bool is_rgb = false;
   const cv::Mat image = region_image(frame, region_, masks_->converted, is_rgb);
-  densities_from_classes(network_->segment(image, is_rgb), result);
+  densities_from_classes(network_->segment(image, is_rgb), masks_->weed, masks_->crop, result);
+}
+
+const cv::Mat& WeedClassifier::vegetation_mask(const std::uint8_t* index, std::uint8_t level) {
+  const cv::Mat index_image(region_.height, region_.width, CV_8UC1,
+                            const_cast<std::uint8_t*>(index));
+  cv::compare(index_image, level, masks_->vegetation, cv::CMP_GT);
+  return masks_->vegetation;
 }
 
 void WeedClassifier::classify_hybrid(const std::uint8_t* index, std::uint8_t level,
                                      FrameResult& result) {
   Masks& m = *masks_;
   const cv::Size size(region_.width, region_.height);
-  const cv::Mat index_image(size, CV_8UC1, const_cast<std::uint8_t*>(index));
-  cv::compare(index_image, level, m.vegetation, cv::CMP_GT);
+  vegetation_mask(index, level);
   // Colour says what is vegetation, the network only which of it is crop: the vegetation
   // mask (and its IoU) stays the colour pipeline's on any camera. The crop mask comes at the
   // network's resolution; the margin is in frame pixels, so grow it at the region's.
@@ -195,24 +209,26 @@ void WeedClassifier::classify_hybrid(const std::uint8_t* index, std::uint8_t lev
   if (!m.margin_kernel.empty()) cv::dilate(m.near_crop, m.near_crop, m.margin_kernel);
   cv::bitwise_and(m.vegetation, m.near_crop, m.crop);
   cv::bitwise_xor(m.vegetation, m.crop, m.weed);  // vegetation minus crop
-  for (int row = 0; row < result.rows; ++row) {
-    for (int col = 0; col < result.cols; ++col) {
-      const ZoneRect zone = zone_rect(row, col, result.rows, result.cols, size.width, size.height);
-      const int i = row * result.cols + col;
-      result.zone_density[i] = cv::countNonZero(m.weed(zone.rect())) / zone.pixels();
-      result.crop_density[i] = cv::countNonZero(m.crop(zone.rect())) / zone.pixels();
-    }
-  }
+  count_zone_densities(m.weed, m.crop, result);
 }
 
 void WeedClassifier::classify_plants(const std::uint8_t* index, std::uint8_t level,
                                      FrameResult& result) {
   Masks& m = *masks_;
-  const cv::Mat index_image(region_.height, region_.width, CV_8UC1,
-                            const_cast<std::uint8_t*>(index));
-  cv::compare(index_image, level, m.vegetation, cv::CMP_GT);
-  plants_.classify(m.vegetation, network_->segment_result(), m.plant_classes);
-  densities_from_classes(m.plant_classes, result);
+  plants_.classify(vegetation_mask(index, level), network_->segment_result(), m.plant_classes);
+  densities_from_classes(m.plant_classes, m.weed, m.crop, result);
+}
+
+void WeedClassifier::classify_dnn_vegetation(const std::uint8_t* index, std::uint8_t level,
+                                             FrameResult& result) {
+  Masks& m = *masks_;
+  // Grown as the plants source joins its plants: the soft leaf edge colour leaves out is plant.
+  cv::dilate(vegetation_mask(index, level), m.grown, m.join_kernel);
+  cv::resize(network_->segment_result(), m.plant_classes, m.grown.size(), 0, 0, cv::INTER_NEAREST);
+  // grown is 0 or 255 and soil is class 0: the AND keeps the class on vegetation, soil elsewhere.
+  static_assert(kClassSoil == 0);
+  cv::bitwise_and(m.plant_classes, m.grown, m.plant_classes);
+  densities_from_classes(m.plant_classes, m.weed, m.crop, result);
 }
 
 PixelRect WeedClassifier::class_map_rect() const {
@@ -257,6 +273,7 @@ ImageView WeedClassifier::class_map(const std::uint8_t* index, std::uint8_t leve
       map.setTo(kClassWeed, m.weed);
       break;
     case WeedSource::kPlants:
+    case WeedSource::kDnnVegetation:
       m.plant_classes.copyTo(map);
       break;
   }

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// Weed and crop densities per zone for the inter_row, dnn, hybrid and plants weed sources, from the
-// frame, its vegetation index image and threshold (internal to vision/; Pipeline owns one).
+// Weed and crop densities per zone for the inter_row, dnn, hybrid, plants and dnn_vegetation weed
+// sources, from the frame, its vegetation index image and threshold (internal to vision/; Pipeline
+// owns one).
 #pragma once
 
 #include <cstdint>
@@ -43,20 +44,23 @@ class WeedClassifier {
 
  private:
   PixelRect class_map_rect() const;  // the class map's width and height (x = y = 0)
+  // index > level over the region, into the masks' vegetation buffer.
+  const cv::Mat& vegetation_mask(const std::uint8_t* index, std::uint8_t level);
   void classify_inter_row(const std::uint8_t* index, std::uint8_t level, FrameResult& result);
   void classify_dnn(const ImageView& frame, FrameResult& result);
   void classify_hybrid(const std::uint8_t* index, std::uint8_t level, FrameResult& result);
   void classify_plants(const std::uint8_t* index, std::uint8_t level, FrameResult& result);
+  void classify_dnn_vegetation(const std::uint8_t* index, std::uint8_t level, FrameResult& result);
 
   PipelineConfig config_;
   PixelRect region_{};
   CropRowTracker tracker_;
   std::vector<std::uint32_t> zone_row_columns_;  // inter_row: per zone row, per column
   std::vector<std::uint8_t> in_band_;            // inter_row: column lies in a crop-row band
-  std::unique_ptr<WeedNetwork> network_;         // dnn, hybrid, plants
+  std::unique_ptr<WeedNetwork> network_;         // the sources that need a model
   PlantClasses plants_;                          // plants
   struct Masks;
-  std::unique_ptr<Masks> masks_;  // OpenCV buffers (hybrid and plants masks, class map)
+  std::unique_ptr<Masks> masks_;  // OpenCV buffers (hybrid, plants, dnn_vegetation masks)
 };
 
 }  // namespace weedspray::vision

@@ -8,8 +8,8 @@
 namespace weedspray::vision {
 namespace {
 
-constexpr std::array<std::string_view, 5> kNames = {"vegetation", "inter_row", "dnn", "hybrid",
-                                                    "plants"};
+constexpr std::array<std::string_view, 6> kNames = {"vegetation", "inter_row", "dnn",
+                                                    "hybrid",     "plants",    "dnn_vegetation"};
 
 }  // namespace
 
@@ -31,7 +31,7 @@ std::span<const std::string_view> weed_source_names() {
 
 bool needs_model(WeedSource source) {
   return source == WeedSource::kDnn || source == WeedSource::kHybrid ||
-         source == WeedSource::kPlants;
+         source == WeedSource::kPlants || source == WeedSource::kDnnVegetation;
 }
 
 int area_in_pixels(double area_cm2, double mm_per_px, int fallback_px) {

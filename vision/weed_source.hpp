@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // What the spray decision counts as weed: every green pixel (vegetation), vegetation between
 // tracked crop rows (the 2018 paper's inter-row rule), a segmentation network's weed class
-// (dnn), colour vegetation minus the network's crop mask (hybrid), or colour-segmented plants
-// each classified by the network's votes (plants).
+// (dnn), colour vegetation minus the network's crop mask (hybrid), colour-segmented plants
+// each classified by the network's votes (plants), or the network's classes kept only on colour
+// vegetation (dnn_vegetation).
 #pragma once
 
 #include <array>
@@ -21,13 +22,16 @@ enum class WeedSource : std::uint8_t {
   kDnn,         // the network's weed class
   kHybrid,      // colour vegetation; crop where it lies within a margin of the network's crop
   kPlants,      // colour vegetation, each connected plant crop or weed by the network's votes
+  // The network's class per pixel, but soil wherever colour finds no vegetation within about a
+  // millimetre: the network decides on a grid coarser than a leaf's edge, colour draws the edge.
+  kDnnVegetation,
 };
 
-// Config names: "vegetation", "inter_row", "dnn", "hybrid", "plants".
+// Config names: "vegetation", "inter_row", "dnn", "hybrid", "plants", "dnn_vegetation".
 std::optional<WeedSource> parse_weed_source(std::string_view name);
 std::string_view to_string(WeedSource source);
 std::span<const std::string_view> weed_source_names();
-// dnn, hybrid and plants need a model.
+// dnn, hybrid, plants and dnn_vegetation need a model.
 bool needs_model(WeedSource source);
 
 // Class ids the pipeline reports per pixel (Pipeline::class_map), whatever the source.

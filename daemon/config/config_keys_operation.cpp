@@ -64,8 +64,11 @@ void append_operation_keys(std::vector<KeySpec<Config>>& keys) {
      "segmentation network in model; hybrid: colour vegetation minus the network's crop class "
      "grown by crop_margin_cm; plants: colour vegetation at the camera's resolution, each "
      "connected plant crop or weed by the network's votes (plants the network cannot resolve "
-     "are weed; see min_plant_cm2). The rate law uses each zone's weed density",
-     {"vegetation", "inter_row", "dnn", "hybrid", "plants"}},
+     "are weed; see min_plant_cm2); dnn_vegetation: the network's classes, but soil wherever "
+     "colour finds no vegetation within about a millimetre (the network decides on a grid "
+     "coarser than a leaf's edge, colour draws the edge). The rate law uses each zone's weed "
+     "density",
+     {"vegetation", "inter_row", "dnn", "hybrid", "plants", "dnn_vegetation"}},
     {WS_KEY(vision, row_band_cm), 30.0, 1, 500, "cm",
      "inter_row: width on the ground of the band around each crop row that counts as crop "
      "(converted to pixels with the camera's ground scale, camera.ground_mm_per_px or its "
@@ -79,7 +82,7 @@ void append_operation_keys(std::vector<KeySpec<Config>>& keys) {
      "plant (sprays nothing); also the least area the network must call weed inside a plant it "
      "calls crop for that part to stay weed (converted with the camera's ground scale)"},
     {WS_KEY(vision, model), std::string("weed-peanut-2mm.onnx"), 0, 0, "path",
-     "dnn, hybrid, plants: the segmentation network, an ONNX file OpenCV DNN loads (checked with one "
+     "dnn, hybrid, plants, dnn_vegetation: the segmentation network, an ONNX file OpenCV DNN loads (checked with one "
      "forward pass at load), with its spec in NAME.json beside it (input size, normalisation, "
      "channel order, classes, the ground scale it learnt at, training data and licence; "
      "tools/train/train.py writes it). A relative path is looked up beside the configuration "

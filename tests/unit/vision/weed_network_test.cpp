@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// dnn, hybrid and plants weed sources with tests/data/tiny-3class.onnx, a hand-set network whose
-// class k is the strongest of input channels R, G, B (after the spec's mean, scale and order).
+// dnn, hybrid, plants and dnn_vegetation weed sources with tests/data/tiny-3class.onnx, a hand-set
+// network whose class k is the strongest of input channels R, G, B (after the spec's mean, scale
+// and order).
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -302,6 +303,69 @@ TEST_F(HybridMargin, TheDnnAloneMissesWeedsItDoesNotKnow) {
   config.dnn.mean_rgb = {0, 100, 0};
   Pipeline pipeline(config, tiny_model());
   EXPECT_DOUBLE_EQ(pipeline.process(frame.view()).zone_density[0], 0.0);
+}
+
+// dnn_vegetation: a 16x16 green weed on soil in a 256x256 frame that the network sees at 64x64,
+// so it decides on 4x4 blocks and marks soil around the weed as weed too. Green is the
+// network's class 1, here named the weed. The weed's soft edge, a 1 px ring (corners left
+// out) of a green too dull for the colour threshold, is what the grown vegetation brings in.
+class VegetationEdge : public ::testing::Test {
+ protected:
+  static constexpr test::Bgr kSoftEdge{60, 120, 110};  // CIVE level ~141: below the threshold
+  BgrFrame frame{256, 256, test::kSoil};
+  void SetUp() override {
+    for (int i = 10; i < 26; ++i) {
+      for (int j = 10; j < 26; ++j) frame.set(i, j, test::kPlant);
+      frame.set(i, 9, kSoftEdge);
+      frame.set(i, 26, kSoftEdge);
+      frame.set(9, i, kSoftEdge);
+      frame.set(26, i, kSoftEdge);
+    }
+  }
+  // Weed pixels of the one zone, and the class 3 px right of the weed's last column.
+  std::pair<double, std::uint8_t> run(WeedSource source) {
+    PipelineConfig config = dnn_config(source);
+    config.cols = 1;
+    config.dnn.weed_class = 1;
+    config.dnn.crop_class = 2;
+    config.threshold = ThresholdMethod::kFixed;  // the plant is vegetation, the soil is not
+    config.threshold_params.fixed_threshold = 150;
+    Pipeline pipeline(config, tiny_model());
+    const FrameResult result = pipeline.process(frame.view());
+    EXPECT_TRUE(pipeline.last_frame_ok()) << pipeline.last_error();
+    const ImageView classes = pipeline.class_map();
+    const int x = 28 * classes.width / 256;
+    const int y = 18 * classes.height / 256;
+    return {result.zone_density[0] * 256 * 256, classes.data[y * classes.stride + x]};
+  }
+};
+
+TEST_F(VegetationEdge, TheNetworksWeedIsKeptOnlyOnVegetationGrownByTheJoin) {
+  const auto [dnn_weed, dnn_beside] = run(WeedSource::kDnn);
+  const auto [kept_weed, kept_beside] = run(WeedSource::kDnnVegetation);
+  // The network's 4x4 blocks reach past the weed; its class map calls soil beside it weed.
+  EXPECT_GE(dnn_weed, 320.0) << dnn_weed;
+  EXPECT_EQ(dnn_beside, kClassWeed);
+  // Kept: the 256 weed pixels and their soft edge (64) that the 1 px join grows into, but for
+  // the few beside the corners the network's blocks call soil; soil beside it.
+  EXPECT_GT(kept_weed, 300.0) << kept_weed;
+  EXPECT_LE(kept_weed, 320.0);
+  EXPECT_EQ(kept_beside, kClassSoil);
+}
+
+TEST_F(VegetationEdge, VegetationTheNetworkCallsSoilStaysSoil) {
+  // A dull green speck the network calls soil (G - 100 loses to R and B) is not made weed:
+  // colour only trims the network's classes, it adds none (unlike hybrid and plants).
+  PipelineConfig config = dnn_config(WeedSource::kDnnVegetation);
+  config.cols = 1;
+  config.dnn.mean_rgb = {0, 100, 0};
+  config.threshold = ThresholdMethod::kFixed;
+  config.threshold_params.fixed_threshold = 150;
+  Pipeline pipeline(config, tiny_model());
+  const FrameResult result = pipeline.process(frame.view());
+  EXPECT_TRUE(pipeline.last_frame_ok()) << pipeline.last_error();
+  EXPECT_DOUBLE_EQ(result.zone_density[0], 0.0);
+  EXPECT_DOUBLE_EQ(result.crop_density[0], 0.0);
 }
 
 }  // namespace
