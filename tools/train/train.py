@@ -144,7 +144,8 @@ def build_parser():
                         help="ground mm per pixel at the network input (default: the photo squeezed to --input)")
     parser.add_argument("--zoom", type=parse_range, default=DEFAULT_ZOOM, help="random zoom around the target scale")
     parser.add_argument("--base", help="checkpoint to start from (train_base.py's NAME.pt, or a train.py NAME.pt)")
-    parser.add_argument("--threads", type=positive(int), default=2, help="torch threads (1 beats 2 on a busy machine)")
+    parser.add_argument("--threads", type=positive(int), default=2,
+                        help="torch threads: the machine's cores when it trains alone; 1 when another job shares them")
     parser.add_argument("--log-every", type=positive(int), default=25, help="steps between progress lines")
     parser.add_argument("--val-every", type=positive(int), default=300, help="steps between quick validation figures")
     parser.add_argument("--report-worst", type=int, default=6, help="validation photos drawn as overlays")
