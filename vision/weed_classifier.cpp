@@ -12,14 +12,15 @@
 namespace weedspray::vision {
 
 struct WeedClassifier::Masks {
-  cv::Mat converted;      // the region as BGR when the frame is YUYV or grey
-  cv::Mat vegetation;     // hybrid, region resolution, 0/255
-  cv::Mat near_crop;      // hybrid: the network's crop at region resolution, grown by the margin
-  cv::Mat crop;           // hybrid: vegetation within near_crop; else the class map's crop
-  cv::Mat plant_classes;  // plants, dnn_vegetation: class ids at region resolution
-  cv::Mat grown;          // dnn_vegetation: vegetation grown by the plants' join
-  cv::Mat join_kernel;    // dnn_vegetation: a disc of the plants' join radius
-  cv::Mat weed;           // hybrid: vegetation outside near_crop; else the class map's weed
+  cv::Mat converted;         // the region as BGR when the frame is YUYV or grey
+  cv::Mat vegetation;        // hybrid, region resolution, 0/255
+  cv::Mat near_crop;         // hybrid: the network's crop at region resolution, grown by the margin
+  cv::Mat crop;              // hybrid: vegetation within near_crop; else the class map's crop
+  cv::Mat plant_classes;     // plants, dnn_vegetation: class ids at region resolution
+  cv::Mat grown;             // dnn_vegetation: vegetation grown by the plants' join
+  cv::Mat network_interior;  // dnn_vegetation: the network's plant less its outer pixel
+  cv::Mat join_kernel;       // dnn_vegetation: a disc of the plants' join radius
+  cv::Mat weed;              // hybrid: vegetation outside near_crop; else the class map's weed
   cv::Mat margin_kernel;
   cv::Mat scratch;
 };
@@ -224,7 +225,16 @@ void WeedClassifier::classify_dnn_vegetation(const std::uint8_t* index, std::uin
   Masks& m = *masks_;
   // Grown as the plants source joins its plants: the soft leaf edge colour leaves out is plant.
   cv::dilate(vegetation_mask(index, level), m.grown, m.join_kernel);
-  cv::resize(network_->segment_result(), m.plant_classes, m.grown.size(), 0, 0, cv::INTER_NEAREST);
+  // Colour trims only the outer network pixel of what the network calls plant, where its grid
+  // blurs the edge; further in, the network's class stands whatever colour says (a shaded leaf,
+  // a camera whose plants the threshold finds poorly).
+  const cv::Mat& network_classes = network_->segment_result();
+  cv::compare(network_classes, kClassSoil, m.network_interior, cv::CMP_NE);
+  cv::erode(m.network_interior, m.network_interior, cv::Mat(), cv::Point(-1, -1), 1,
+            cv::BORDER_REPLICATE);
+  cv::resize(m.network_interior, m.scratch, m.grown.size(), 0, 0, cv::INTER_NEAREST);
+  cv::bitwise_or(m.grown, m.scratch, m.grown);
+  cv::resize(network_classes, m.plant_classes, m.grown.size(), 0, 0, cv::INTER_NEAREST);
   // grown is 0 or 255 and soil is class 0: the AND keeps the class on vegetation, soil elsewhere.
   static_assert(kClassSoil == 0);
   cv::bitwise_and(m.plant_classes, m.grown, m.plant_classes);

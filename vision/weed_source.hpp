@@ -22,8 +22,9 @@ enum class WeedSource : std::uint8_t {
   kDnn,         // the network's weed class
   kHybrid,      // colour vegetation; crop where it lies within a margin of the network's crop
   kPlants,      // colour vegetation, each connected plant crop or weed by the network's votes
-  // The network's class per pixel, but soil wherever colour finds no vegetation within about a
-  // millimetre: the network decides on a grid coarser than a leaf's edge, colour draws the edge.
+  // The network's class per pixel, but soil where colour finds no vegetation within about a
+  // millimetre in the outer network pixel of what the network calls plant: the network decides
+  // on a grid coarser than a leaf's edge, colour draws the edge.
   kDnnVegetation,
 };
 

@@ -64,10 +64,10 @@ void append_operation_keys(std::vector<KeySpec<Config>>& keys) {
      "segmentation network in model; hybrid: colour vegetation minus the network's crop class "
      "grown by crop_margin_cm; plants: colour vegetation at the camera's resolution, each "
      "connected plant crop or weed by the network's votes (plants the network cannot resolve "
-     "are weed; see min_plant_cm2); dnn_vegetation: the network's classes, but soil wherever "
-     "colour finds no vegetation within about a millimetre (the network decides on a grid "
-     "coarser than a leaf's edge, colour draws the edge). The rate law uses each zone's weed "
-     "density",
+     "are weed; see min_plant_cm2); dnn_vegetation: the network's classes, but in the outer "
+     "network pixel of each plant soil wherever colour finds no vegetation within about a "
+     "millimetre (the network decides on a grid coarser than a leaf's edge, colour draws the "
+     "edge). The rate law uses each zone's weed density",
      {"vegetation", "inter_row", "dnn", "hybrid", "plants", "dnn_vegetation"}},
     {WS_KEY(vision, row_band_cm), 30.0, 1, 500, "cm",
      "inter_row: width on the ground of the band around each crop row that counts as crop "

@@ -135,15 +135,15 @@ TEST(GroundScale, TheDefaultModelAtTheDefaultCameraFindsMoreWeedThanTheFourMilli
 
 // The default model's classes kept on colour vegetation against the same model alone: colour
 // draws the leaf edges the network's 4 mm grid cannot, so soil around each plant stops being
-// weed or crop (docs/vision.md). In these frames the colour threshold, taken over a whole frame
-// of many photos, also cuts some weed the network had right: weed IoU stays about the same.
+// weed or crop (docs/vision.md). Weed IoU barely moves in these frames: the weeds' fringe is
+// small beside the crop's.
 TEST(GroundScale, TheDefaultModelOnColourVegetationOutlinesPlantsBetterThanAlone) {
   const Scores alone = segment_held_out_ground("[vision]\nweed_source = \"dnn\"\n");
   const Scores kept = segment_held_out_ground("[vision]\nweed_source = \"dnn_vegetation\"\n");
   EXPECT_GT(kept.iou[0], alone.iou[0] + 0.005) << "soil IoU against the network alone";
   EXPECT_GT(kept.iou[1], alone.iou[1] + 0.01) << "crop IoU against the network alone";
-  EXPECT_GT(kept.miou, alone.miou + 0.004) << "MIoU against the network alone";
-  EXPECT_GT(kept.iou[2], alone.iou[2] - 0.02) << "weed IoU against the network alone";
+  EXPECT_GT(kept.miou, alone.miou + 0.005) << "MIoU against the network alone";
+  EXPECT_GT(kept.iou[2], alone.iou[2] - 0.005) << "weed IoU against the network alone";
   std::cout << "at the default camera, default model: dnn_vegetation MIoU " << kept.miou
             << ", IoU soil " << kept.iou[0] << " crop " << kept.iou[1] << " weed " << kept.iou[2]
             << "; dnn MIoU " << alone.miou << ", IoU soil " << alone.iou[0] << " crop "
