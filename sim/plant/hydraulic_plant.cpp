@@ -97,7 +97,9 @@ std::pair<double, double> ramp_mean_and_end(double from, double to, double rate,
   const double travel_time = std::abs(to - from) / rate;
   const double moving = std::min(travel_time, dt - lead);
   const double dir = to > from ? 1.0 : -1.0;
-  const double end_of_move = from + dir * rate * moving;
+  // A move that runs its whole travel ends on its target exactly: from + rate * (|to - from| /
+  // rate) can miss it by a rounding error, and a valve then never quite closes.
+  const double end_of_move = moving >= travel_time ? to : from + dir * rate * moving;
   const double hold = dt - lead - moving;
   const double integral = from * lead + 0.5 * (from + end_of_move) * moving + end_of_move * hold;
   return {integral / dt, end_of_move};
