@@ -13,7 +13,7 @@ namespace weedspray::vision {
 
 struct WeedClassifier::Masks {
   cv::Mat converted;         // the region as BGR when the frame is YUYV or grey
-  cv::Mat vegetation;        // hybrid, region resolution, 0/255
+  cv::Mat vegetation;        // hybrid, plants, dnn_vegetation: region resolution, 0/255
   cv::Mat near_crop;         // hybrid: the network's crop at region resolution, grown by the margin
   cv::Mat crop;              // hybrid: vegetation within near_crop; else the class map's crop
   cv::Mat plant_classes;     // plants, dnn_vegetation: class ids at region resolution

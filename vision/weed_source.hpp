@@ -2,8 +2,8 @@
 // What the spray decision counts as weed: every green pixel (vegetation), vegetation between
 // tracked crop rows (the 2018 paper's inter-row rule), a segmentation network's weed class
 // (dnn), colour vegetation minus the network's crop mask (hybrid), colour-segmented plants
-// each classified by the network's votes (plants), or the network's classes kept only on colour
-// vegetation (dnn_vegetation).
+// each classified by the network's votes (plants), or the network's classes with their edges
+// drawn by colour vegetation (dnn_vegetation).
 #pragma once
 
 #include <array>
