@@ -81,15 +81,19 @@ void PlantClasses::decide_plants() {
   }
 }
 
+void PlantClasses::join(const cv::Mat& vegetation, cv::Mat& joined) const {
+  if (join_kernel_.empty()) {
+    vegetation.copyTo(joined);
+  } else {
+    cv::dilate(vegetation, joined, join_kernel_);
+  }
+}
+
 void PlantClasses::classify(const cv::Mat& vegetation, const cv::Mat& network_classes,
                             cv::Mat& classes) {
   const cv::Size size = vegetation.size();
   map_to_network(size, network_classes.size());
-  if (join_kernel_.empty()) {
-    vegetation.copyTo(joined_);
-  } else {
-    cv::dilate(vegetation, joined_, join_kernel_);
-  }
+  join(vegetation, joined_);
   const int plants = cv::connectedComponents(joined_, labels_, 8, CV_32S);
   cv::compare(network_classes, kClassCrop, near_crop_, cv::CMP_EQ);
   cv::compare(network_classes, kClassWeed, near_weed_, cv::CMP_EQ);

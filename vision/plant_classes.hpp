@@ -26,6 +26,9 @@ class PlantClasses {
   // ground. Writes one class id per pixel into `classes` (CV_8UC1, vegetation's size).
   void classify(const cv::Mat& vegetation, const cv::Mat& network_classes, cv::Mat& classes);
 
+  // The vegetation grown by join_px into `joined` (what classify calls plants).
+  void join(const cv::Mat& vegetation, cv::Mat& joined) const;
+
  private:
   struct Votes {
     std::uint32_t pixels = 0;  // pixels of the plant

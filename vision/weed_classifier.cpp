@@ -19,7 +19,6 @@ struct WeedClassifier::Masks {
   cv::Mat plant_classes;     // plants, dnn_vegetation: class ids at region resolution
   cv::Mat grown;             // dnn_vegetation: vegetation grown by the plants' join
   cv::Mat network_interior;  // dnn_vegetation: the network's plant less its outer pixel
-  cv::Mat join_kernel;       // dnn_vegetation: a disc of the plants' join radius
   cv::Mat weed;              // hybrid: vegetation outside near_crop; else the class map's weed
   cv::Mat margin_kernel;
   cv::Mat scratch;
@@ -104,9 +103,6 @@ WeedClassifier::WeedClassifier(const PipelineConfig& config,
     network_ =
         std::make_unique<WeedNetwork>(config_.dnn, model_onnx_bytes, config_.frame_mm_per_px);
   }
-  const int join_px = plant_join_px(config.frame_mm_per_px);
-  masks_->join_kernel =
-      cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * join_px + 1, 2 * join_px + 1));
   if (config_.crop_margin_px > 0) {
     const int side = 2 * config_.crop_margin_px + 1;
     masks_->margin_kernel = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(side, side));
@@ -224,7 +220,7 @@ void WeedClassifier::classify_dnn_vegetation(const std::uint8_t* index, std::uin
                                              FrameResult& result) {
   Masks& m = *masks_;
   // Grown as the plants source joins its plants: the soft leaf edge colour leaves out is plant.
-  cv::dilate(vegetation_mask(index, level), m.grown, m.join_kernel);
+  plants_.join(vegetation_mask(index, level), m.grown);
   // Colour trims only the outer network pixel of what the network calls plant, where its grid
   // blurs the edge; further in, the network's class stands whatever colour says (a shaded leaf,
   // a camera whose plants the threshold finds poorly).

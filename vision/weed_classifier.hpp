@@ -58,7 +58,7 @@ class WeedClassifier {
   std::vector<std::uint32_t> zone_row_columns_;  // inter_row: per zone row, per column
   std::vector<std::uint8_t> in_band_;            // inter_row: column lies in a crop-row band
   std::unique_ptr<WeedNetwork> network_;         // the sources that need a model
-  PlantClasses plants_;                          // plants
+  PlantClasses plants_;                          // plants; its join serves dnn_vegetation too
   struct Masks;
   std::unique_ptr<Masks> masks_;  // OpenCV buffers (hybrid, plants, dnn_vegetation masks)
 };
