@@ -133,8 +133,11 @@ ImageView Pipeline::class_map() {
 }
 
 std::size_t Pipeline::class_map_pixels() const {
-  if (weeds_) return weeds_->class_map_pixels();
   return static_cast<std::size_t>(region_.width) * region_.height;
+}
+
+PixelRect Pipeline::network_input() const {
+  return weeds_ ? weeds_->network_input() : PixelRect{};
 }
 
 ImageView Pipeline::class_map_into(std::span<std::uint8_t> out) {

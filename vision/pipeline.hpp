@@ -100,13 +100,14 @@ class Pipeline {
   // The crop rows tracked so far (inter_row; empty for the other sources).
   std::span<const CropRow> crop_rows() const;
   // The last frame's class of each pixel (kClassSoil/kClassCrop/kClassWeed) over the region
-  // of interest, built on demand for overlays and evaluation: at the region's resolution,
-  // except for dnn, whose map is at the network's output resolution.
+  // of interest at the region's resolution, built on demand for overlays and evaluation.
   ImageView class_map();
   // The same written into `out` without allocating (the daemon's snapshot handoff): a view of
   // `out`, or an empty view when `out` is smaller than class_map_pixels().
   ImageView class_map_into(std::span<std::uint8_t> out);
   std::size_t class_map_pixels() const;
+  // The network input the last frame was resampled to (x = y = 0; empty without a network).
+  PixelRect network_input() const;
   const PipelineConfig& config() const { return config_; }
   // The last frame's index image over the region of interest and its pixel rectangle, for
   // overlays and evaluation (mask = index > threshold).

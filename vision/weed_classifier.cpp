@@ -123,18 +123,19 @@ bool WeedClassifier::classify(const ImageView& frame, const PixelRect& region,
         classify_inter_row(index, level, result);
         break;
       case WeedSource::kDnn:
-        classify_dnn(frame, result);
+        run_network(frame);
+        densities_from_classes(network_classes(), masks_->weed, masks_->crop, result);
         break;
       case WeedSource::kHybrid:
-        classify_dnn(frame, result);
+        run_network(frame);
         classify_hybrid(index, level, result);
         break;
       case WeedSource::kPlants:
-        classify_dnn(frame, result);
+        run_network(frame);
         classify_plants(index, level, result);
         break;
       case WeedSource::kDnnVegetation:
-        classify_dnn(frame, result);
+        run_network(frame);
         classify_dnn_vegetation(index, level, result);
         break;
     }
@@ -180,10 +181,14 @@ void WeedClassifier::classify_inter_row(const std::uint8_t* index, std::uint8_t 
   }
 }
 
-void WeedClassifier::classify_dnn(const ImageView& frame, FrameResult& result) {
+void WeedClassifier::run_network(const ImageView& frame) {
   bool is_rgb = false;
   const cv::Mat image = region_image(frame, region_, masks_->converted, is_rgb);
-  densities_from_classes(network_->segment(image, is_rgb), masks_->weed, masks_->crop, result);
+  network_->segment(image, is_rgb);
+}
+
+const cv::Mat& WeedClassifier::network_classes() {
+  return network_->classes_at(cv::Size(region_.width, region_.height));
 }
 
 const cv::Mat& WeedClassifier::vegetation_mask(const std::uint8_t* index, std::uint8_t level) {
@@ -196,13 +201,11 @@ const cv::Mat& WeedClassifier::vegetation_mask(const std::uint8_t* index, std::u
 void WeedClassifier::classify_hybrid(const std::uint8_t* index, std::uint8_t level,
                                      FrameResult& result) {
   Masks& m = *masks_;
-  const cv::Size size(region_.width, region_.height);
   vegetation_mask(index, level);
   // Colour says what is vegetation, the network only which of it is crop: the vegetation
-  // mask (and its IoU) stays the colour pipeline's on any camera. The crop mask comes at the
-  // network's resolution; the margin is in frame pixels, so grow it at the region's.
-  cv::compare(network_->segment_result(), kClassCrop, m.scratch, cv::CMP_EQ);
-  cv::resize(m.scratch, m.near_crop, size, 0, 0, cv::INTER_NEAREST);
+  // mask (and its IoU) stays the colour pipeline's on any camera. The margin is in frame
+  // pixels.
+  cv::compare(network_classes(), kClassCrop, m.near_crop, cv::CMP_EQ);
   if (!m.margin_kernel.empty()) cv::dilate(m.near_crop, m.near_crop, m.margin_kernel);
   cv::bitwise_and(m.vegetation, m.near_crop, m.crop);
   cv::bitwise_xor(m.vegetation, m.crop, m.weed);  // vegetation minus crop
@@ -212,7 +215,7 @@ void WeedClassifier::classify_hybrid(const std::uint8_t* index, std::uint8_t lev
 void WeedClassifier::classify_plants(const std::uint8_t* index, std::uint8_t level,
                                      FrameResult& result) {
   Masks& m = *masks_;
-  plants_.classify(vegetation_mask(index, level), network_->segment_result(), m.plant_classes);
+  plants_.classify(vegetation_mask(index, level), network_classes(), m.plant_classes);
   densities_from_classes(m.plant_classes, m.weed, m.crop, result);
 }
 
@@ -224,37 +227,27 @@ void WeedClassifier::classify_dnn_vegetation(const std::uint8_t* index, std::uin
   // Colour trims only the outer network pixel of what the network calls plant, where its grid
   // blurs the edge; further in, the network's class stands whatever colour says (a shaded leaf,
   // a camera whose plants the threshold finds poorly).
-  const cv::Mat& network_classes = network_->segment_result();
-  cv::compare(network_classes, kClassSoil, m.network_interior, cv::CMP_NE);
+  cv::compare(network_->segment_result(), kClassSoil, m.network_interior, cv::CMP_NE);
   cv::erode(m.network_interior, m.network_interior, cv::Mat(), cv::Point(-1, -1), 1,
             cv::BORDER_REPLICATE);
   cv::resize(m.network_interior, m.scratch, m.grown.size(), 0, 0, cv::INTER_NEAREST);
   cv::bitwise_or(m.grown, m.scratch, m.grown);
-  cv::resize(network_classes, m.plant_classes, m.grown.size(), 0, 0, cv::INTER_NEAREST);
   // grown is 0 or 255 and soil is class 0: the AND keeps the class on vegetation, soil elsewhere.
   static_assert(kClassSoil == 0);
-  cv::bitwise_and(m.plant_classes, m.grown, m.plant_classes);
+  cv::bitwise_and(network_classes(), m.grown, m.plant_classes);
   densities_from_classes(m.plant_classes, m.weed, m.crop, result);
 }
 
-PixelRect WeedClassifier::class_map_rect() const {
-  if (config_.weed_source == WeedSource::kDnn) {
-    const cv::Mat& classes = network_->segment_result();
-    return {0, 0, classes.cols, classes.rows};
-  }
-  return {0, 0, region_.width, region_.height};
-}
-
-std::size_t WeedClassifier::class_map_pixels() const {
-  const PixelRect rect = class_map_rect();
-  return static_cast<std::size_t>(rect.width) * rect.height;
+PixelRect WeedClassifier::network_input() const {
+  if (!network_) return {};
+  const cv::Size size = network_->input_size();
+  return {0, 0, size.width, size.height};
 }
 
 ImageView WeedClassifier::class_map(const std::uint8_t* index, std::uint8_t level,
                                     std::span<std::uint8_t> out) {
   Masks& m = *masks_;
-  const PixelRect rect = class_map_rect();
-  const cv::Size size(rect.width, rect.height);
+  const cv::Size size(region_.width, region_.height);
   // A header on the caller's bytes: the writes below fill it in place, allocating nothing.
   cv::Mat map(size, CV_8UC1, out.data());
   switch (config_.weed_source) {
@@ -270,7 +263,7 @@ ImageView WeedClassifier::class_map(const std::uint8_t* index, std::uint8_t leve
       }
       break;
     case WeedSource::kDnn:
-      network_->segment_result().copyTo(map);
+      network_classes().copyTo(map);
       break;
     case WeedSource::kHybrid:
       // Vegetation kept out of the weeds by the margin is attributed to the crop.

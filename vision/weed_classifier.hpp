@@ -38,16 +38,19 @@ class WeedClassifier {
   const CropRowTracker& tracker() const { return tracker_; }
 
   // The last classified frame's class map (see Pipeline::class_map), written into `out`
-  // (at least class_map_pixels() bytes, packed rows).
+  // (at least region width x height bytes, packed rows).
   ImageView class_map(const std::uint8_t* index, std::uint8_t level, std::span<std::uint8_t> out);
-  std::size_t class_map_pixels() const;
+  // The network input the last frame became (x = y = 0; empty for sources without a network).
+  PixelRect network_input() const;
 
  private:
-  PixelRect class_map_rect() const;  // the class map's width and height (x = y = 0)
   // index > level over the region, into the masks' vegetation buffer.
   const cv::Mat& vegetation_mask(const std::uint8_t* index, std::uint8_t level);
   void classify_inter_row(const std::uint8_t* index, std::uint8_t level, FrameResult& result);
-  void classify_dnn(const ImageView& frame, FrameResult& result);
+  // The network on the frame's region; network_classes() then gives its classes at the
+  // region's resolution.
+  void run_network(const ImageView& frame);
+  const cv::Mat& network_classes();
   void classify_hybrid(const std::uint8_t* index, std::uint8_t level, FrameResult& result);
   void classify_plants(const std::uint8_t* index, std::uint8_t level, FrameResult& result);
   void classify_dnn_vegetation(const std::uint8_t* index, std::uint8_t level, FrameResult& result);

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <span>
+#include <vector>
 
 #include <opencv2/core.hpp>
 #include <opencv2/dnn.hpp>
@@ -11,6 +12,13 @@
 #include "vision/weed_source.hpp"
 
 namespace weedspray::vision {
+
+// One output coordinate's two neighbouring network pixels and the weight of the second.
+struct BilinearTap {
+  int low = 0;
+  int high = 0;
+  float weight = 0.0f;
+};
 
 class WeedNetwork {
  public:
@@ -30,7 +38,16 @@ class WeedNetwork {
 
   // The last segment()'s classes.
   const cv::Mat& segment_result() const { return classes_; }
+
+  // The last segment()'s classes at `size` (the image's own, typically): the argmax of the
+  // scores interpolated bilinearly (pixel centres aligned, as cv::resize INTER_LINEAR), which
+  // draws plant edges finer than the network's grid. Sized once per size: a steady stream
+  // allocates nothing.
+  const cv::Mat& classes_at(cv::Size size);
   const DnnModelSpec& spec() const { return spec_; }
+  // The last segment()'s scores (1 x classes x H x W) and network input size.
+  const cv::Mat& scores() const { return scores_; }
+  cv::Size input_size() const { return input_size_; }
 
  private:
   // segment() at a given network input size.
@@ -45,7 +62,19 @@ class WeedNetwork {
   cv::Mat resized_;
   cv::Mat blob_;
   cv::Mat scores_;
-  cv::Mat classes_;  // CV_8UC1
+  cv::Mat classes_;               // CV_8UC1
+  cv::Mat argmax_;                // CV_8UC1: the score channel each network pixel's argmax picked
+  cv::Mat fine_;                  // classes_at()'s classes
+  bool fine_is_current_ = false;  // fine_ holds the last segment()'s classes
+  std::vector<std::uint8_t> class_of_channel_;  // kClass* of each score channel
+  std::vector<BilinearTap> column_taps_, row_taps_;
+  struct ColumnRun {  // output columns [begin, end) that share their network pixels
+    int low, high, begin, end;
+  };
+  std::vector<ColumnRun> column_runs_;
+  std::vector<const ColumnRun*> mixed_runs_;   // one row pair's runs whose neighbours differ
+  std::vector<float> run_offset_, run_slope_;  // per score channel, one run's mix
+  cv::Size taps_from_, taps_to_;  // the network output and classes_at() sizes the taps map
 };
 
 }  // namespace weedspray::vision

@@ -9,8 +9,8 @@ whole frame shrunk by area averaging (area_shrink), channels swapped to RGB when
 (pixel - mean_rgb) * scale. When both the model's ground scale (spec.ground_mm_per_px) and the
 photos' (--dataset-mm-per-px) are known, the frame is resampled so that one input pixel covers
 ground_mm_per_px (each side rounded to a multiple of spec.stride, aspect kept); otherwise it is
-squeezed to the spec's input size. The argmax is taken at the network's resolution and scaled
-to the mask's size with nearest neighbour (what the daemon sees).
+squeezed to the spec's input size. Each class's scores are enlarged bilinearly to the mask's
+size and the argmax taken there (what the daemon sees).
 
 Figures: IoU per class, MIoU, MPA (mean per-class pixel accuracy), each image's own IoU per
 class (per_image; null where a class is neither in the image's labels nor predicted), and the
@@ -120,10 +120,16 @@ def to_blob(bgr, spec, size=None):
 
 
 def predict_labels(net, bgr, spec, frame_mm_per_px=None):
+    """Class ids of bgr at its own size, as the daemon gives them (vision/weed_network.cpp,
+    classes_at): the argmax of the network's scores each enlarged bilinearly to the frame."""
     size = network_input_size(spec, frame_mm_per_px, bgr.shape[1], bgr.shape[0])
     net.setInput(to_blob(bgr, spec, size))
-    labels = net.forward()[0].argmax(axis=0).astype(np.uint8)
-    return cv2.resize(labels, (bgr.shape[1], bgr.shape[0]), interpolation=cv2.INTER_NEAREST)
+    scores = net.forward()[0]
+    frame = (bgr.shape[1], bgr.shape[0])
+    if scores.shape[1:] == (frame[1], frame[0]):
+        return scores.argmax(axis=0).astype(np.uint8)
+    planes = [cv2.resize(plane, frame, interpolation=cv2.INTER_LINEAR) for plane in scores]
+    return np.argmax(np.stack(planes), axis=0).astype(np.uint8)
 
 
 def confusion_matrix(truth, predicted, classes):

@@ -192,7 +192,6 @@ TEST(GroundScale, TheNetworkInputMatchesTheModelsGroundScale) {
   }
 }
 
-// The class map is at the network's resolution, so its size shows the input the frame became.
 TEST(GroundScale, ThePipelineResamplesEachFrameToTheModelsScale) {
   PipelineConfig config = dnn_config();
   config.dnn.stride = 32;
@@ -205,17 +204,20 @@ TEST(GroundScale, ThePipelineResamplesEachFrameToTheModelsScale) {
   }
   const FrameResult& result = pipeline.process(frame.view());
   ASSERT_TRUE(pipeline.last_frame_ok()) << pipeline.last_error();
+  EXPECT_EQ(pipeline.network_input().width, 128);
+  EXPECT_EQ(pipeline.network_input().height, 64);
+  // The classes come back at the frame's resolution whatever the network's.
   const ImageView map = pipeline.class_map();
-  EXPECT_EQ(map.width, 128);
-  EXPECT_EQ(map.height, 64);
+  EXPECT_EQ(map.width, 512);
+  EXPECT_EQ(map.height, 256);
   EXPECT_GT(result.zone_density[0], 0.9);  // blue is class 2, weed
   EXPECT_LT(result.zone_density[1], 0.1);
   // Without the camera's scale the spec's fixed 64 x 64 input is used.
   config.frame_mm_per_px = 0.0;
   Pipeline squeezed(config, tiny_model());
   squeezed.process(frame.view());
-  EXPECT_EQ(squeezed.class_map().width, 64);
-  EXPECT_EQ(squeezed.class_map().height, 64);
+  EXPECT_EQ(squeezed.network_input().width, 64);
+  EXPECT_EQ(squeezed.network_input().height, 64);
 }
 
 TEST(GroundScale, ASpecWhoseSizeIsNotAMultipleOfItsStrideIsRefused) {
