@@ -2,6 +2,7 @@
 // A crop/weed/soil segmentation network run through OpenCV DNN (internal to vision/).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -60,6 +61,7 @@ class WeedNetwork {
   cv::dnn::Net net_;
   cv::Mat shrunk_by_whole_factor_;  // area_shrink's first step
   cv::Mat resized_;
+  std::array<cv::Mat, 3> channels_;  // the resized image's planes
   cv::Mat blob_;
   cv::Mat scores_;
   cv::Mat classes_;               // CV_8UC1

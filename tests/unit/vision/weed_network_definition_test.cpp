@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// WeedNetwork::classes_at against its definition: the argmax of every score plane resized
-// bilinearly (cv::resize INTER_LINEAR), with tests/data/tiny-3class.onnx on random frames.
+// WeedNetwork against OpenCV's own definitions, with tests/data/tiny-3class.onnx on random
+// frames: its input blob against cv::dnn::blobFromImage, classes_at against the argmax of every
+// score plane resized bilinearly (cv::resize INTER_LINEAR).
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include <opencv2/core.hpp>
+#include <opencv2/dnn.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "vision/weed_network.hpp"
@@ -115,6 +117,33 @@ TEST(NetworkClassesAt, EachSegmentGetsItsOwnFineClasses) {
   const cv::Mat second = network.classes_at(cv::Size(200, 200));
   EXPECT_GT(share_differing(first, second), 0.1);
   EXPECT_LT(share_differing(second, reference_classes(network, cv::Size(200, 200))), 0.001);
+}
+
+TEST(NetworkInput, TheBlobIsBlobFromImagesForEitherChannelOrder) {
+  const std::vector<std::uint8_t> bytes = tiny_model();
+  cv::dnn::Net reference =
+      cv::dnn::readNetFromONNX(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  const cv::Mat frame = random_blocks(cv::Size(64, 64), 1, 11);
+  for (const bool model_rgb : {true, false}) {
+    for (const bool frame_rgb : {true, false}) {
+      DnnModelSpec spec = tiny_spec();
+      spec.rgb = model_rgb;
+      spec.mean_rgb = {100.0, 120.0, 90.0};
+      spec.scale = 0.02;
+      WeedNetwork network(spec, bytes);
+      network.segment(frame, frame_rgb);
+      const auto& m = spec.mean_rgb;
+      const cv::Scalar mean =
+          model_rgb ? cv::Scalar(m[0], m[1], m[2]) : cv::Scalar(m[2], m[1], m[0]);
+      reference.setInput(cv::dnn::blobFromImage(frame, spec.scale, frame.size(), mean,
+                                                frame_rgb != model_rgb, false));
+      const cv::Mat expected = reference.forward();
+      ASSERT_EQ(expected.total(), network.scores().total());
+      EXPECT_LT(cv::norm(expected.reshape(1, 1), network.scores().reshape(1, 1), cv::NORM_INF),
+                1e-4)
+          << "model rgb " << model_rgb << ", frame rgb " << frame_rgb;
+    }
+  }
 }
 
 }  // namespace
