@@ -4,8 +4,6 @@
 // score plane resized bilinearly (cv::resize INTER_LINEAR).
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <iterator>
 #include <string>
 #include <vector>
 
@@ -13,17 +11,13 @@
 #include <opencv2/dnn.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "tiny_model.hpp"
 #include "vision/weed_network.hpp"
 
 namespace weedspray::vision {
 namespace {
 
-std::vector<std::uint8_t> tiny_model() {
-  const std::string path = std::string(WEEDSPRAY_SOURCE_DIR) + "/tests/data/tiny-3class.onnx";
-  std::ifstream file(path, std::ios::binary);
-  EXPECT_TRUE(file) << path;
-  return {std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
-}
+using test::tiny_model;
 
 DnnModelSpec tiny_spec() {
   DnnModelSpec spec;

@@ -4,14 +4,13 @@
 // and order).
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <tuple>
 #include <vector>
 
 #include "test_images.hpp"
+#include "tiny_model.hpp"
 #include "vision/pipeline.hpp"
 
 namespace weedspray::vision {
@@ -19,12 +18,7 @@ namespace {
 
 using test::BgrFrame;
 
-std::vector<std::uint8_t> tiny_model() {
-  const std::string path = std::string(WEEDSPRAY_SOURCE_DIR) + "/tests/data/tiny-3class.onnx";
-  std::ifstream file(path, std::ios::binary);
-  EXPECT_TRUE(file) << path;
-  return {std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
-}
+using test::tiny_model;
 
 PipelineConfig dnn_config(WeedSource source = WeedSource::kDnn) {
   PipelineConfig config = default_pipeline_config();
