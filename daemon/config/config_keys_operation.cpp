@@ -61,13 +61,14 @@ void append_operation_keys(std::vector<KeySpec<Config>>& keys) {
      "what counts as weed. vegetation: every green pixel (bare soil: fallow, pre-plant); "
      "inter_row: vegetation between the crop rows, rows found as peaks of the column histogram "
      "and tracked from frame to frame (row crops; see row_band_cm); dnn: the weed class of the "
-     "segmentation network in model; hybrid: colour vegetation minus the network's crop class "
+     "segmentation network in model, its scores interpolated to the camera's pixels; hybrid: "
+     "colour vegetation minus the network's crop class "
      "grown by crop_margin_cm; plants: colour vegetation at the camera's resolution, each "
      "connected plant crop or weed by the network's votes (plants the network cannot resolve "
      "are weed; see min_plant_cm2); dnn_vegetation: the network's classes, but in the outer "
      "network pixel of each plant soil wherever colour finds no vegetation within about a "
-     "millimetre (the network decides on a grid coarser than a leaf's edge, colour draws the "
-     "edge). The rate law uses each zone's weed density",
+     "millimetre (the network's scores are coarser than a leaf's edge, colour draws the edge). "
+     "The rate law uses each zone's weed density",
      {"vegetation", "inter_row", "dnn", "hybrid", "plants", "dnn_vegetation"}},
     {WS_KEY(vision, row_band_cm), 30.0, 1, 500, "cm",
      "inter_row: width on the ground of the band around each crop row that counts as crop "
@@ -88,7 +89,7 @@ void append_operation_keys(std::vector<KeySpec<Config>>& keys) {
      "tools/train/train.py writes it). A relative path is looked up beside the configuration "
      "file that sets it, then among the installed models (/usr/share/weedspray/models from the "
      "package; a build tree also looks in its checkout's models/). The default is the shipped "
-     "crop/weed/soil model trained on peanut fields, fed 2 mm of ground per pixel and deciding "
+     "crop/weed/soil model trained on peanut fields, fed 2 mm of ground per pixel with scores "
      "every 4 mm, which keeps up with a camera that sees about 1 mm per pixel (also shipped: "
      "weed-peanut-4mm.onnx, fed and deciding at 4 and 8 mm, faster and blind to more small "
      "weeds; weed-peanut.onnx, learnt at 0.94 mm per network pixel, for cameras closer to the "
