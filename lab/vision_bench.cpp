@@ -258,10 +258,8 @@ void add_bench_vision_command(CLI::App& app) {
       "Time a vision pipeline on 1280x800 frames, one thread (the default one vs an OpenCV "
       "baseline, or a weed source)");
   bench
-      ->add_option(
-          "--pipeline", options->pipeline,
-          "Weed source: vegetation (the default pipeline), inter_row, dnn, hybrid, plants, "
-          "dnn_vegetation")
+      ->add_option("--pipeline", options->pipeline,
+                   "Weed source (vegetation is the default pipeline): " + weed_source_list())
       ->capture_default_str();
   bench
       ->add_option("--model", options->model,

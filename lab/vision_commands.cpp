@@ -11,6 +11,7 @@
 #include "lab/vision_eval.hpp"
 #include "lab/vision_tools.hpp"
 #include "lab/weed_eval_command.hpp"
+#include "lab/weed_model.hpp"
 
 namespace weedspray::lab {
 namespace {
@@ -127,8 +128,7 @@ void add_vision_commands(CLI::App& app) {
           "ONNX weed model (spec from FILE.json): adds dnn, hybrid, plants and dnn_vegetation")
       ->check(CLI::ExistingFile);
   eval->add_option("--weed-source", weeds.weed_source,
-                   "Evaluate only this source: vegetation, inter_row, dnn, hybrid, plants, "
-                   "dnn_vegetation");
+                   "Evaluate only this source: " + weed_source_list());
   eval->add_option("--config", weeds.config,
                    "weedsprayd configuration: [vision] keys of the first camera, its model and "
                    "spray.decision_threshold")

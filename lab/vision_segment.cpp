@@ -203,7 +203,7 @@ void add_segment_command(CLI::App& app) {
                       "(OUT_<stem>.png for several images)");
   segment
       ->add_option("--weed-source", options->weed_source,
-                   "What counts as weed: " + join_names(vision::weed_source_names()))
+                   "What counts as weed: " + weed_source_list())
       ->capture_default_str();
   segment
       ->add_option("--model", options->model,

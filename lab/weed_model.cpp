@@ -61,13 +61,17 @@ double default_decision_threshold() {
   throw std::logic_error("daemon key table has no spray.decision_threshold");
 }
 
-vision::WeedSource parse_weed_source_option(const std::string& option, const std::string& value) {
-  if (const auto source = vision::parse_weed_source(value)) return *source;
+std::string weed_source_list() {
   std::string names;
   for (std::string_view name : vision::weed_source_names()) {
     names += (names.empty() ? "" : ", ") + std::string(name);
   }
-  throw std::runtime_error(option + " " + value + ": unknown (one of " + names + ")");
+  return names;
+}
+
+vision::WeedSource parse_weed_source_option(const std::string& option, const std::string& value) {
+  if (const auto source = vision::parse_weed_source(value)) return *source;
+  throw std::runtime_error(option + " " + value + ": unknown (one of " + weed_source_list() + ")");
 }
 
 void parse_grid_option(const std::string& option, const std::string& value, int& rows, int& cols) {

@@ -41,6 +41,9 @@ DaemonVisionSetup read_daemon_vision_setup(const std::filesystem::path& config_f
 // spray.decision_threshold's default in the daemon's key table (the one place it is set).
 double default_decision_threshold();
 
+// Every weed source's name, comma-separated, for help texts and errors.
+std::string weed_source_list();
+
 // "vegetation" ... -> WeedSource; std::runtime_error naming `option` and the choices.
 vision::WeedSource parse_weed_source_option(const std::string& option, const std::string& value);
 
