@@ -276,7 +276,8 @@ build_stage1() { # -> $work_dir/stage1.cpio: busybox, the root disk's modules, /
   (cd "$root" && find . -print0 | cpio --null -o -H newc --quiet) >"$work_dir/stage1.cpio"
 }
 
-run_guest() { # returns QEMU's status
+# shellcheck disable=SC2317 # run through vm_boot
+run_guest() { # -> $guest_log, vm_reached_init; returns QEMU's status
   local status=0 machine=(qemu-system-x86_64 -cpu qemu64)
   # arm64: the virt board's PL011 is ttyAMA0; the guest powers off through PSCI. Both guests
   # run under TCG (this host's /dev/kvm has no hardware virtualisation), slow enough — aarch64
@@ -289,7 +290,11 @@ run_guest() { # returns QEMU's status
     -kernel "$vmlinux" -initrd "$work_dir/stage1.cpio" \
     -drive "file=$work_dir/rootfs.ext4,format=raw,if=virtio" -snapshot \
     -append "console=$console quiet loglevel=3 panic=-1 oops=panic systemd.show_status=0 systemd.firstboot=off${slow:+ weedspray.tcg_stalls_expected=1}${hil:+ weedspray.hil=1}${selftest:+ weedspray.hil_selftest=1}" \
-    </dev/null >"$guest_log" 2>&1 || status=$?
+    </dev/null >"$guest_log" 2>&1 &
+  vm_qemu_pid=$!
+  vm_guest_log="$guest_log"
+  vm_watch_boot
+  wait "$vm_qemu_pid" || status=$?
   return "$status"
 }
 
@@ -313,7 +318,7 @@ build_stage1
 note "disk image $(du -h --apparent-size "$work_dir/rootfs.ext4" | cut -f1) made in $((SECONDS - disk_started)) s; booting $kernel_release"
 boot_started=$SECONDS
 qemu_status=0
-run_guest || qemu_status=$?
+vm_boot run_guest || qemu_status=$?
 note "guest ran for $((SECONDS - boot_started)) s (QEMU status $qemu_status); whole run $((SECONDS - started_all)) s"
 sed -i 's/\r$//' "$guest_log" # the serial console ends lines with CR LF
 

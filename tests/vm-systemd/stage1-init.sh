@@ -4,6 +4,9 @@
 # Stage-1 PID 1 of the systemd guest (run-systemd-vm-test.sh packs it as /init with busybox and
 # the modules in /modules.load): loads the virtio disk and ext4 drivers Debian builds as
 # modules, mounts the root disk /dev/vda and hands over to its systemd.
+# On a line of its own (the firmware leaves one open): the host's proof of a booted kernel
+# (tests/vm/vm-kernel.sh, vm_watch_boot).
+printf "\nWEEDSPRAY-VM-INIT\n"
 /bin/busybox --install -s /bin
 export PATH=/bin
 fail() {

@@ -5,6 +5,7 @@
 # listed in /modules.load and the programs under test in /tests).
 #
 # It sets up what the programs expect, then runs each one and reports on the serial console:
+#   WEEDSPRAY-VM-INIT                           the kernel has started /init (first line)
 #   WEEDSPRAY-VM-SETUP OK                       simulated GPIO chips and camera are ready
 #   WEEDSPRAY-VM-RESULT <program> PASS|FAIL rc=N  one line per program
 #   WEEDSPRAY-VM-DONE                           every program has run
@@ -18,6 +19,9 @@
 #     interrupt-cnt counts rising edges of flow_fast (counter named "interrupt-cnt", bound by
 #     the test-only interrupt_counter_fixture.ko; count0/enable left 0 for the tests to set)
 #   vivid with one video capture node (/dev/video*), timestamps at the start of exposure
+# On a line of its own (the firmware leaves one open): the host's proof of a booted kernel
+# (vm-kernel.sh, vm_watch_boot).
+printf "\nWEEDSPRAY-VM-INIT\n"
 /bin/busybox --install -s /bin
 export PATH=/bin:/usr/bin
 export HOME=/tmp

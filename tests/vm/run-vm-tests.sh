@@ -203,7 +203,8 @@ build_initramfs() { # -> $work_dir/initrd.cpio
 }
 
 # --- boot and judge -----------------------------------------------------------------------
-run_guest() { # -> $guest_log; returns QEMU's status
+# shellcheck disable=SC2317 # run through vm_boot
+run_guest() { # -> $guest_log, vm_reached_init; returns QEMU's status
   local status=0 machine
   # amd64, isa-debug-exit: the guest writes its result to port 0xf4 and QEMU exits at once.
   # arm64 virt has no such port: the guest powers off through PSCI (QEMU exits 0); the
@@ -223,7 +224,11 @@ run_guest() { # -> $guest_log; returns QEMU's status
   timeout --foreground "$boot_timeout_s" "${machine[@]}" -accel tcg -smp 2 -m 1024 \
     -nographic -no-reboot -nodefaults -serial stdio \
     -kernel "$vmlinux" -initrd "$work_dir/initrd.cpio" \
-    </dev/null >"$guest_log" 2>&1 || status=$?
+    </dev/null >"$guest_log" 2>&1 &
+  vm_qemu_pid=$!
+  vm_guest_log="$guest_log"
+  vm_watch_boot
+  wait "$vm_qemu_pid" || status=$?
   return "$status"
 }
 
@@ -238,7 +243,7 @@ build_initramfs
 note "booting $kernel_release with $(du -h "$work_dir/initrd.cpio" | cut -f1) initramfs"
 boot_started=$SECONDS
 qemu_status=0
-run_guest || qemu_status=$?
+vm_boot run_guest || qemu_status=$?
 note "guest ran for $((SECONDS - boot_started)) s (QEMU status $qemu_status)"
 sed -i 's/\r$//' "$guest_log" # the serial console ends lines with CR LF
 
@@ -269,6 +274,7 @@ fi
 echo "===== guest console =====" >&2
 cat -v "$guest_log" >&2
 echo "===== end of guest console =====" >&2
+((vm_reached_init)) || note "FAIL: the guest kernel did not start /init in either boot"
 ((setup_ok)) || note "FAIL: guest setup did not complete (no WEEDSPRAY-VM-SETUP OK)"
 ((done_ok)) || note "FAIL: guest did not finish (no WEEDSPRAY-VM-DONE; QEMU status $qemu_status, 124 = timeout after $boot_timeout_s s)"
 for name in "${failures[@]}"; do note "FAIL $name"; done

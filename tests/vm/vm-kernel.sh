@@ -17,6 +17,9 @@
 #                       hold the cache lock)
 #   vm_module_load_list MODULE...   insmod paths (/lib/modules/...), dependencies first
 #   vm_arm64_guest_tools            arm64: Debian's arm64 busybox-static, gpiod, v4l-utils
+#   vm_boot BOOT                    runs BOOT (the caller's function that starts QEMU in the
+#                                   background, sets vm_qemu_pid and vm_guest_log, waits for
+#                                   it: vm_watch_boot), once more if its kernel hung before /init
 #
 # module_root is a self-contained lib/modules/$kernel_release tree (depmod has run) holding
 # only the modules some guest loads (vm_staged_modules), so a guest can copy it whole and use
@@ -377,4 +380,47 @@ prepare_kernel() {
     ! -path "$kernel_dir" -exec rm -rf {} +
   touch "$kernel_dir/ready"
   note "kernel $kernel_release ($kernel_version) prepared in $((SECONDS - started)) s"
+}
+
+# --- booting --------------------------------------------------------------------------------
+# Each guest's PID 1 prints WEEDSPRAY-VM-INIT first. A kernel that has not started it within
+# vm_init_deadline_s has hung in its own boot: TCG's emulated SMP bring-up hangs now and then,
+# with no console output the whole timeout long. /init starts 2-3 s after QEMU does here (amd64
+# and arm64), 5 s with both host cores busy.
+vm_init_deadline_s=120
+
+# Waits until $vm_guest_log shows /init started or QEMU ($vm_qemu_pid, under timeout) ends;
+# past the deadline without it, stops QEMU. Sets vm_reached_init (1 or 0).
+vm_watch_boot() {
+  local waited=0
+  vm_reached_init=0
+  while kill -0 "$vm_qemu_pid" 2>/dev/null; do
+    if grep -qa 'WEEDSPRAY-VM-INIT' "$vm_guest_log"; then
+      vm_reached_init=1
+      note "the guest started /init after $waited s"
+      return 0
+    fi
+    if ((waited >= vm_init_deadline_s)); then
+      kill "$vm_qemu_pid" 2>/dev/null || true # timeout passes the signal on to QEMU
+      return 0
+    fi
+    sleep 1
+    waited=$((waited + 1))
+  done
+  if grep -qa 'WEEDSPRAY-VM-INIT' "$vm_guest_log"; then vm_reached_init=1; fi
+  return 0
+}
+
+# Runs BOOT, and once more when the guest's kernel never started /init; a hang after /init, or
+# a second one before it, is the caller's failure. Returns BOOT's last status.
+vm_boot() {
+  local status=0
+  "$1" || status=$?
+  if ((!vm_reached_init)); then
+    note "the guest kernel did not start /init within $vm_init_deadline_s s (QEMU status $status): its boot hung; booting once more"
+    cat -v "$vm_guest_log" >&2
+    status=0
+    "$1" || status=$?
+  fi
+  return "$status"
 }
