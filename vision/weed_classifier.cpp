@@ -215,7 +215,8 @@ void WeedClassifier::classify_hybrid(const std::uint8_t* index, std::uint8_t lev
 void WeedClassifier::classify_plants(const std::uint8_t* index, std::uint8_t level,
                                      FrameResult& result) {
   Masks& m = *masks_;
-  plants_.classify(vegetation_mask(index, level), network_classes(), m.plant_classes);
+  // The network votes on its own grid: the rule's neighbourhood is one network pixel.
+  plants_.classify(vegetation_mask(index, level), network_->segment_result(), m.plant_classes);
   densities_from_classes(m.plant_classes, m.weed, m.crop, result);
 }
 
