@@ -13,6 +13,7 @@
 #include <iostream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,8 +51,10 @@ Scores segment_held_out_ground(const std::string& config_text, bool network_grid
   const CameraSection& camera = config.cameras.front();
   const vision::PipelineConfig pipeline_config = daemon::pipeline_config(config, camera);
   vision::Pipeline pipeline(pipeline_config, config.model->onnx);
-  vision::WeedNetwork network(pipeline_config.dnn, config.model->onnx,
-                              pipeline_config.frame_mm_per_px);
+  std::optional<vision::WeedNetwork> network;
+  if (network_grid) {
+    network.emplace(pipeline_config.dnn, config.model->onnx, pipeline_config.frame_mm_per_px);
+  }
   const io::sim::GroundScale scale{kPeanutMmPerPx, camera_ground_mm_per_px(camera),
                                    cv::Size(camera.width, camera.height)};
   std::array<std::array<double, 3>, 3> confusion{};  // [truth][predicted]
@@ -80,7 +83,7 @@ Scores segment_held_out_ground(const std::string& config_text, bool network_grid
     const vision::ImageView map = pipeline.class_map();
     cv::Mat classes(map.height, map.width, CV_8UC1, const_cast<std::uint8_t*>(map.data),
                     map.stride);
-    if (network_grid) classes = network.segment(frame, false);
+    if (network) classes = network->segment(frame, false);
     cv::Mat predicted;
     cv::resize(classes, predicted, truth.size(), 0, 0, cv::INTER_NEAREST);
     for (int y = 0; y < truth.rows; ++y) {
