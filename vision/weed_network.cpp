@@ -18,8 +18,10 @@ namespace {
 // Area averaging in two steps: by a whole factor of each side first (OpenCV's integer-ratio
 // path), then the rest, on a frame that many times smaller. One INTER_AREA at a ratio that is
 // no whole number takes OpenCV's slower general path over the whole frame. The factor divides
-// the side exactly, so the frame's geometry is kept to the pixel. tools/train/evaluate.py
-// resamples the same way.
+// the side exactly, so the frame's geometry is kept to the pixel. A rest that shrinks by less
+// than half (800 -> 400 -> 384 rows at the default camera) is bilinear: its two taps already
+// cover every source pixel, and OpenCV's general area path costs four times as much there.
+// tools/train/evaluate.py resamples the same way.
 int whole_factor(int from, int to) {
   for (int factor = from / to; factor > 1; --factor) {
     if (from % factor == 0) return factor;
@@ -35,7 +37,8 @@ void area_shrink(const cv::Mat& image, cv::Size size, cv::Mat& whole, cv::Mat& o
     return;
   }
   cv::resize(image, whole, step, 0, 0, cv::INTER_AREA);
-  cv::resize(whole, out, size, 0, 0, cv::INTER_AREA);
+  const bool rest_under_half = step.width <= 2 * size.width && step.height <= 2 * size.height;
+  cv::resize(whole, out, size, 0, 0, rest_under_half ? cv::INTER_LINEAR : cv::INTER_AREA);
 }
 
 // Taps from `to` output pixels onto `from` network pixels with pixel centres aligned (as

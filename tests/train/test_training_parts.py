@@ -108,6 +108,9 @@ class Sampling(unittest.TestCase):
             self.assertLess(float(np.abs(shrunk.astype(float) - direct).mean()), 1.5)
             square = [np.argwhere(image[..., 0] > 200).mean(axis=0) for image in (shrunk, direct)]
             self.assertLess(float(np.abs(square[0] - square[1]).max()), 0.15)  # its centre, in output pixels
+        halved = cv2.resize(frame, (640, 400), interpolation=cv2.INTER_AREA)  # the rest shrinks by less than half
+        self.assertTrue(np.array_equal(area_shrink(frame, (640, 384)),
+                                       cv2.resize(halved, (640, 384), interpolation=cv2.INTER_LINEAR)))
         odd = frame[:221, :295]
         self.assertTrue(np.array_equal(area_shrink(odd, (64, 64)), cv2.resize(odd, (64, 64), interpolation=cv2.INTER_AREA)))
 

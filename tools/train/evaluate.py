@@ -103,12 +103,14 @@ def whole_factor(side, to):
 
 def area_shrink(bgr, size):
     """Area averaging as the daemon shrinks a frame (vision/weed_network.cpp): by a whole factor
-    of each side that divides it first, then the rest."""
+    of each side that divides it first, then the rest (bilinear when it shrinks by less than
+    half: its two taps cover every source pixel)."""
     step = (bgr.shape[1] // whole_factor(bgr.shape[1], size[0]), bgr.shape[0] // whole_factor(bgr.shape[0], size[1]))
     if step == (bgr.shape[1], bgr.shape[0]) or step == tuple(size):
         return cv2.resize(bgr, size, interpolation=cv2.INTER_AREA)
     whole = cv2.resize(bgr, step, interpolation=cv2.INTER_AREA)
-    return cv2.resize(whole, size, interpolation=cv2.INTER_AREA)
+    rest_under_half = step[0] <= 2 * size[0] and step[1] <= 2 * size[1]
+    return cv2.resize(whole, size, interpolation=cv2.INTER_LINEAR if rest_under_half else cv2.INTER_AREA)
 
 
 def to_blob(bgr, spec, size=None):

@@ -256,8 +256,9 @@ def model_spec(args, ground_mm):
         "mean_rgb": list(MEAN_RGB),
         "scale": SCALE,
         "rgb": True,
-        "resize": "whole frame, area averaging (by a whole factor dividing each side, then the rest): to ground_mm_per_px per pixel "
-                  "when known (sides rounded to the stride), else to the input size (aspect not kept)",
+        "resize": "whole frame, area averaging (by a whole factor dividing each side, then the rest, bilinear when it "
+                  "shrinks by less than half): to ground_mm_per_px per pixel when known (sides rounded to the stride), "
+                  "else to the input size (aspect not kept)",
         "classes": args.class_names,
         "soil_class": args.soil_class,
         "crop_class": args.crop_class,
