@@ -74,6 +74,10 @@ class SmallSetTraining(unittest.TestCase):
         self.assertEqual([row["image"] for row in validation["per_image"]], VAL)
         self.assertIn("weed", validation["intervals"]["iou"])
         self.assertEqual(validation["zones"]["not_counted"], 0)
+        for limit in ("true_outline", "true_classes"):
+            self.assertEqual(set(validation["limits"][limit]["iou"]), {"soil", "crop", "weed"})
+        self.assertEqual(validation["limits"]["true_outline"]["iou"]["soil"], 1.0)  # the labels' soil, exactly
+        self.assertIn("with the labels' plant outline", self.log)
 
     def test_steps_log_and_training_record(self):
         self.assertIn("steps/s", self.log)

@@ -24,6 +24,8 @@ clean_left_dry (all weed-free zones left dry); null where no zone is of that kin
 threshold leaves most crop_only zones dry while keeping recall >= 0.95 (what a farmer pays
 for: weeds hit, herbicide kept off the crop). intervals: 95 % percentile bootstrap over images
 (1000 resamples, seeded) of the IoU per class, MIoU and the zone figures at the best threshold.
+With --limits, limits.py's two figures: the labels' plant outline with the model's choice of
+class, and the model's outline with the labels' classes (which of the two holds the model back).
 
     /usr/bin/python3 tools/train/evaluate.py --model models/weed-peanut.onnx \
         --spec models/weed-peanut.json --images ../shared/data/peanut/images \
@@ -38,6 +40,8 @@ import time
 
 import cv2
 import numpy as np
+
+import limits
 
 IGNORE = 255
 WEEDY_ZONE_SHARE = 0.005
@@ -121,17 +125,22 @@ def to_blob(bgr, spec, size=None):
     return cv2.dnn.blobFromImage(resized, spec["scale"], size, tuple(spec["mean_rgb"]), swapRB=spec["rgb"])
 
 
-def predict_labels(net, bgr, spec, frame_mm_per_px=None):
-    """Class ids of bgr at its own size, as the daemon gives them (vision/weed_network.cpp,
-    classes_at): the argmax of the network's scores each enlarged bilinearly to the frame."""
+def predict_scores(net, bgr, spec, frame_mm_per_px=None):
+    """classes x H x W scores of bgr at its own size: the network's, each enlarged bilinearly
+    to the frame (pixel centres aligned) when the network scores coarser."""
     size = network_input_size(spec, frame_mm_per_px, bgr.shape[1], bgr.shape[0])
     net.setInput(to_blob(bgr, spec, size))
     scores = net.forward()[0]
     frame = (bgr.shape[1], bgr.shape[0])
     if scores.shape[1:] == (frame[1], frame[0]):
-        return scores.argmax(axis=0).astype(np.uint8)
-    planes = [cv2.resize(plane, frame, interpolation=cv2.INTER_LINEAR) for plane in scores]
-    return np.argmax(np.stack(planes), axis=0).astype(np.uint8)
+        return scores
+    return np.stack([cv2.resize(plane, frame, interpolation=cv2.INTER_LINEAR) for plane in scores])
+
+
+def predict_labels(net, bgr, spec, frame_mm_per_px=None):
+    """Class ids of bgr at its own size, as the daemon gives them (vision/weed_network.cpp,
+    classes_at): the argmax of the network's scores each enlarged bilinearly to the frame."""
+    return predict_scores(net, bgr, spec, frame_mm_per_px).argmax(axis=0).astype(np.uint8)
 
 
 def confusion_matrix(truth, predicted, classes):
@@ -231,18 +240,25 @@ def _rounded(values, names):
 class Scores:
     """Per-image confusion matrices and zone cells, and the figures drawn from them."""
 
-    def __init__(self, names, crop_class, weed_class):
+    def __init__(self, names, crop_class, weed_class, soil_class=0):
         self.names = list(names)
         self.crop_class = crop_class
         self.weed_class = weed_class
+        self.soil_class = soil_class
         self.stems = []
         self.confusions = []
         self.cells = []
+        self.limit_confusions = {}  # limits.py's figures, when add() is given the scores
 
-    def add(self, stem, truth, predicted):
+    def add(self, stem, truth, predicted, scores=None):
         self.stems.append(stem)
         self.confusions.append(confusion_matrix(truth, predicted, len(self.names)))
         self.cells.append(zone_cells(truth, predicted, self.crop_class, self.weed_class))
+        if scores is not None:
+            for name, labels in (("true_outline", limits.true_outline(truth, scores, self.soil_class)),
+                                 ("true_classes", limits.true_classes(truth, predicted, self.soil_class))):
+                confusion = confusion_matrix(truth, labels, len(self.names))
+                self.limit_confusions[name] = self.limit_confusions.get(name, 0) + confusion
 
     def per_image(self):
         rows = []
@@ -258,7 +274,7 @@ class Scores:
         iou = tp / np.maximum(confusion.sum(axis=1) + confusion.sum(axis=0) - tp, 1)
         accuracy = tp / np.maximum(confusion.sum(axis=1), 1)
         zones = zone_tradeoff(np.concatenate(self.cells))
-        return {
+        summary = {
             "iou": _rounded(iou, self.names),
             "miou": round(float(iou.mean()), 4),
             "pixel_accuracy": _rounded(accuracy, self.names),
@@ -268,6 +284,13 @@ class Scores:
             "per_image": self.per_image(),
             "intervals": self.intervals(zones["best"]["threshold"]),
         }
+        if self.limit_confusions:
+            summary["limits"] = {}
+            for name, confusion in self.limit_confusions.items():
+                limit_iou = iou_per_class(confusion)
+                summary["limits"][name] = {"iou": _rounded(limit_iou, self.names),
+                                           "miou": round(float(np.nanmean(limit_iou)), 4)}
+        return summary
 
     def intervals(self, threshold, resamples=BOOTSTRAP_RESAMPLES, seed=0):
         """95 % percentile bootstrap over images of IoU per class, MIoU and the zone figures at
@@ -300,12 +323,18 @@ def _interval(samples):
     return [round(float(low), 4), round(float(high), 4)]
 
 
-def evaluate(net, spec, images, masks, stems, dataset_mm_per_px=None):
-    """All figures of net on the stems (see the module's docstring)."""
-    scores = Scores(spec["classes"], spec["crop_class"], spec["weed_class"])
+def _add_prediction(scores, name, truth, net, bgr, spec, frame_mm_per_px, with_limits):
+    planes = predict_scores(net, bgr, spec, frame_mm_per_px)
+    scores.add(name, truth, planes.argmax(axis=0).astype(np.uint8), planes if with_limits else None)
+
+
+def evaluate(net, spec, images, masks, stems, dataset_mm_per_px=None, with_limits=False):
+    """All figures of net on the stems (see the module's docstring); with_limits adds
+    limits.py's figures."""
+    scores = Scores(spec["classes"], spec["crop_class"], spec["weed_class"], spec.get("soil_class", 0))
     for stem in stems:
         image, mask = load_pair(images, masks, stem, len(spec["classes"]))
-        scores.add(stem, mask, predict_labels(net, image, spec, dataset_mm_per_px))
+        _add_prediction(scores, stem, mask, net, image, spec, dataset_mm_per_px, with_limits)
     return scores.summary()
 
 
@@ -339,13 +368,13 @@ def laid_frames(pairs, photo_mm_per_px, frame_mm_per_px, size):
     return frames
 
 
-def evaluate_laid(net, spec, images, masks, stems, photo_mm_per_px, frame_mm_per_px, size):
+def evaluate_laid(net, spec, images, masks, stems, photo_mm_per_px, frame_mm_per_px, size, with_limits=False):
     """The figures of evaluate() over frames of the stems laid as a camera sees them: each
     frame counts as one image (zones are the frame's, intervals are over frames)."""
     pairs = [load_pair(images, masks, stem, len(spec["classes"])) for stem in stems]
-    scores = Scores(spec["classes"], spec["crop_class"], spec["weed_class"])
+    scores = Scores(spec["classes"], spec["crop_class"], spec["weed_class"], spec.get("soil_class", 0))
     for n, (frame, truth) in enumerate(laid_frames(pairs, photo_mm_per_px, frame_mm_per_px, size)):
-        scores.add(f"frame {n}", truth, predict_labels(net, frame, spec, frame_mm_per_px))
+        _add_prediction(scores, f"frame {n}", truth, net, frame, spec, frame_mm_per_px, with_limits)
     return scores.summary()
 
 
@@ -378,6 +407,9 @@ def main():
     parser.add_argument("--frame-mm-per-px", type=float, help="the camera's ground mm per pixel for --lay-frames")
     parser.add_argument("--per-image", action="store_true", help="also print each image's IoU per class")
     parser.add_argument("--bench", action="store_true", help="also time one forward pass, one thread")
+    parser.add_argument("--limits", action="store_true",
+                        help="also score the model with the labels' plant outline and with the labels' classes "
+                             "(limits.py: does the outline or the choice of class hold it back?)")
     args = parser.parse_args()
     with open(args.spec) as spec_file:
         spec = json.load(spec_file)["spec"]
@@ -392,11 +424,12 @@ def main():
         if not (args.dataset_mm_per_px and args.frame_mm_per_px):
             parser.error("--lay-frames needs --dataset-mm-per-px and --frame-mm-per-px (> 0)")
         result = evaluate_laid(net, spec, args.images, args.masks, read_list(args.list), args.dataset_mm_per_px,
-                               args.frame_mm_per_px, size)
+                               args.frame_mm_per_px, size, args.limits)
     elif args.frame_mm_per_px:
         parser.error("--frame-mm-per-px is the camera's scale for --lay-frames; give --lay-frames WxH too")
     else:
-        result = evaluate(net, spec, args.images, args.masks, read_list(args.list), args.dataset_mm_per_px)
+        result = evaluate(net, spec, args.images, args.masks, read_list(args.list), args.dataset_mm_per_px,
+                          args.limits)
     if not args.per_image:
         del result["per_image"]
     if args.bench:

@@ -346,7 +346,7 @@ def measure(args, model, spec, val_pairs, stems):
     for key in ("per_image", "intervals"):
         del training_set[key]
     figures = {
-        "validation": evaluate(net, spec, args.images, args.masks, val_stems, args.dataset_mm_per_px),
+        "validation": evaluate(net, spec, args.images, args.masks, val_stems, args.dataset_mm_per_px, with_limits=True),
         "training_set": training_set,
         "export": {"onnx_bytes": os.path.getsize(onnx_path), "opset": OPSET, "opencv_vs_torch_max_abs_diff": diff,
                    "parameters": sum(p.numel() for p in model.parameters())},
@@ -458,7 +458,9 @@ def summarise(report, onnx_path):
                      for n, x in v["iou"].items())
     print(f"{onnx_path}: validation IoU {ious}, MIoU {v['miou']}; zones at threshold {best['threshold']}: "
           f"recall {best['recall']}, crop-only left dry {best['crop_only_left_dry']}, "
-          f"bare left dry {best['bare_left_dry']}; forward {report['inference']['forward_ms_1_thread']} ms; "
+          f"bare left dry {best['bare_left_dry']}; MIoU with the labels' plant outline "
+          f"{v['limits']['true_outline']['miou']}, with the labels' classes {v['limits']['true_classes']['miou']}; "
+          f"forward {report['inference']['forward_ms_1_thread']} ms; "
           f"OpenCV-torch diff {report['export']['opencv_vs_torch_max_abs_diff']:.2e}; "
           f"{format_seconds(report['training']['total_s'])} in all; worst photos in {report['report']['folder']}/",
           flush=True)
