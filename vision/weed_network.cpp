@@ -20,7 +20,7 @@ namespace {
 // no whole number takes OpenCV's slower general path over the whole frame. The factor divides
 // the side exactly, so the frame's geometry is kept to the pixel. A rest that shrinks by less
 // than half (800 -> 400 -> 384 rows at the default camera) is bilinear: its two taps already
-// cover every source pixel, and OpenCV's general area path costs four times as much there.
+// cover every source pixel, and OpenCV's general area path is several times slower there.
 // tools/train/evaluate.py resamples the same way.
 int whole_factor(int from, int to) {
   for (int factor = from / to; factor > 1; --factor) {
