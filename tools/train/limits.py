@@ -16,7 +16,7 @@ Unlabelled pixels (255) count in neither, as in every figure of evaluate.py.
 import cv2
 import numpy as np
 
-IGNORE = 255
+from labels import IGNORE
 
 
 def true_outline(truth, scores, soil_class):
