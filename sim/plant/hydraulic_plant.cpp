@@ -377,8 +377,8 @@ void HydraulicPlant::substep(double dt) {
     }
   } else {
     // From the accumulated phase, not volume x today's K: a meter that drifts (set_meter_drift)
-    // changes the pulses to come, not the ones already counted (the product put 10 % of all
-    // the volume so far into one window when the daemon's sim drifted its meter 10 %).
+    // changes the pulses to come, not the ones already counted (a 10 % drift would otherwise
+    // put 10 % of all the volume so far into one window).
     flow_pulses_ = static_cast<std::uint64_t>(meter_phase_);
   }
   tank_level_l_ = std::max(0.0, tank_level_l_ - nozzle_flow * dt);
