@@ -8,6 +8,7 @@ import os
 import subprocess
 import tempfile
 import unittest
+import unittest.mock
 
 import cv2
 import numpy as np
@@ -93,6 +94,20 @@ class SmallSetTraining(unittest.TestCase):
         self.assertEqual(data[0]["count"], 3)
         self.assertEqual(data[0]["licence"], "own photos, CC0")
         self.assertIn("own photos, CC0", self.report["licence"])
+
+    def test_the_plant_soil_base_is_the_default(self):
+        """Without --base the run starts from models/base-plant-soil.pt and carries its data."""
+        self.assertEqual(self.report["training"]["base"]["path"], train.DEFAULT_BASE)
+        self.assertEqual(self.report["training"]["base"]["classes"], ["soil", "plant"])
+        self.assertIn("--base " + train.DEFAULT_BASE, self.log)
+        self.assertEqual(sorted(d["via"] for d in self.report["training_data"][1:]),
+                         ["base base-plant-soil.pt"] * 3)
+        self.assertTrue(self.report["licence"].startswith("CC BY-SA 4.0"))
+        self.assertIsNone(train.parse_args(self.common("scratch") + ["--base", "none"]).base)
+        with unittest.mock.patch.object(train, "DEFAULT_BASE", os.path.join(self.tmp.name, "missing.pt")):
+            with contextlib.redirect_stdout(io.StringIO()) as printed:
+                self.assertIsNone(train.parse_args(self.common("scratch")).base)
+        self.assertIn("training from scratch", printed.getvalue())
 
     def test_report_overlays(self):
         folder = os.path.join(self.out, "tiny-report")

@@ -5,14 +5,14 @@
 Made for a field's own model from 25-40 labelled photos on a 2-core CPU in under 30 minutes:
 label the photos (tools/train/import_labels.py turns CVAT, LabelMe, COCO or palette exports
 into masks), split them (split.py keeps near-duplicate photos on one side), then fine-tune the
-plant/soil base network (train_base.py) for your classes:
+plant/soil base network (train_base.py; the default --base) for your classes:
 
     /usr/bin/python3 tools/train/split.py --images ~/carrots/images --masks ~/carrots/masks \
         --val-fraction 0.25 --seed 9 --train-out ~/carrots/train.txt --val-out ~/carrots/val.txt
     /usr/bin/python3 tools/train/train.py --images ~/carrots/images --masks ~/carrots/masks \
         --train-list ~/carrots/train.txt --val-list ~/carrots/val.txt --out ~/carrots/model \
-        --name weed-carrot --base models/base-plant-soil.pt --dataset-mm-per-px 0.4 \
-        --data-licence "own photos, Farm X" --install /etc/weedspray
+        --name weed-carrot --dataset-mm-per-px 0.4 --data-licence "own photos, Farm X" \
+        --install /etc/weedspray
 
 Masks: STEM.png beside each STEM.jpg in --masks, one class id per pixel (0 soil, 1 crop, 2 weed
 by default: --classes), 255 = unlabelled (no loss, no figure). The validation list is only
@@ -36,9 +36,11 @@ drawn at Y times a zoom in --zoom (0.7-1.4); spec.ground_mm_per_px = Y lets the 
 each camera's frames to the scale the model learnt. Without X the scale is unknown:
 ground_mm_per_px is null and the daemon squeezes frames to the input size whatever their scale.
 
---base PATH.pt starts from a checkpoint's encoder and decoder (train_base.py's plant/soil
-network learnt from all shared photo sets) with a new class head (kept when the class names
-are the same, as when going on from a train.py NAME.pt).
+--base PATH.pt starts from a checkpoint's encoder and decoder with a new class head (kept when
+the class names are the same, as when going on from a train.py NAME.pt). By default (--base auto)
+that is models/base-plant-soil.pt, the plant/soil network train_base.py learnt from all shared
+photo sets: its training data and their licences are recorded in NAME.json and pass to the
+model. --base none trains from scratch.
 
 Writes into --out:
 - NAME.onnx, checked against torch through OpenCV DNN, and NAME.pt (a checkpoint --base takes);
@@ -83,6 +85,9 @@ STRIDE = 32
 WIDTH = 0.5
 BASE_SCALE_MISMATCH = 1.4
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
+# The plant/soil network train_base.py learnt from every shared photo set, in the checkout's models/.
+DEFAULT_BASE = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
+                            "models", "base-plant-soil.pt")
 
 
 def parse_size(text):
@@ -143,7 +148,10 @@ def build_parser():
     parser.add_argument("--target-mm-per-px", type=positive(float),
                         help="ground mm per pixel at the network input (default: the photo squeezed to --input)")
     parser.add_argument("--zoom", type=parse_range, default=DEFAULT_ZOOM, help="random zoom around the target scale")
-    parser.add_argument("--base", help="checkpoint to start from (train_base.py's NAME.pt, or a train.py NAME.pt)")
+    parser.add_argument("--base", default="auto",
+                        help="checkpoint to start from (train_base.py's NAME.pt, or a train.py NAME.pt); 'auto' (the "
+                             "default): the project's plant/soil base network, models/base-plant-soil.pt of this checkout; "
+                             "'none': from scratch")
     parser.add_argument("--threads", type=positive(int), default=2,
                         help="torch threads: the machine's cores when it trains alone; 1 when another job shares them")
     parser.add_argument("--log-every", type=positive(int), default=25, help="steps between progress lines")
@@ -173,9 +181,22 @@ def parse_args(argv=None):
         if width % stride(args.detail) or height % stride(args.detail):
             parser.error(f"{option} {width}x{height}: with --detail {args.detail} the sides must be multiples of "
                          f"{stride(args.detail)}")
+    args.base = resolve_base(args.base)
     if args.target_mm_per_px and not args.dataset_mm_per_px:
         parser.error("--target-mm-per-px needs --dataset-mm-per-px (the photos' own ground scale)")
     return args
+
+
+def resolve_base(text):
+    """--base as given -> the checkpoint's path, or None for a network trained from scratch."""
+    if text.strip().lower() == "none":
+        return None
+    if text.strip().lower() == "auto":
+        if not os.path.exists(DEFAULT_BASE):
+            print(f"note: no {DEFAULT_BASE} (the plant/soil base network): training from scratch", flush=True)
+            return None
+        return DEFAULT_BASE
+    return text
 
 
 def photo_width(images, stem):
@@ -230,7 +251,8 @@ def build_model(args, target_mm):
     meta = checkpoint.get("meta", {})
     base_mm = meta.get("ground_mm_per_px")
     print(f"--base {args.base}: classes {checkpoint['classes']} -> {args.class_names}, "
-          f"class head {'kept' if kept else 'new'}, learnt at {base_mm} mm/px", flush=True)
+          f"class head {'kept' if kept else 'new'}, learnt at {base_mm} mm/px; the model carries its data's "
+          f"licences: {meta.get('licence', 'not recorded')}", flush=True)
     body_mm = target_mm * args.detail if target_mm else None
     if base_mm and body_mm and max(base_mm / body_mm, body_mm / base_mm) > BASE_SCALE_MISMATCH:
         print(f"warning: the base learnt at {base_mm} mm/px, this model's body sees {body_mm:.3g} mm/px "
