@@ -86,6 +86,10 @@ class SmallSetTraining(unittest.TestCase):
         training = self.report["training"]
         self.assertEqual((training["steps"], training["batch"], training["train_images"]), (3, 8, 3))
         self.assertEqual(len(training["class_weights"]), 3)
+        for key in ("class_shares", "validation_class_shares"):
+            self.assertEqual(set(training[key]), {"soil", "crop", "weed"})
+            self.assertAlmostEqual(sum(training[key].values()), 1.0, places=3)
+        self.assertIn("validation class shares soil", self.log)
         for key in ("spec", "validation", "training_set", "export", "inference", "training", "licence"):
             self.assertIn(key, self.report)
 

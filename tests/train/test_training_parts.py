@@ -11,7 +11,7 @@ from datasets import UNKNOWN_LICENCE, model_licence, plant_soil_mask
 from evaluate import (IGNORE, Scores, area_shrink, confusion_matrix, laid_frames, network_input_size, whole_factor,
                       zone_cells, zone_tradeoff)
 from loss import auto_class_weights, loss_fn, parse_class_weights
-from sampling import Sampler, ScaledPhoto, class_frequencies
+from sampling import Sampler, ScaledPhoto, class_frequencies, share_shifts
 from synthetic import field_photo
 
 
@@ -41,6 +41,22 @@ class ClassWeights(unittest.TestCase):
         self.assertEqual(parse_class_weights("1,1.5,4", 3), [1.0, 1.5, 4.0])
         with self.assertRaises(ValueError):
             parse_class_weights("1,2", 3)
+
+
+class ShareShifts(unittest.TestCase):
+    names = ["soil", "crop", "weed"]
+
+    def test_a_crop_four_times_rarer_in_training_is_named(self):
+        shifts = share_shifts(self.names, [0.20, 0.023, 0.777], [0.28, 0.098, 0.622])
+        self.assertEqual([name for name, _, _ in shifts], ["crop"])
+        self.assertAlmostEqual(shifts[0][2], 0.098)
+
+    def test_alike_photos_and_classes_rare_on_both_sides_are_not(self):
+        self.assertEqual(share_shifts(self.names, [0.85, 0.12, 0.03], [0.83, 0.138, 0.035]), [])
+        self.assertEqual(share_shifts(self.names, [0.996, 0.001, 0.003], [0.99, 0.004, 0.006]), [])
+
+    def test_a_class_missing_from_one_side_is_named(self):
+        self.assertEqual([n for n, _, _ in share_shifts(self.names, [0.9, 0.1, 0.0], [0.8, 0.1, 0.1])], ["weed"])
 
 
 class IgnoredPixels(unittest.TestCase):

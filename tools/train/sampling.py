@@ -125,3 +125,20 @@ def class_frequencies(masks, classes):
     for mask in masks:
         counts += np.bincount(mask[mask != IGNORE].ravel(), minlength=256)[:classes]
     return counts / max(counts.sum(), 1.0)
+
+
+SHIFT_FACTOR = 2.0
+SHIFT_FLOOR = 0.005
+
+
+def share_shifts(names, training, validation, factor=SHIFT_FACTOR, floor=SHIFT_FLOOR):
+    """Classes whose pixel share differs more than factor-fold between the training and the
+    validation photos (ignoring classes under floor in both): [(name, training, validation)].
+    Such validation photos judge the model on ground unlike what it learnt."""
+    shifts = []
+    for name, a, b in zip(names, training, validation):
+        if max(a, b) < floor:
+            continue
+        if min(a, b) <= 0 or max(a, b) / min(a, b) > factor:
+            shifts.append((name, float(a), float(b)))
+    return shifts

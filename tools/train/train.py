@@ -42,13 +42,18 @@ that is models/base-plant-soil.pt, the plant/soil network train_base.py learnt f
 photo sets: its training data and their licences are recorded in NAME.json and pass to the
 model. --base none trains from scratch.
 
+A class whose share of the labelled pixels differs more than 2x between the training and the
+validation photos is warned of before training: such validation photos judge the model on
+ground unlike what it learns from (a model learnt on photos that are mostly weed calls more weed).
+
 Writes into --out:
 - NAME.onnx, checked against torch through OpenCV DNN, and NAME.pt (a checkpoint --base takes);
 - NAME.json: spec (what the daemon feeds the network, classes, ground_mm_per_px, stride,
   input_channels), licence, training_data (each photo folder with its count, licence and
   attribution, from datasets.json or --data-licence/--data-attribution; a base's data too),
   validation (IoU per class, MIoU, MPA, zones, per_image, intervals: evaluate.py), training_set,
-  report, export, inference, training (command, seed, steps, class weights, scales, versions);
+  report, export, inference, training (command, seed, steps, class weights, the class shares of
+  the training and the validation photos, scales, versions);
 - NAME-report/: the --report-worst validation photos with the lowest crop/weed IoU as overlays
   (report.py).
 --install DIR copies NAME.onnx and NAME.json into DIR and writes DIR/conf.d/50-model-NAME.toml.
@@ -76,7 +81,7 @@ from loss import auto_class_weights, parse_class_weights  # noqa: E402
 from model import SegmentationNet, load_checkpoint_into, read_checkpoint, save_checkpoint, stride  # noqa: E402
 from onnx_export import OPSET, export_onnx, load_opencv_net, max_abs_diff_vs_opencv  # noqa: E402
 from report import LEGEND, install, worst_images, write_overlays  # noqa: E402
-from sampling import MEAN_RGB, SCALE, Sampler, ScaledPhoto, class_frequencies  # noqa: E402
+from sampling import MEAN_RGB, SCALE, SHIFT_FACTOR, Sampler, ScaledPhoto, class_frequencies, share_shifts  # noqa: E402
 from trainer import format_seconds, quick_iou, train_steps  # noqa: E402
 
 DEFAULT_STEPS = 2500
@@ -218,6 +223,15 @@ def ground_scale(args, stems):
         target = args.target_mm_per_px or args.dataset_mm_per_px * width / args.input[0]
         return args.dataset_mm_per_px, target, target
     return 1.0, width / args.input[0], None
+
+
+def warn_of_share_shifts(names, training, validation):
+    print("validation class shares " + ", ".join(f"{n} {f:.1%}" for n, f in zip(names, validation)), flush=True)
+    for name, a, b in share_shifts(names, training, validation):
+        print(f"warning: class '{name}' covers {a:.1%} of the training photos' labelled pixels but {b:.1%} of the "
+              f"validation photos' (more than {SHIFT_FACTOR:g}x apart): the model is judged on photos unlike "
+              f"those it learns from; label photos of the growth stage and ground it will meet "
+              f"(docs/vision.md, 'Photos unlike the ones it must judge')", flush=True)
 
 
 def load_photos(args, stems, photo_mm, target_mm):
@@ -400,6 +414,7 @@ def training_record(args, argv, run, setup):
         "class_weights": setup["weights"],
         "class_weights_method": setup["weights_method"],
         "class_shares": {n: round(float(f), 4) for n, f in zip(args.class_names, setup["frequencies"])},
+        "validation_class_shares": {n: round(float(f), 4) for n, f in zip(args.class_names, setup["val_frequencies"])},
         "dataset_mm_per_px": args.dataset_mm_per_px,
         "target_mm_per_px": round(setup["target_mm"], 4) if setup["ground_mm"] else None,
         "zoom": list(args.zoom),
@@ -437,6 +452,8 @@ def main(argv=None):
     print("class shares " + ", ".join(f"{n} {f:.1%}" for n, f in zip(args.class_names, frequencies))
           + "; weights " + ", ".join(f"{n} {w:g}" for n, w in zip(args.class_names, weights)), flush=True)
     val_pairs = [load_pair(args.images, args.masks, s, len(args.class_names)) for s in val_stems]
+    val_frequencies = class_frequencies([mask for _, mask in val_pairs], len(args.class_names))
+    warn_of_share_shifts(args.class_names, frequencies, val_frequencies)
     spec = model_spec(args, ground_mm)
     model, base = build_model(args, ground_mm)
     steps = step_count(args, len(train_stems))
@@ -450,8 +467,8 @@ def main(argv=None):
     onnx_path, net, figures = measure(args, model, spec, val_pairs, (train_stems, val_stems))
     data = training_data(args, len(train_stems), base)
     setup = {"steps": steps, "weights": weights, "weights_method": weights_method, "frequencies": frequencies,
-             "target_mm": target_mm, "ground_mm": ground_mm, "train_images": len(train_stems),
-             "val_images": len(val_stems), "base": base}
+             "val_frequencies": val_frequencies, "target_mm": target_mm, "ground_mm": ground_mm,
+             "train_images": len(train_stems), "val_images": len(val_stems), "base": base}
     report = {"model": os.path.basename(onnx_path), "spec": spec, "licence": model_licence(data), "training_data": data,
               "validation": figures["validation"], "training_set": figures["training_set"],
               "report": overlays(args, net, spec, figures["validation"]), "export": figures["export"],
