@@ -225,8 +225,16 @@ def ground_scale(args, stems):
     return 1.0, width / args.input[0], None
 
 
+def shares_text(names, shares):
+    return ", ".join(f"{n} {f:.1%}" for n, f in zip(names, shares))
+
+
+def shares_record(names, shares):
+    return {n: round(float(f), 4) for n, f in zip(names, shares)}
+
+
 def warn_of_share_shifts(names, training, validation):
-    print("validation class shares " + ", ".join(f"{n} {f:.1%}" for n, f in zip(names, validation)), flush=True)
+    print("validation class shares " + shares_text(names, validation), flush=True)
     for name, a, b in share_shifts(names, training, validation):
         print(f"warning: class '{name}' covers {a:.1%} of the training photos' labelled pixels but {b:.1%} of the "
               f"validation photos' (more than {SHIFT_FACTOR:g}x apart): the model is judged on photos unlike "
@@ -413,8 +421,8 @@ def training_record(args, argv, run, setup):
         "lr": args.lr,
         "class_weights": setup["weights"],
         "class_weights_method": setup["weights_method"],
-        "class_shares": {n: round(float(f), 4) for n, f in zip(args.class_names, setup["frequencies"])},
-        "validation_class_shares": {n: round(float(f), 4) for n, f in zip(args.class_names, setup["val_frequencies"])},
+        "class_shares": shares_record(args.class_names, setup["frequencies"]),
+        "validation_class_shares": shares_record(args.class_names, setup["val_frequencies"]),
         "dataset_mm_per_px": args.dataset_mm_per_px,
         "target_mm_per_px": round(setup["target_mm"], 4) if setup["ground_mm"] else None,
         "zoom": list(args.zoom),
@@ -449,8 +457,8 @@ def main(argv=None):
     announce_scale(args, photo_mm, target_mm, ground_mm)
     photos = load_photos(args, train_stems, photo_mm, target_mm)
     weights, weights_method, frequencies = resolve_class_weights(args, photos)
-    print("class shares " + ", ".join(f"{n} {f:.1%}" for n, f in zip(args.class_names, frequencies))
-          + "; weights " + ", ".join(f"{n} {w:g}" for n, w in zip(args.class_names, weights)), flush=True)
+    print("class shares " + shares_text(args.class_names, frequencies) + "; weights "
+          + ", ".join(f"{n} {w:g}" for n, w in zip(args.class_names, weights)), flush=True)
     val_pairs = [load_pair(args.images, args.masks, s, len(args.class_names)) for s in val_stems]
     val_frequencies = class_frequencies([mask for _, mask in val_pairs], len(args.class_names))
     warn_of_share_shifts(args.class_names, frequencies, val_frequencies)
