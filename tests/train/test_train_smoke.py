@@ -90,6 +90,7 @@ class SmallSetTraining(unittest.TestCase):
             self.assertEqual(set(training[key]), {"soil", "crop", "weed"})
             self.assertAlmostEqual(sum(training[key].values()), 1.0, places=3)
         self.assertIn("validation class shares soil", self.log)
+        self.assertTrue(0 <= training["paste_crop"]["probability"] <= 1)
         for key in ("spec", "validation", "training_set", "export", "inference", "training", "licence"):
             self.assertIn(key, self.report)
 

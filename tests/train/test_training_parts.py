@@ -11,8 +11,9 @@ from datasets import UNKNOWN_LICENCE, model_licence, plant_soil_mask
 from evaluate import (IGNORE, Scores, area_shrink, confusion_matrix, laid_frames, network_input_size, whole_factor,
                       zone_cells, zone_tradeoff)
 from loss import auto_class_weights, loss_fn, parse_class_weights
-from sampling import Sampler, ScaledPhoto, class_frequencies, share_shifts
+from sampling import Sampler, ScaledPhoto, class_frequencies, paste_class, share_shifts
 from synthetic import field_photo
+from train import PASTE_PROBABILITY, build_parser, resolve_paste
 
 
 class ClassWeights(unittest.TestCase):
@@ -57,6 +58,57 @@ class ShareShifts(unittest.TestCase):
 
     def test_a_class_missing_from_one_side_is_named(self):
         self.assertEqual([n for n, _, _ in share_shifts(self.names, [0.9, 0.1, 0.0], [0.8, 0.1, 0.1])], ["weed"])
+
+
+class CropPasting(unittest.TestCase):
+    def test_the_donors_class_pixels_are_laid_over_colour_and_label(self):
+        image = np.full((4, 6, 3), 10, np.uint8)
+        mask = np.full((4, 6), 2, np.uint8)
+        mask[0, 0] = IGNORE
+        donor_image = np.full((4, 6, 3), 200, np.uint8)
+        donor_mask = np.zeros((4, 6), np.uint8)
+        donor_mask[1:3, 2:4] = 1
+        donor_mask[0, 0] = 2  # another class of the donor's: not pasted
+        pasted_image, pasted_mask = paste_class(image, mask, donor_image, donor_mask, 1)
+        where = donor_mask == 1
+        self.assertTrue((pasted_mask[where] == 1).all())
+        self.assertTrue((pasted_image[where] == 200).all())
+        self.assertTrue((pasted_mask[~where] == mask[~where]).all())
+        self.assertTrue((pasted_image[~where] == 10).all())
+        self.assertEqual(int(mask[1, 2]), 2)  # the inputs are left as they were
+
+    def photos(self):
+        photos = []
+        for seed in range(3):
+            image, mask = field_photo(seed)
+            mask = mask.copy()
+            mask[mask == 1] = 2  # two photos without crop: only the third can give it
+            if seed == 2:
+                mask[40:48, 60:70] = 1
+            photos.append(ScaledPhoto(image, mask, 1.0, 1.0))
+        return photos
+
+    def crop_share(self, sampler):
+        _, targets = sampler.batch(np.random.default_rng(1), 64)
+        return float((targets == 1).float().mean())
+
+    def test_a_rare_crop_is_seen_more_often_and_no_pasting_changes_nothing(self):
+        photos = self.photos()
+        plain = Sampler(photos, (64, 48), 1.0, (0.9, 1.1))
+        pasting = Sampler(photos, (64, 48), 1.0, (0.9, 1.1), paste=(1, 1.0))
+        self.assertGreater(self.crop_share(pasting), 2 * self.crop_share(plain))
+        off = Sampler(photos, (64, 48), 1.0, (0.9, 1.1), paste=(1, 0.0))
+        for a, b in zip(plain.batch(np.random.default_rng(3), 4), off.batch(np.random.default_rng(3), 4)):
+            self.assertTrue(torch.equal(a, b))
+
+    def test_auto_pastes_only_a_crop_under_five_per_cent(self):
+        args = build_parser().parse_args(["--images", "i", "--masks", "m", "--train-list", "t", "--val-list", "v",
+                                          "--out", "o"])
+        self.assertEqual(resolve_paste(args, [0.2, 0.023, 0.777])[0], PASTE_PROBABILITY)
+        self.assertEqual(resolve_paste(args, [0.85, 0.12, 0.03])[0], 0.0)
+        self.assertEqual(resolve_paste(args, [0.9, 0.0, 0.1])[0], 0.0)  # nothing to paste
+        args.paste_crop = 0.25
+        self.assertEqual(resolve_paste(args, [0.85, 0.12, 0.03]), (0.25, "given"))
 
 
 class IgnoredPixels(unittest.TestCase):

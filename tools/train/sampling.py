@@ -10,6 +10,12 @@ and camera changes another field or camera may bring (hue, saturation, white bal
 contrast, gamma, blur, sensor noise). Masks follow the geometry with nearest neighbour; 255
 (unlabelled) stays 255.
 
+Pasting (paste=(class id, probability)): with that probability a crop gets the pixels of one
+class, image and label, from a crop of another training photo drawn the same way, laid over
+whatever is there. A crop that covers a few per cent of the photos is then seen more often, on
+more kinds of ground and beside more weeds, so the network does not learn to call a plant weed
+whenever in doubt.
+
 Ground scale: a photo stored at photo_mm_per_px (ground mm per pixel) is resampled so that one
 pixel covers target_mm_per_px, the scale the network is meant to run at. Without a known ground
 scale, callers pass photo_mm_per_px = 1 and target_mm_per_px = photo width / input width (the
@@ -94,10 +100,24 @@ def normalise(rgb):
     return ((rgb - np.array(MEAN_RGB, np.float32)) * SCALE).transpose(2, 0, 1)
 
 
+def paste_class(image, mask, donor_image, donor_mask, class_id):
+    """image and mask with the donor's pixels of class_id (colour and label) laid over them."""
+    where = donor_mask == class_id
+    if not where.any():
+        return image, mask
+    image, mask = image.copy(), mask.copy()
+    image[where] = donor_image[where]
+    mask[where] = class_id
+    return image, mask
+
+
+PASTE_TRIES = 4  # donor crops drawn until one shows the class (a crop can miss a small plant)
+
+
 class Sampler:
     """Batches of augmented crops drawn with replacement from ScaledPhotos."""
 
-    def __init__(self, photos, crop, target_mm_per_px, zoom_range, weights=None):
+    def __init__(self, photos, crop, target_mm_per_px, zoom_range, weights=None, paste=None):
         if not photos:
             raise ValueError("no training photos")
         self.photos = photos
@@ -106,13 +126,27 @@ class Sampler:
         self.zoom_range = tuple(zoom_range)
         weights = np.ones(len(photos)) if weights is None else np.asarray(weights, float)
         self.probabilities = weights / weights.sum()
+        self.paste_id, self.paste_probability = paste if paste else (None, 0.0)
+        self.donors = [p for p in photos if self.paste_probability > 0 and (p.mask == self.paste_id).any()]
+
+    def crop_of(self, rng, photo):
+        return random_geometry(rng, photo.image, photo.mask, self.crop, photo.mm_per_px / self.target_mm_per_px,
+                               self.zoom_range)
+
+    def pasted(self, rng, image, mask):
+        if not self.donors or rng.random() >= self.paste_probability:
+            return image, mask
+        donor = self.donors[rng.integers(len(self.donors))]
+        for _ in range(PASTE_TRIES):
+            donor_image, donor_mask = self.crop_of(rng, donor)
+            if (donor_mask == self.paste_id).any():
+                break
+        return paste_class(image, mask, donor_image, donor_mask, self.paste_id)
 
     def batch(self, rng, size):
         inputs, targets = [], []
         for i in rng.choice(len(self.photos), size=size, replace=True, p=self.probabilities):
-            photo = self.photos[i]
-            scale = photo.mm_per_px / self.target_mm_per_px
-            image, mask = random_geometry(rng, photo.image, photo.mask, self.crop, scale, self.zoom_range)
+            image, mask = self.pasted(rng, *self.crop_of(rng, self.photos[i]))
             inputs.append(normalise(random_photometry(rng, image)))
             targets.append(mask)
         return (torch.from_numpy(np.stack(inputs).astype(np.float32)),

@@ -27,7 +27,9 @@ Loss: class-weighted cross-entropy + Dice over the labelled pixels; --class-weig
 default) weighs each class by sqrt(share of the most frequent class / its share), clipped to
 [1, 20], and prints the weights. Augmentation aims at other fields and cameras: zoom, aspect,
 rotation, flips, hue, saturation, white balance, exposure, contrast, gamma, blur, noise
-(sampling.py).
+(sampling.py). A crop under 5 % of the training photos' labelled pixels is also pasted: half
+the training crops get the crop pixels of another crop laid over them (--paste-crop: auto, or a
+probability), so a rare crop is seen on more ground.
 
 Ground scale: --dataset-mm-per-px X is the ground size of one pixel of the photos as stored;
 --target-mm-per-px Y the ground size of one pixel at the network input (default X x photo
@@ -86,6 +88,10 @@ from trainer import format_seconds, quick_iou, train_steps  # noqa: E402
 
 DEFAULT_STEPS = 2500
 DEFAULT_ZOOM = (0.7, 1.4)
+# --paste-crop auto: crops get another crop's crop pixels this often when the crop covers less
+# than PASTE_BELOW_SHARE of the training photos' labelled pixels.
+PASTE_PROBABILITY = 0.5
+PASTE_BELOW_SHARE = 0.05
 STRIDE = 32
 WIDTH = 0.5
 BASE_SCALE_MISMATCH = 1.4
@@ -113,6 +119,18 @@ def parse_range(text):
     if not 0 < low <= high:
         raise argparse.ArgumentTypeError(f"'{text}': need 0 < MIN <= MAX")
     return low, high
+
+
+def parse_paste(text):
+    if text.strip().lower() == "auto":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not 0 <= value <= 1:
+        raise argparse.ArgumentTypeError(f"'{text}': expected 'auto' or a probability from 0 to 1")
+    return value
 
 
 def positive(kind):
@@ -149,6 +167,10 @@ def build_parser():
     parser.add_argument("--crop-class", type=int, default=1)
     parser.add_argument("--weed-class", type=int, default=2)
     parser.add_argument("--class-weights", default="auto", help="'auto' or one cross-entropy weight per class")
+    parser.add_argument("--paste-crop", type=parse_paste, default=None, metavar="auto|P",
+                        help="probability that a training crop gets the crop pixels of another photo's crop laid "
+                             f"over it; auto (the default): {PASTE_PROBABILITY:g} when the crop covers under "
+                             f"{PASTE_BELOW_SHARE * 100:g} per cent of the training photos' labelled pixels, else 0")
     parser.add_argument("--dataset-mm-per-px", type=positive(float), help="ground mm per pixel of the photos as stored")
     parser.add_argument("--target-mm-per-px", type=positive(float),
                         help="ground mm per pixel at the network input (default: the photo squeezed to --input)")
@@ -258,6 +280,19 @@ def resolve_class_weights(args, photos):
         if share == 0:
             print(f"warning: class '{name}' has no labelled pixel in the training photos", flush=True)
     return auto_class_weights(frequencies), "auto: sqrt(top share / share), clipped to [1, 20]", frequencies
+
+
+def resolve_paste(args, frequencies):
+    """(probability, how it was set) of pasting crop pixels into a training crop."""
+    share = frequencies[args.crop_class]
+    if args.paste_crop is not None:
+        return args.paste_crop, "given"
+    if 0 < share < PASTE_BELOW_SHARE:
+        print(f"the crop covers {share:.1%} of the training photos' labelled pixels (under {PASTE_BELOW_SHARE:.0%}): "
+              f"{PASTE_PROBABILITY:g} of the training crops get another crop's crop pixels (--paste-crop 0 for none)",
+              flush=True)
+        return PASTE_PROBABILITY, f"auto: crop share under {PASTE_BELOW_SHARE:g}"
+    return 0.0, f"auto: crop share {PASTE_BELOW_SHARE:g} or more"
 
 
 def build_model(args, target_mm):
@@ -422,6 +457,7 @@ def training_record(args, argv, run, setup):
         "class_weights": setup["weights"],
         "class_weights_method": setup["weights_method"],
         "class_shares": shares_record(args.class_names, setup["frequencies"]),
+        "paste_crop": {"probability": setup["paste"][0], "method": setup["paste"][1]},
         "validation_class_shares": shares_record(args.class_names, setup["val_frequencies"]),
         "dataset_mm_per_px": args.dataset_mm_per_px,
         "target_mm_per_px": round(setup["target_mm"], 4) if setup["ground_mm"] else None,
@@ -462,6 +498,7 @@ def main(argv=None):
     val_pairs = [load_pair(args.images, args.masks, s, len(args.class_names)) for s in val_stems]
     val_frequencies = class_frequencies([mask for _, mask in val_pairs], len(args.class_names))
     warn_of_share_shifts(args.class_names, frequencies, val_frequencies)
+    paste = resolve_paste(args, frequencies)
     spec = model_spec(args, ground_mm)
     model, base = build_model(args, ground_mm)
     steps = step_count(args, len(train_stems))
@@ -469,13 +506,14 @@ def main(argv=None):
           f"{args.crop[0]}x{args.crop[1]}, {sum(p.numel() for p in model.parameters())} parameters, "
           f"{args.threads} threads", flush=True)
 
-    run = train_steps(model, Sampler(photos, args.crop, target_mm, args.zoom), steps, args.batch, args.lr, weights,
+    sampler = Sampler(photos, args.crop, target_mm, args.zoom, paste=(args.crop_class, paste[0]))
+    run = train_steps(model, sampler, steps, args.batch, args.lr, weights,
                       rng, args.log_every, validation_line(args, spec, val_pairs), args.val_every)
 
     onnx_path, net, figures = measure(args, model, spec, val_pairs, (train_stems, val_stems))
     data = training_data(args, len(train_stems), base)
     setup = {"steps": steps, "weights": weights, "weights_method": weights_method, "frequencies": frequencies,
-             "val_frequencies": val_frequencies, "target_mm": target_mm, "ground_mm": ground_mm,
+             "val_frequencies": val_frequencies, "paste": paste, "target_mm": target_mm, "ground_mm": ground_mm,
              "train_images": len(train_stems), "val_images": len(val_stems), "base": base}
     report = {"model": os.path.basename(onnx_path), "spec": spec, "licence": model_licence(data), "training_data": data,
               "validation": figures["validation"], "training_set": figures["training_set"],
