@@ -55,7 +55,7 @@ Writes into --out:
   attribution, from datasets.json or --data-licence/--data-attribution; a base's data too),
   validation (IoU per class, MIoU, MPA, zones, per_image, intervals: evaluate.py), training_set,
   report, export, inference, training (command, seed, steps, class weights, the class shares of
-  the training and the validation photos, scales, versions);
+  the training and the validation photos, crop pasting, scales, versions);
 - NAME-report/: the --report-worst validation photos with the lowest crop/weed IoU as overlays
   (report.py).
 --install DIR copies NAME.onnx and NAME.json into DIR and writes DIR/conf.d/50-model-NAME.toml.
