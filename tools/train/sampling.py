@@ -11,10 +11,10 @@ contrast, gamma, blur, sensor noise). Masks follow the geometry with nearest nei
 (unlabelled) stays 255.
 
 Pasting (paste=(class id, probability)): with that probability a crop gets the pixels of one
-class, image and label, from a crop of another training photo drawn the same way, laid over
-whatever is there. A crop that covers a few per cent of the photos is then seen more often, on
-more kinds of ground and beside more weeds, so the network does not learn to call a plant weed
-whenever in doubt.
+class, image and label, from another crop drawn the same way from a training photo that shows
+that class (the same photo can be drawn), laid over whatever is there. A crop that covers a few
+per cent of the photos is then seen more often, on more kinds of ground and beside more weeds,
+so the network does not learn to call a plant weed whenever in doubt.
 
 Ground scale: a photo stored at photo_mm_per_px (ground mm per pixel) is resampled so that one
 pixel covers target_mm_per_px, the scale the network is meant to run at. Without a known ground

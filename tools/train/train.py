@@ -168,8 +168,9 @@ def build_parser():
     parser.add_argument("--weed-class", type=int, default=2)
     parser.add_argument("--class-weights", default="auto", help="'auto' or one cross-entropy weight per class")
     parser.add_argument("--paste-crop", type=parse_paste, default=None, metavar="auto|P",
-                        help="probability that a training crop gets the crop pixels of another photo's crop laid "
-                             f"over it; auto (the default): {PASTE_PROBABILITY:g} when the crop covers under "
+                        help="probability that a training crop gets the crop pixels of another crop, from any "
+                             f"training photo with crop, laid over it; auto (the default): {PASTE_PROBABILITY:g} "
+                             f"when the crop covers under "
                              f"{PASTE_BELOW_SHARE * 100:g} per cent of the training photos' labelled pixels, else 0")
     parser.add_argument("--dataset-mm-per-px", type=positive(float), help="ground mm per pixel of the photos as stored")
     parser.add_argument("--target-mm-per-px", type=positive(float),
