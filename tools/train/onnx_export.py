@@ -6,6 +6,10 @@ OpenCV 4.6 pitfalls handled here (see ../shared/notes/dnn.md):
   and export refuses a model that still has ReLU6.
 - torch 1.13 may turn identical initialisers into Identity nodes, which OpenCV 4.6 rejects:
   each Identity fed by an initialiser becomes an initialiser of its own.
+- PixelShuffle exports as DepthToSpace, which OpenCV 4.6 imports as Reshapes fixed to the
+  export's input size: the daemon feeds the size its camera and ground scale give, and such a
+  network fails there. Export refuses it (a ConvTranspose2d of kernel and stride K computes the
+  same sub-pixel layer and runs at any size).
 - opset 11 with bilinear Resize at constant scales loads fine.
 """
 
@@ -24,6 +28,9 @@ def export_onnx(model: nn.Module, path: str, width: int, height: int) -> None:
     """Writes model (N x 3 x H x W in, N x C x H x W logits out) as ONNX for OpenCV 4.6."""
     if any(isinstance(m, nn.ReLU6) for m in model.modules()):
         raise ValueError("export_onnx: model has ReLU6 (exports as a Clip OpenCV 4.6 rejects)")
+    if any(isinstance(m, nn.PixelShuffle) for m in model.modules()):
+        raise ValueError("export_onnx: model has PixelShuffle (OpenCV 4.6 runs its DepthToSpace only at the "
+                         "export's input size; use ConvTranspose2d with kernel = stride)")
     model = model.eval()
     dummy = torch.zeros(1, 3, height, width)
     torch.onnx.export(
